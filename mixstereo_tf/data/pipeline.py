@@ -1,0 +1,221 @@
+"""The tf.data pipeline: stereo pairs in, mixtures synthesised on the fly out.
+
+Training order (issue #2): list -> parallel decode -> random crop -> photometric
+augmentation (identical for both views) -> random flip-and-swap -> normalise to [-1, 1] ->
+mixture `f(left, right)` -> batch -> prefetch. Every random draw is a stateless op seeded by
+(seed, element index), so a seeded pipeline yields identical batches run after run.
+
+Elements are dicts with flat string keys (see docs/DESIGN.md): `mixture`, `left`, `right`
+([H, W, 3] float32 in [-1, 1]), `disparity_left`, `disparity_right` ([H, W, 1] float32,
+pixels, 0 = unknown), `valid_left`, `valid_right`, `nonocc_left` ([H, W, 1] float32 0/1),
+`name` (string).
+"""
+
+import dataclasses
+from typing import Dict, Sequence
+
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf import mixtures
+from mixstereo_tf.data import records
+
+_IMAGE_KEYS = ('left', 'right')
+_MAP_KEYS = ('disparity_left', 'disparity_right', 'valid_left', 'valid_right', 'nonocc_left')
+
+
+@dataclasses.dataclass(frozen=True)
+class PipelineConfig:
+  """How pairs become training or evaluation elements.
+
+  Attributes:
+    mixture: name of the composition operator (`mixstereo_tf.mixtures.MIXTURE_NAMES`).
+    crop_height: training crop height (paper: 256 KITTI, 384 Middlebury).
+    crop_width: training crop width (paper: 512 KITTI, 384 Middlebury).
+    batch_size: global batch size (paper: 1).
+    augment: monodepth-style photometric augmentation with probability 0.5.
+    flip: random horizontal flip-and-swap with probability 0.5.
+    seed: seed of every random draw (shuffle, crop, augmentation, flip).
+    shuffle_buffer: 0 shuffles the whole list each epoch.
+    skip_bad_pairs: log and drop pairs that fail to decode instead of stopping.
+  """
+  mixture: str = 'anaglyph'
+  crop_height: int = 256
+  crop_width: int = 512
+  batch_size: int = 1
+  augment: bool = True
+  flip: bool = True
+  seed: int = 0
+  shuffle_buffer: int = 0
+  skip_bad_pairs: bool = False
+
+  def __post_init__(self):
+    mixtures.get_mixture(self.mixture)  # Raises ValueError listing valid names.
+    for field in ('crop_height', 'crop_width', 'batch_size'):
+      if getattr(self, field) <= 0:
+        raise ValueError(f'PipelineConfig.{field} must be positive, got '
+                         f'{getattr(self, field)}.')
+    if self.shuffle_buffer < 0:
+      raise ValueError(f'PipelineConfig.shuffle_buffer must be >= 0, got {self.shuffle_buffer}.')
+
+
+def _load_fn(samples: Sequence[records.StereoSample]):
+  """Returns a graph function index -> dict of decoded arrays (via tf.numpy_function)."""
+  keys = tuple(records.LOADED_KEYS)
+  dtypes = [tf.as_dtype(records.LOADED_KEYS[k]) for k in keys]
+
+  def load(index):
+    loaded = records.load_sample(samples[int(index)])
+    return [np.asarray(loaded[k], dtype=records.LOADED_KEYS[k]) for k in keys]
+
+  def graph_load(index):
+    tensors = tf.numpy_function(load, [index], dtypes, stateful=False)
+    out = {}
+    for key, tensor in zip(keys, tensors):
+      if key in _IMAGE_KEYS:
+        tensor.set_shape([None, None, 3])
+        out[key] = tf.cast(tensor, tf.float32) / 255.0
+      else:
+        tensor.set_shape([None, None])
+        out[key] = tf.cast(tensor, tf.float32)[..., None]
+    out['name'] = tf.gather(tf.constant([s.name for s in samples]), index)
+    return out
+
+  return graph_load
+
+
+def _seed(seed: tf.Tensor, index: tf.Tensor, stream: int) -> tf.Tensor:
+  """A stateless seed unique to (run seed, element index, draw)."""
+  return tf.stack([tf.cast(seed, tf.int64) * 7919 + stream, tf.cast(index, tf.int64)])
+
+
+def _pad_edge(image, height, width):
+  """Pads [h, w, C] at the bottom/right to at least [height, width] by edge replication."""
+  shape = tf.shape(image)
+  rows = tf.minimum(tf.range(tf.maximum(shape[0], height)), shape[0] - 1)
+  cols = tf.minimum(tf.range(tf.maximum(shape[1], width)), shape[1] - 1)
+  return tf.gather(tf.gather(image, rows, axis=0), cols, axis=1)
+
+
+def _random_crop(element, height, width, seed):
+  """Crops all image-aligned keys at one random window.
+
+  Images smaller than the crop are first padded by edge replication at the bottom/right;
+  padded ground truth is marked unknown (0), not replicated.
+  """
+  shape = tf.shape(element['left'])
+  out = dict(element)
+  for key in _IMAGE_KEYS:
+    out[key] = _pad_edge(element[key], height, width)
+  pad = [[0, tf.maximum(height - shape[0], 0)], [0, tf.maximum(width - shape[1], 0)], [0, 0]]
+  for key in _MAP_KEYS:
+    out[key] = tf.pad(element[key], pad)
+  shape = tf.shape(out['left'])
+  top = tf.random.stateless_uniform([], seed, 0, shape[0] - height + 1, dtype=tf.int32)
+  left = tf.random.stateless_uniform([], seed + [0, 1], 0, shape[1] - width + 1,
+                                     dtype=tf.int32)
+  for key in _IMAGE_KEYS + _MAP_KEYS:
+    channels = 3 if key in _IMAGE_KEYS else 1
+    out[key] = tf.ensure_shape(out[key][top:top + height, left:left + width],
+                               [height, width, channels])
+  return out
+
+
+def augment_photometric(left, right, seed):
+  """monodepth augmentation, identical for both views, applied with probability 0.5.
+
+  Args:
+    left, right: [H, W, 3] float32 in [0, 1].
+    seed: a stateless seed [2].
+
+  Returns:
+    The augmented pair, clipped to [0, 1]: x ** gamma, gamma ~ U[0.8, 1.2]; times a
+    brightness ~ U[0.5, 2.0]; times a per-channel colour ~ U[0.8, 1.2].
+  """
+  draws = tf.random.stateless_uniform([6], seed)
+  gamma = 0.8 + 0.4 * draws[1]
+  brightness = 0.5 + 1.5 * draws[2]
+  colour = 0.8 + 0.4 * draws[3:6]
+  apply = draws[0] < 0.5
+
+  def change(image):
+    image = tf.pow(image, gamma) * brightness * colour
+    return tf.clip_by_value(image, 0.0, 1.0)
+
+  return (tf.where(apply, change(left), left), tf.where(apply, change(right), right))
+
+
+def flip_and_swap(element: Dict[str, tf.Tensor]) -> Dict[str, tf.Tensor]:
+  """Mirrors the pair so the left view stays on the left.
+
+  new left = flip(right), new right = flip(left), and likewise for the disparities: with the
+  left pixel x matching the right pixel x - d_L, the mirrored left view's disparity is the
+  mirrored right disparity. There is no right non-occlusion mask, so `nonocc_left` becomes the
+  mirrored right validity.
+  """
+  flip = lambda x: tf.reverse(x, axis=[1])
+  out = dict(element)
+  out['left'], out['right'] = flip(element['right']), flip(element['left'])
+  out['disparity_left'] = flip(element['disparity_right'])
+  out['disparity_right'] = flip(element['disparity_left'])
+  out['valid_left'] = flip(element['valid_right'])
+  out['valid_right'] = flip(element['valid_left'])
+  out['nonocc_left'] = flip(element['valid_right'])
+  return out
+
+
+def _finish(element, mixture_name):
+  """Normalises to the network range and synthesises the mixture (paper: inputs in [-1, 1])."""
+  out = dict(element)
+  for key in _IMAGE_KEYS:
+    out[key] = element[key] * 2.0 - 1.0
+  out['mixture'] = mixtures.mix(mixture_name, out['left'], out['right'])
+  return out
+
+
+def _check_samples(samples):
+  if not samples:
+    raise ValueError('The dataset is empty: expected at least one stereo pair from the '
+                     'reader (check --data_dir and --train_list).')
+
+
+def train_dataset(samples: Sequence[records.StereoSample],
+                  config: PipelineConfig) -> tf.data.Dataset:
+  """An infinite, shuffled, augmented, batched dataset of training elements."""
+  _check_samples(samples)
+  samples = list(samples)
+  load = _load_fn(samples)
+  buffer = config.shuffle_buffer or len(samples)
+  ds = tf.data.Dataset.range(len(samples))
+  ds = ds.shuffle(buffer, seed=config.seed, reshuffle_each_iteration=True).repeat()
+  ds = ds.enumerate()  # Element counter: the stateless seeds differ for every draw.
+
+  def prepare(count, index):
+    element = load(index)
+    crop_seed = _seed(config.seed, count, 1)
+    element = _random_crop(element, config.crop_height, config.crop_width, crop_seed)
+    if config.augment:
+      element['left'], element['right'] = augment_photometric(
+          element['left'], element['right'], _seed(config.seed, count, 2))
+    if config.flip:
+      coin = tf.random.stateless_uniform([], _seed(config.seed, count, 3))
+      element = tf.cond(coin < 0.5, lambda e=element: flip_and_swap(e),
+                        lambda e=element: dict(e))
+    return _finish(element, config.mixture)
+
+  ds = ds.map(prepare, num_parallel_calls=tf.data.AUTOTUNE, deterministic=True)
+  if config.skip_bad_pairs:
+    ds = ds.ignore_errors(log_warning=True)
+  ds = ds.batch(config.batch_size, drop_remainder=True)
+  return ds.prefetch(tf.data.AUTOTUNE)
+
+
+def eval_dataset(samples: Sequence[records.StereoSample], mixture: str) -> tf.data.Dataset:
+  """Full-size, unaugmented elements in list order, batch 1, with ground truth."""
+  _check_samples(samples)
+  mixtures.get_mixture(mixture)
+  load = _load_fn(list(samples))
+  ds = tf.data.Dataset.range(len(samples))
+  ds = ds.map(lambda i: _finish(load(i), mixture), num_parallel_calls=tf.data.AUTOTUNE,
+              deterministic=True)
+  return ds.batch(1).prefetch(tf.data.AUTOTUNE)

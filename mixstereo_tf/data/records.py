@@ -1,0 +1,78 @@
+"""The stereo sample record every dataset reader returns, and its loader.
+
+A reader (KITTI, Middlebury, the embedded `sample` source) turns a dataset root or a split
+list into a list of `StereoSample`s; `load_sample` turns one into NumPy arrays. File-backed
+samples hold paths; samples of the embedded source hold virtual URIs (`synthetic://...`,
+`skimage://motorcycle`) that `mixstereo_tf.data.sample` renders on demand.
+"""
+
+import dataclasses
+from typing import Dict, Mapping, Optional
+
+import numpy as np
+
+VIRTUAL_SCHEMES = ('synthetic://', 'skimage://')
+
+
+@dataclasses.dataclass(frozen=True)
+class StereoSample:
+  """One stereo pair and its optional ground truth.
+
+  Attributes:
+    name: a short unique name (scene or frame id) used in tables and output files.
+    left: path (or virtual URI) of the left image.
+    right: path (or virtual URI) of the right image.
+    disparity_left: optional path of the left ground-truth disparity.
+    disparity_right: optional path of the right ground-truth disparity.
+    disparity_scale: stored value / disparity_scale = pixels (KITTI 256, Tsukuba 16, ...).
+    nonocc_left: optional path of a non-occluded mask for the left view (white = evaluated).
+    all_left: optional path of the 'all' evaluation mask for the left view (white = evaluated).
+    calib: optional path of a calibration file.
+    source: where the sample was listed, as 'file:line' or the scene folder, for errors.
+  """
+  name: str
+  left: str
+  right: str
+  disparity_left: Optional[str] = None
+  disparity_right: Optional[str] = None
+  disparity_scale: float = 1.0
+  nonocc_left: Optional[str] = None
+  all_left: Optional[str] = None
+  calib: Optional[str] = None
+  source: str = ''
+
+  @property
+  def is_virtual(self) -> bool:
+    return self.left.startswith(VIRTUAL_SCHEMES)
+
+
+# Keys and dtypes of `load_sample`'s result; the tf.data pipeline relies on them.
+LOADED_KEYS: Mapping[str, type] = {
+    'left': np.uint8,             # [H, W, 3] RGB
+    'right': np.uint8,            # [H, W, 3] RGB
+    'disparity_left': np.float32,   # [H, W] pixels, 0 = unknown
+    'disparity_right': np.float32,  # [H, W] pixels, 0 = unknown
+    'valid_left': np.bool_,       # [H, W] ground truth known (and inside the 'all' mask)
+    'valid_right': np.bool_,      # [H, W]
+    'nonocc_left': np.bool_,      # [H, W] valid and not occluded
+}
+
+
+def load_sample(sample: StereoSample) -> Dict[str, np.ndarray]:
+  """Loads a sample into NumPy arrays with exactly the keys of `LOADED_KEYS`.
+
+  Args:
+    sample: the record.
+
+  Returns:
+    Dict of arrays. Images are converted to 8-bit RGB whatever their file format.
+
+  Raises:
+    ValueError: a file is missing or unreadable, or the views differ in size; the message
+      names the file and `sample.source`.
+  """
+  if sample.is_virtual:
+    from mixstereo_tf.data import sample as sample_source  # pylint: disable=g-import-not-at-top
+    return sample_source.load_virtual(sample)
+  from mixstereo_tf.data import image_io  # pylint: disable=g-import-not-at-top
+  return image_io.load_file_sample(sample)
