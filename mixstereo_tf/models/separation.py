@@ -1,0 +1,67 @@
+"""The separation module: a U-Net from the mixture to the two views (paper section 3.1).
+
+Paper: "a U-Net ... 22 convolutional layers", ReLU after each but the last, element-wise
+ADD skip connections, `tanh` output with 6 channels (left RGB, right RGB). With the default
+widths 32-64-128-256-512-512 the layers are:
+  1  3x3 conv (full resolution)
+  2-11  five levels of [3x3 stride-2 conv, 3x3 conv]
+  12-21 five levels of [2x2 stride-2 transposed conv, ADD the encoder output, 3x3 conv]
+  22 3x3 conv to 6 channels, tanh
+which is 14,313,862 parameters.
+"""
+
+from typing import Dict, Sequence
+
+import tensorflow as tf
+
+from mixstereo_tf.models import layers_util
+
+
+class SeparationNet(tf.keras.Model):
+  """U-Net F: mixture [B, H, W, 3] in [-1, 1] -> {'left', 'right'} in [-1, 1]."""
+
+  def __init__(self, widths: Sequence[int] = (32, 64, 128, 256, 512, 512), **kwargs):
+    super().__init__(**kwargs)
+    self.widths = tuple(int(w) for w in widths)
+    conv = layers_util.conv2d
+    self.stem = conv(self.widths[0], 3, name='conv1')
+    self.down = []
+    index = 2
+    for width in self.widths[1:]:
+      self.down.append((conv(width, 3, strides=2, name=f'conv{index}'),
+                        conv(width, 3, name=f'conv{index + 1}')))
+      index += 2
+    self.up = []
+    for width in reversed(self.widths[:-1]):
+      self.up.append((layers_util.conv2d_transpose(width, 2, name=f'conv{index}'),
+                      conv(width, 3, name=f'conv{index + 1}')))
+      index += 2
+    # Last layer: no ReLU, tanh to [-1, 1]; 6 channels = left RGB, right RGB.
+    self.head = conv(6, 3, activation='tanh', name=f'conv{index}')
+    self.num_conv_layers = index
+
+  @property
+  def size_multiple(self) -> int:
+    return 2 ** (len(self.widths) - 1)
+
+  def call(self, mixture: tf.Tensor, training: bool = False) -> Dict[str, tf.Tensor]:
+    layers_util.check_size(mixture, self.size_multiple, 'SeparationNet input')
+    x = self.stem(mixture)
+    skips = [x]
+    for strided, plain in self.down:
+      x = plain(strided(x))
+      skips.append(x)
+    skips.pop()
+    for (transposed, plain), skip in zip(self.up, reversed(skips)):
+      x = plain(transposed(x) + skip)  # Element-wise ADD skip connection (paper).
+    views = self.head(x)
+    return {'left': views[..., :3], 'right': views[..., 3:]}
+
+  def get_config(self):
+    config = super().get_config()
+    config.update({'widths': list(self.widths)})
+    return config
+
+  @classmethod
+  def from_config(cls, config):
+    return cls(**config)

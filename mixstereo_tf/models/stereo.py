@@ -1,0 +1,143 @@
+"""The stereo module: GC-Net-style disparity from the separated views (paper section 3.2).
+
+The paper builds on SsSMnet (Zhong et al. 2017) without its consistency check, i.e. GC-Net
+(Kendall et al. 2017), trained without ground-truth disparity:
+  1      5x5 stride-2 conv, F features              (shared 2D tower, 1/2 resolution)
+  2-17   8 residual blocks of two 3x3 convs, F
+  18     3x3 conv, F (no BN, no ReLU)
+  cost   concatenation volume over D/2 levels at 1/2 resolution -> [D/2, H/2, W/2, 2F]
+  19-20  two 3x3x3 convs, F
+  21-32  per level: 3x3x3 stride-2 conv (from the previous level's strided conv, as in
+         GC-Net), two 3x3x3 convs; widths 64, 64, 64, 128
+  33-36  3x3x3 stride-2 transposed convs, each ADDed to the matching encoder output
+  37     3x3x3 stride-2 transposed conv to 1 channel (no BN, no ReLU) -> [D, H, W]
+  soft-argmin over D levels -> disparity in full-resolution pixels.
+BN + ReLU follow every layer but 18 and 37 (convs before BN carry no bias).
+
+Right disparity: a mirrored pass. Flipping both views horizontally and swapping them turns
+the right view into the left view of a mirrored pair, whose left-referenced disparity is the
+right disparity mirrored; both passes run as one batch of 2B through shared weights.
+"""
+
+from typing import Dict, Sequence
+
+import tensorflow as tf
+
+from mixstereo_tf.models import layers_util
+from mixstereo_tf.ops import cost_volume
+
+
+class ConvBnRelu(tf.keras.layers.Layer):
+  """conv (no bias) -> batch norm -> ReLU, 2D or 3D, optionally transposed."""
+
+  def __init__(self, filters: int, kernel: int, strides: int = 1, rank: int = 2,
+               transposed: bool = False, **kwargs):
+    super().__init__(**kwargs)
+    self.filters, self.kernel, self.strides = filters, kernel, strides
+    self.rank, self.transposed = rank, transposed
+    layer = {(2, False): tf.keras.layers.Conv2D, (3, False): tf.keras.layers.Conv3D,
+             (2, True): tf.keras.layers.Conv2DTranspose,
+             (3, True): tf.keras.layers.Conv3DTranspose}[(rank, transposed)]
+    self.conv = layer(filters, kernel, strides=strides, padding='same', use_bias=False)
+    self.bn = tf.keras.layers.BatchNormalization()
+
+  def call(self, x, training=False):
+    return tf.nn.relu(self.bn(self.conv(x), training=training))
+
+  def get_config(self):
+    config = super().get_config()
+    config.update(filters=self.filters, kernel=self.kernel, strides=self.strides,
+                  rank=self.rank, transposed=self.transposed)
+    return config
+
+
+class StereoNet(tf.keras.Model):
+  """GC-Net-like stereo network: (left, right) -> {'disparity_left', 'disparity_right'}."""
+
+  def __init__(self, features: int = 32, residual_blocks: int = 8,
+               widths_3d: Sequence[int] = (64, 64, 64, 128), max_disparity: int = 96,
+               **kwargs):
+    super().__init__(**kwargs)
+    self.features, self.residual_blocks = int(features), int(residual_blocks)
+    self.widths_3d, self.max_disparity = tuple(int(w) for w in widths_3d), int(max_disparity)
+    f = self.features
+    self.tower_in = ConvBnRelu(f, 5, strides=2, name='conv1')
+    self.tower_blocks = [(ConvBnRelu(f, 3, name=f'conv{2 + 2 * i}'),
+                          ConvBnRelu(f, 3, name=f'conv{3 + 2 * i}'))
+                         for i in range(self.residual_blocks)]
+    self.tower_out = layers_util.conv2d(f, 3, activation=None, name='conv_tower_out')
+    self.volume_in = [ConvBnRelu(f, 3, rank=3, name='conv3d_a'),
+                      ConvBnRelu(f, 3, rank=3, name='conv3d_b')]
+    self.encoder = [(ConvBnRelu(w, 3, strides=2, rank=3, name=f'conv3d_down{i}'),
+                     ConvBnRelu(w, 3, rank=3, name=f'conv3d_down{i}_a'),
+                     ConvBnRelu(w, 3, rank=3, name=f'conv3d_down{i}_b'))
+                    for i, w in enumerate(self.widths_3d)]
+    skip_widths = (f,) + self.widths_3d[:-1]
+    self.decoder = [ConvBnRelu(w, 3, strides=2, rank=3, transposed=True,
+                               name=f'deconv3d_{i}')
+                    for i, w in reversed(list(enumerate(skip_widths)))]
+    self.volume_out = tf.keras.layers.Conv3DTranspose(1, 3, strides=2, padding='same',
+                                                      name='deconv3d_out')
+
+  @property
+  def size_multiple(self) -> int:
+    return 2 ** (len(self.widths_3d) + 1)
+
+  def _features(self, image, training):
+    x = self.tower_in(image, training=training)
+    for first, second in self.tower_blocks:
+      x = x + second(first(x, training=training), training=training)  # Residual block.
+    return self.tower_out(x)
+
+  def _disparity(self, left, right, training):
+    """Left-referenced disparity [B, H, W, 1] in pixels from a rectified pair."""
+    features = self._features(tf.concat([left, right], axis=0), training)
+    left_features, right_features = tf.split(features, 2, axis=0)
+    volume = cost_volume.concat_cost_volume(left_features, right_features,
+                                            self.max_disparity // 2)
+    x = volume
+    for layer in self.volume_in:
+      x = layer(x, training=training)
+    skips = [x]
+    down = volume
+    for strided, first, second in self.encoder:
+      down = strided(down, training=training)
+      skips.append(second(first(down, training=training), training=training))
+    x = skips.pop()
+    for deconv, skip in zip(self.decoder, reversed(skips)):
+      x = deconv(x, training=training) + skip  # GC-Net's skip additions.
+    cost = self.volume_out(x)[..., 0]  # [B, D, H, W]
+    return cost_volume.soft_argmin(cost)
+
+  def call(self, left: tf.Tensor, right: tf.Tensor, training: bool = False
+           ) -> Dict[str, tf.Tensor]:
+    """Both disparities of a rectified pair.
+
+    Args:
+      left: [B, H, W, 3] left view in [-1, 1]; H, W multiples of `size_multiple`.
+      right: [B, H, W, 3] right view.
+      training: batch-norm mode.
+
+    Returns:
+      'disparity_left' and 'disparity_right': [B, H, W, 1] float32, pixels, positive;
+      the left pixel x matches the right pixel x - d_L, the right pixel x matches the left
+      pixel x + d_R.
+    """
+    layers_util.check_size(left, self.size_multiple, 'StereoNet input')
+    mirrored_left = tf.reverse(right, axis=[2])
+    mirrored_right = tf.reverse(left, axis=[2])
+    disparity = self._disparity(tf.concat([left, mirrored_left], axis=0),
+                                tf.concat([right, mirrored_right], axis=0), training)
+    disparity_left, mirrored = tf.split(disparity, 2, axis=0)
+    return {'disparity_left': disparity_left,
+            'disparity_right': tf.reverse(mirrored, axis=[2])}
+
+  def get_config(self):
+    config = super().get_config()
+    config.update(features=self.features, residual_blocks=self.residual_blocks,
+                  widths_3d=list(self.widths_3d), max_disparity=self.max_disparity)
+    return config
+
+  @classmethod
+  def from_config(cls, config):
+    return cls(**config)
