@@ -1,0 +1,244 @@
+"""Readers for the image, disparity and mask files of the stereo datasets.
+
+Everything returns NumPy arrays in the project's reader conventions: images uint8 RGB
+`[H, W, 3]`; ground-truth disparity float32 `[H, W]` in pixels with 0 = unknown, plus a
+boolean validity mask. Bad input raises `ValueError` naming the file.
+"""
+
+import os
+import re
+from typing import Dict, Optional, Tuple
+
+import cv2
+import numpy as np
+
+from mixstereo_tf.data import records
+
+# Extensions `find_image` swaps: monodepth's KITTI lists name .jpg files, downloads hold .png.
+_SWAP_EXTENSIONS = ('.jpg', '.png')
+
+
+def _read_raw(path: str) -> np.ndarray:
+  """cv2.imread(IMREAD_UNCHANGED) with a ValueError naming a missing or unreadable file."""
+  if not os.path.isfile(path):
+    raise ValueError(f'File not found: {path}')
+  # IMREAD_UNCHANGED keeps 16-bit depth and ignores EXIF rotation (which would break the
+  # stereo geometry); palette PNGs are still expanded to BGR by the decoder.
+  array = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+  if array is None:
+    raise ValueError(f'Cannot decode image file: {path}')
+  return array
+
+
+def read_image(path: str) -> np.ndarray:
+  """Reads any 8/16-bit gray, gray+alpha, BGR or BGRA image as uint8 RGB `[H, W, 3]`.
+
+  16-bit values v become round(v / 257) (65535 -> 255, 257 k -> k).
+
+  Raises:
+    ValueError: missing or undecodable file, or an unsupported sample type (e.g. float).
+  """
+  array = _read_raw(path)
+  if array.dtype == np.uint16:
+    array = ((array.astype(np.uint32) + 128) // 257).astype(np.uint8)
+  elif array.dtype != np.uint8:
+    raise ValueError(f'Unsupported image sample type {array.dtype} in {path}')
+  if array.ndim == 2:
+    array = array[:, :, None]
+  channels = array.shape[2]
+  if channels in (1, 2):  # Gray (+ alpha): replicate the gray channel.
+    return np.repeat(array[:, :, :1], 3, axis=2)
+  if channels in (3, 4):  # BGR (+ alpha): drop alpha, reorder to RGB.
+    return np.ascontiguousarray(array[:, :, 2::-1])
+  raise ValueError(f'Unsupported channel count {channels} in {path}')
+
+
+def find_image(path: str) -> str:
+  """Returns `path` if it exists, else the same stem with the other of .jpg / .png.
+
+  Raises:
+    ValueError: neither exists; the message names the path and the alternative tried.
+  """
+  if os.path.isfile(path):
+    return path
+  stem, ext = os.path.splitext(path)
+  tried = [path]
+  if ext.lower() in _SWAP_EXTENSIONS:
+    for other in _SWAP_EXTENSIONS:
+      if other != ext.lower():
+        candidate = stem + other
+        tried.append(candidate)
+        if os.path.isfile(candidate):
+          return candidate
+  raise ValueError(f'Image not found: {path} (tried {", ".join(tried)})')
+
+
+def read_pfm(path: str) -> np.ndarray:
+  """Reads a PFM file as float32 `[H, W]` ('Pf') or `[H, W, 3]` ('PF'), top row first.
+
+  PFM stores rows bottom-to-top; a negative header scale means little-endian samples.
+  Values are returned unchanged (inf/NaN included).
+
+  Raises:
+    ValueError: missing file, malformed header or truncated data.
+  """
+  if not os.path.isfile(path):
+    raise ValueError(f'File not found: {path}')
+  with open(path, 'rb') as f:
+    data = f.read()
+  # The header is three whitespace-separated fields after the magic: width, height, scale,
+  # ended by exactly one whitespace byte before the binary samples.
+  match = re.match(rb'(P[Ff])\s+(\d+)\s+(\d+)\s+([-+0-9.eE]+)\s', data)
+  if match is None:
+    raise ValueError(f'Malformed PFM header in {path}')
+  channels = 3 if match.group(1) == b'PF' else 1
+  width, height = int(match.group(2)), int(match.group(3))
+  try:
+    scale = float(match.group(4))
+  except ValueError:
+    raise ValueError(f'Malformed PFM scale {match.group(4)!r} in {path}') from None
+  count = width * height * channels
+  body = data[match.end():]
+  if len(body) < 4 * count:
+    raise ValueError(f'Truncated PFM data in {path}: expected {count} floats for '
+                     f'{width}x{height}x{channels}, found {len(body) // 4}')
+  dtype = '<f4' if scale < 0 else '>f4'
+  array = np.frombuffer(body, dtype=dtype, count=count).astype(np.float32)
+  shape = (height, width) if channels == 1 else (height, width, 3)
+  return np.ascontiguousarray(np.flipud(array.reshape(shape)))
+
+
+def write_pfm(path: str, array: np.ndarray) -> None:
+  """Writes float32 `[H, W]` or `[H, W, 3]` (top row first) as a little-endian PFM."""
+  array = np.asarray(array, dtype=np.float32)
+  if array.ndim == 3 and array.shape[2] == 1:
+    array = array[:, :, 0]
+  if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
+    raise ValueError(f'write_pfm({path}): expected [H, W] or [H, W, 3], got {array.shape}')
+  magic = 'PF' if array.ndim == 3 else 'Pf'
+  header = f'{magic}\n{array.shape[1]} {array.shape[0]}\n-1.0\n'.encode('ascii')
+  with open(path, 'wb') as f:
+    f.write(header)
+    f.write(np.flipud(array).astype('<f4').tobytes())
+
+
+def _single_channel(array: np.ndarray, path: str) -> np.ndarray:
+  """Returns a 2-D map; 3/4-channel files are accepted only when their colours are equal."""
+  if array.ndim == 2:
+    return array
+  if array.ndim == 3 and array.shape[2] == 1:
+    return array[:, :, 0]
+  if array.ndim == 3 and np.all(array[:, :, :3] == array[:, :, :1]):
+    return array[:, :, 0]
+  raise ValueError(f'Expected a single-channel map in {path}, got shape {array.shape}')
+
+
+def read_disparity(path: str, scale: float = 1.0) -> Tuple[np.ndarray, np.ndarray]:
+  """Reads ground-truth disparity in pixels: stored value / `scale`.
+
+  Formats: .pfm floats (Middlebury 2014, Scene Flow; scale normally 1); 16-bit PNG (KITTI,
+  scale 256); 8-bit PNG/PGM (Middlebury 2001/2003, scale 16/8/4). Stored 0, negative, inf
+  and NaN values are unknown.
+
+  Returns:
+    (disparity float32 [H, W] with unknown pixels set to 0, valid bool [H, W]).
+
+  Raises:
+    ValueError: missing/unreadable file, more than one channel, or scale <= 0.
+  """
+  if not scale > 0:
+    raise ValueError(f'Disparity scale must be positive for {path}, got {scale}')
+  if path.lower().endswith('.pfm'):
+    stored = read_pfm(path)
+  else:
+    stored = _read_raw(path)
+    if stored.dtype not in (np.uint8, np.uint16):
+      raise ValueError(f'Unsupported disparity sample type {stored.dtype} in {path}')
+  stored = _single_channel(stored, path).astype(np.float32)
+  valid = np.isfinite(stored) & (stored > 0)
+  disparity = np.where(valid, stored / np.float32(scale), 0).astype(np.float32)
+  return disparity, valid
+
+
+def read_mask(path: str) -> np.ndarray:
+  """Reads an evaluation mask as bool `[H, W]`.
+
+  8-bit masks: True only where white (255). This matches the Middlebury 2001/2003 masks
+  (`nonocc.png`, `all.png`: 255 = evaluated) and Middlebury 2014 `mask0nocc.png` (255 =
+  non-occluded, 128 = occluded, 0 = invalid). 16-bit files are KITTI disparity maps used as
+  masks (`disp_noc` as the non-occluded mask): True where the value is > 0. Colour masks are
+  white only where all colour channels are 255.
+  """
+  array = _read_raw(path)
+  if array.ndim == 3:
+    array = array[:, :, :3].min(axis=2)
+  if array.dtype == np.uint16:
+    return array > 0
+  if array.dtype == np.uint8:
+    return array == 255
+  raise ValueError(f'Unsupported mask sample type {array.dtype} in {path}')
+
+
+def _check_shape(array: np.ndarray, shape: Tuple[int, int], path: str, what: str) -> None:
+  if array.shape[:2] != shape:
+    raise ValueError(f'{what} {path} is {array.shape[1]}x{array.shape[0]} but the left '
+                     f'image is {shape[1]}x{shape[0]}')
+
+
+def _read_gt(path: Optional[str], scale: float,
+             shape: Tuple[int, int]) -> Tuple[np.ndarray, np.ndarray]:
+  if path is None:
+    return np.zeros(shape, np.float32), np.zeros(shape, bool)
+  disparity, valid = read_disparity(path, scale)
+  _check_shape(disparity, shape, path, 'disparity')
+  return disparity, valid
+
+
+def _read_optional_mask(path: Optional[str], shape: Tuple[int, int]) -> np.ndarray:
+  if path is None:
+    return np.ones(shape, bool)
+  mask = read_mask(path)
+  _check_shape(mask, shape, path, 'mask')
+  return mask
+
+
+def _load(sample: records.StereoSample) -> Dict[str, np.ndarray]:
+  left_path, right_path = find_image(sample.left), find_image(sample.right)
+  left, right = read_image(left_path), read_image(right_path)
+  if left.shape != right.shape:
+    raise ValueError(f'left {left_path} is {left.shape[1]}x{left.shape[0]} but right '
+                     f'{right_path} is {right.shape[1]}x{right.shape[0]}')
+  shape = left.shape[:2]
+  disparity_left, valid_left = _read_gt(sample.disparity_left, sample.disparity_scale, shape)
+  disparity_right, valid_right = _read_gt(sample.disparity_right, sample.disparity_scale,
+                                          shape)
+  valid_left &= _read_optional_mask(sample.all_left, shape)
+  nonocc_left = valid_left & _read_optional_mask(sample.nonocc_left, shape)
+  disparity_left = np.where(valid_left, disparity_left, 0).astype(np.float32)
+  return {
+      'left': left,
+      'right': right,
+      'disparity_left': disparity_left,
+      'disparity_right': disparity_right,
+      'valid_left': valid_left,
+      'valid_right': valid_right,
+      'nonocc_left': nonocc_left,
+  }
+
+
+def load_file_sample(sample: records.StereoSample) -> Dict[str, np.ndarray]:
+  """Loads a file-backed sample into arrays with exactly the keys of `records.LOADED_KEYS`.
+
+  valid_left = GT known AND inside `all_left` (when given); nonocc_left = valid_left AND
+  `nonocc_left` (when given), else valid_left. Disparity outside the validity masks is 0.
+  Missing ground truth gives zero disparity and all-False masks. Image paths go through
+  `find_image`, so a .jpg entry also finds a .png file.
+
+  Raises:
+    ValueError: a file is missing or unreadable, or sizes differ; the message names the
+      file(s) and `sample.source`.
+  """
+  try:
+    return _load(sample)
+  except ValueError as e:
+    raise ValueError(f'{sample.source or sample.name}: {e}') from None

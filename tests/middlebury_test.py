@@ -1,0 +1,148 @@
+"""Tests for mixstereo_tf.data.middlebury on tiny scene folders written into tmp_path."""
+
+import os
+
+import cv2
+import numpy as np
+import pytest
+
+from mixstereo_tf.data import image_io
+from mixstereo_tf.data import middlebury
+from mixstereo_tf.data import records
+
+_SHAPE = (8, 12)
+
+
+def _write(folder, name, array):
+  os.makedirs(folder, exist_ok=True)
+  path = os.path.join(folder, name)
+  assert cv2.imwrite(path, array), path
+  return path
+
+
+def _views(folder, left_name, right_name):
+  _write(folder, left_name, np.full(_SHAPE + (3,), 10, np.uint8))
+  _write(folder, right_name, np.full(_SHAPE + (3,), 20, np.uint8))
+
+
+def _tsukuba(folder, stored=80):
+  _views(folder, 'scene1.row3.col3.ppm', 'scene1.row3.col4.ppm')
+  _write(folder, 'truedisp.row3.col3.pgm', np.full(_SHAPE, stored, np.uint8))
+
+
+def _classic(folder, stored=20):
+  _views(folder, 'im2.ppm', 'im6.ppm')
+  _write(folder, 'disp2.pgm', np.full(_SHAPE, stored, np.uint8))
+  _write(folder, 'disp6.png', np.full(_SHAPE, stored, np.uint8))
+
+
+def _scene_2014(folder):
+  _views(folder, 'im0.png', 'im1.png')
+  disparity = np.full(_SHAPE, 37.25, np.float32)
+  disparity[0, 0] = np.inf
+  image_io.write_pfm(os.path.join(folder, 'disp0.pfm'), disparity)
+  mask = np.full(_SHAPE, 255, np.uint8)
+  mask[1, :3] = [128, 0, 255]
+  _write(folder, 'mask0nocc.png', mask)
+  with open(os.path.join(folder, 'calib.txt'), 'w') as f:
+    f.write('cam0=[3979.911 0 1244.772; 0 3979.911 1019.507; 0 0 1]\n'
+            'cam1=[3979.911 0 1369.115; 0 3979.911 1019.507; 0 0 1]\n'
+            'doffs=124.343\nbaseline=193.001\nwidth=2964\nheight=1988\nndisp=270\n'
+            'isint=0\nvmin=23\nvmax=245\ndyavg=-0.031\ndymax=0.320\n')
+
+
+def test_tsukuba_scale_and_official_masks(tmp_path):
+  folder = str(tmp_path / 'tsukuba')
+  _tsukuba(folder, stored=80)
+  all_mask = np.full(_SHAPE, 255, np.uint8)
+  all_mask[:, 0] = 0
+  nonocc = all_mask.copy()
+  nonocc[:, 1] = 0
+  _write(folder, 'all.png', all_mask)
+  _write(folder, 'nonocc.png', nonocc)
+  _write(folder, 'disc.png', np.zeros(_SHAPE, np.uint8))  # Ignored.
+  sample, = middlebury.middlebury_samples(str(tmp_path))
+  assert sample.name == 'tsukuba' and sample.disparity_scale == 16
+  loaded = records.load_sample(sample)
+  assert loaded['left'][0, 0, 0] == 10 and loaded['right'][0, 0, 0] == 20
+  np.testing.assert_array_equal(loaded['disparity_left'][0], [0] + [5] * 11)
+  np.testing.assert_array_equal(loaded['valid_left'][0], [False] + [True] * 11)
+  np.testing.assert_array_equal(loaded['nonocc_left'][0], [False] * 2 + [True] * 10)
+  assert not loaded['valid_right'].any()
+
+
+@pytest.mark.parametrize('scene, pixels', [('Cones', 5.0), ('teddy', 5.0), ('Venus', 2.5),
+                                           ('bull', 2.5), ('TSUKUBA', 1.25)])
+def test_classic_scale_by_folder_name(tmp_path, scene, pixels):
+  _classic(str(tmp_path / scene), stored=20)
+  sample, = middlebury.middlebury_samples(str(tmp_path))
+  loaded = records.load_sample(sample)
+  assert sample.name == scene
+  np.testing.assert_allclose(loaded['disparity_left'], pixels)
+  np.testing.assert_allclose(loaded['disparity_right'], pixels)
+  assert loaded['nonocc_left'].all()  # No occlusion information: equals valid_left.
+
+
+def test_scale_overrides(tmp_path):
+  _classic(str(tmp_path / 'Cones'))
+  _classic(str(tmp_path / 'map'))
+  samples = middlebury.middlebury_samples(str(tmp_path), scale_overrides={'MAP': 2})
+  assert {s.name: s.disparity_scale for s in samples} == {'Cones': 4, 'map': 2}
+  with pytest.raises(ValueError, match="not found.*'teddy'"):
+    middlebury.middlebury_samples(str(tmp_path), scale_overrides={'teddy': 4})
+  with pytest.raises(ValueError, match='positive'):
+    middlebury.middlebury_samples(str(tmp_path), scale_overrides={'map': 0})
+
+
+def test_nested_2014_scene_and_calib(tmp_path):
+  folder = str(tmp_path / '2014' / 'Motorcycle-perfect')
+  _scene_2014(folder)
+  os.makedirs(tmp_path / 'notes')  # Matches no layout: skipped.
+  sample, = middlebury.middlebury_samples(str(tmp_path))
+  assert sample.name == 'Motorcycle-perfect' and sample.disparity_scale == 1
+  assert sample.calib == os.path.join(folder, 'calib.txt')
+  loaded = records.load_sample(sample)
+  assert loaded['disparity_left'][0, 0] == 0 and not loaded['valid_left'][0, 0]
+  assert loaded['disparity_left'][0, 1] == np.float32(37.25)
+  np.testing.assert_array_equal(loaded['nonocc_left'][1, :4], [False, False, True, True])
+  calib = middlebury.parse_calib(sample.calib)
+  np.testing.assert_allclose(calib['cam1'], [[3979.911, 0, 1369.115], [0, 3979.911, 1019.507],
+                                             [0, 0, 1]])
+  assert calib['baseline'] == 193.001 and calib['doffs'] == 124.343
+  assert calib['width'] == 2964 and isinstance(calib['ndisp'], int)
+  assert calib['vmin'] == 23 and calib['vmax'] == 245 and calib['dyavg'] == -0.031
+
+
+def test_data_dir_is_one_scene(tmp_path):
+  _scene_2014(str(tmp_path / 'Piano'))
+  sample, = middlebury.middlebury_samples(str(tmp_path / 'Piano') + os.sep)
+  assert sample.name == 'Piano'
+
+
+def test_duplicate_scene_names_use_relative_paths(tmp_path):
+  _classic(str(tmp_path / '2001' / 'venus'))
+  _classic(str(tmp_path / 'copy' / 'venus'))
+  names = [s.name for s in middlebury.middlebury_samples(str(tmp_path))]
+  assert names == ['2001/venus', 'copy/venus']
+
+
+def test_no_scene_lists_layouts(tmp_path):
+  os.makedirs(tmp_path / 'a' / 'b')
+  _views(str(tmp_path / 'a'), 'im2.ppm', 'im3.ppm')  # im6 missing: not a scene.
+  with pytest.raises(ValueError, match='No Middlebury scene.*im0.png.*scene1.row3.*im2'):
+    middlebury.middlebury_samples(str(tmp_path))
+  with pytest.raises(ValueError, match='not a folder'):
+    middlebury.middlebury_samples(str(tmp_path / 'missing'))
+
+
+def test_parse_calib_bad_lines(tmp_path):
+  path = tmp_path / 'calib.txt'
+  path.write_text('doffs=1.5\n\nbaseline 193\n')
+  with pytest.raises(ValueError, match=r"calib\.txt:3: expected 'key=value'"):
+    middlebury.parse_calib(str(path))
+  path.write_text('cam0=[1 0 2; 0 1 3]\n')
+  with pytest.raises(ValueError, match=r'calib\.txt:1: expected a 3x3'):
+    middlebury.parse_calib(str(path))
+  path.write_text('ndisp=abc\n')
+  with pytest.raises(ValueError, match=r'calib\.txt:1'):
+    middlebury.parse_calib(str(path))
