@@ -19,6 +19,8 @@ setuptools.setup(
         'opencv-python-headless>=4.6',
         'scikit-image>=0.21',
         'absl-py>=1.0',
+        # tf.summary's writers live in tensorboard, which recent TF no longer pulls in.
+        'tensorboard>=2.15',
     ],
     extras_require={'test': ['pytest>=7']},
     entry_points={

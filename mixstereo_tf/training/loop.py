@@ -1,0 +1,211 @@
+"""The training loop: strategy, checkpoints that survive interruptions, summaries, progress.
+
+Checkpoints (`tf.train.CheckpointManager` in `model_dir`) hold the model, the optimizer
+state and its step counter. One is written every `checkpoint_every` steps, at the end, on
+SIGINT/SIGTERM (the loop finishes the running step, saves and returns), and when a step
+raises. A non-finite loss raises `NonFiniteLossError` naming the step WITHOUT saving, so the
+last good checkpoint stays the newest.
+"""
+
+import dataclasses
+import math
+import os
+import signal
+import time
+from typing import Callable, Optional
+
+from absl import logging
+import tensorflow as tf
+
+from mixstereo_tf import models
+from mixstereo_tf import objective
+from mixstereo_tf.training import config as config_lib
+from mixstereo_tf.training import step as step_lib
+from mixstereo_tf.training import summaries
+
+
+class NonFiniteLossError(FloatingPointError):
+  """The loss became NaN or infinite; the message names the step."""
+
+
+@dataclasses.dataclass(frozen=True)
+class TrainResult:
+  """What a call to `train` did."""
+  start_step: int
+  final_step: int
+  interrupted_by: Optional[str]
+  last_checkpoint: Optional[str]
+  final_loss: float
+  steps_per_second: float
+  num_replicas: int
+
+
+def make_strategy(name: str) -> tf.distribute.Strategy:
+  """'default' (one device), 'mirrored' (all local devices), 'multi_worker' (TF_CONFIG)."""
+  if name == 'default':
+    return tf.distribute.get_strategy()
+  if name == 'mirrored':
+    return tf.distribute.MirroredStrategy()
+  if name == 'multi_worker':
+    return tf.distribute.MultiWorkerMirroredStrategy()
+  raise ValueError(f'Unknown strategy {name!r}; valid: {config_lib.STRATEGIES}.')
+
+
+def _device_type(strategy: tf.distribute.Strategy) -> str:
+  """'GPU' or 'CPU' (or 'TPU'): the device type the step runs on."""
+  if strategy is tf.distribute.get_strategy() and not tf.distribute.has_strategy():
+    # The default strategy places ops on the first GPU when there is one.
+    return 'GPU' if tf.config.list_logical_devices('GPU') else 'CPU'
+  devices = strategy.extended.worker_devices
+  return tf.DeviceSpec.from_string(devices[0]).device_type or 'CPU'
+
+
+def _set_precision(enabled: bool, device_type: str) -> None:
+  # float16 needs loss scaling and is fast on GPUs; CPUs have bfloat16 kernels instead.
+  if not enabled:
+    tf.keras.mixed_precision.set_global_policy('float32')
+  else:
+    tf.keras.mixed_precision.set_global_policy(
+        'mixed_float16' if device_type == 'GPU' else 'mixed_bfloat16')
+
+
+class _StopSignals:
+  """Turns SIGINT/SIGTERM into a flag the loop checks between steps."""
+
+  def __init__(self):
+    self.received: Optional[str] = None
+    self._previous = {}
+
+  def __enter__(self):
+    for signum in (signal.SIGINT, signal.SIGTERM):
+      self._previous[signum] = signal.signal(signum, self._handle)
+    return self
+
+  def _handle(self, signum, frame):
+    del frame
+    self.received = signal.Signals(signum).name
+
+  def __exit__(self, *exc):
+    for signum, handler in self._previous.items():
+      signal.signal(signum, handler)
+
+
+def _check_batch(dataset: tf.data.Dataset, strategy: tf.distribute.Strategy) -> int:
+  batch = dataset.element_spec['mixture'].shape[0]
+  if batch is None:
+    raise ValueError('The training dataset must have a static batch size (drop_remainder).')
+  if batch % strategy.num_replicas_in_sync:
+    raise ValueError(f'batch_size {batch} is not divisible by the '
+                     f'{strategy.num_replicas_in_sync} replicas of the strategy.')
+  return batch
+
+
+def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
+          loss_config: objective.LossConfig,
+          dataset_fn: Callable[[], tf.data.Dataset],
+          flags_text: Optional[str] = None,
+          extra_configs: Optional[dict] = None) -> TrainResult:
+  """Trains (or resumes training) until `config.num_steps` optimizer steps.
+
+  Args:
+    config: the training configuration.
+    model_config: the architecture.
+    loss_config: the loss weights.
+    dataset_fn: returns the training dataset of GLOBAL batches (it is split over replicas).
+    flags_text: the command line flags, saved as `flags.txt` beside the checkpoints.
+    extra_configs: other configs (data, pipeline) to record in `config.json`.
+
+  Returns:
+    A TrainResult.
+
+  Raises:
+    NonFiniteLossError: the loss became non-finite; the newest checkpoint is the last good.
+  """
+  tf.io.gfile.makedirs(config.model_dir)
+  if flags_text is not None:
+    with tf.io.gfile.GFile(os.path.join(config.model_dir, 'flags.txt'), 'w') as f:
+      f.write(flags_text)
+  with tf.io.gfile.GFile(os.path.join(config.model_dir, 'config.json'), 'w') as f:
+    f.write(config_lib.to_json(train=config, model=model_config, loss=loss_config,
+                               **(extra_configs or {})))
+
+  strategy = make_strategy(config.strategy)
+  device_type = _device_type(strategy)
+  jit = step_lib.resolve_jit_compile(config.jit_compile, device_type)
+  _set_precision(config.mixed_precision, device_type)
+  tf.keras.utils.set_random_seed(config.seed)
+  dataset = dataset_fn()
+  _check_batch(dataset, strategy)
+  logging.info('Strategy %s with %d replica(s) on %s; jit_compile=%s; mode=%s.',
+               config.strategy, strategy.num_replicas_in_sync, device_type, jit, config.mode)
+
+  with strategy.scope():
+    model = models.build_model(model_config)
+    optimizer = tf.keras.optimizers.RMSprop(config.learning_rate)  # Paper: RMSProp, 1e-4.
+    if config.mixed_precision and device_type == 'GPU':
+      optimizer = tf.keras.mixed_precision.LossScaleOptimizer(optimizer)
+    trainer = step_lib.TrainStep(model, optimizer, loss_config, config.mode, strategy, jit)
+    optimizer.build(trainer.variables)
+    checkpoint = tf.train.Checkpoint(model=model, optimizer=optimizer)
+  manager = tf.train.CheckpointManager(checkpoint, config.model_dir,
+                                       max_to_keep=config.max_checkpoints)
+  if manager.latest_checkpoint:
+    checkpoint.restore(manager.latest_checkpoint).assert_existing_objects_matched()
+    logging.info('Resumed from %s at step %d.', manager.latest_checkpoint,
+                 int(optimizer.iterations.numpy()))
+  elif config.init_checkpoint:
+    tf.train.Checkpoint(model=model).read(config.init_checkpoint).expect_partial()
+    logging.info('Initialised the model from %s.', config.init_checkpoint)
+
+  start_step = step = int(optimizer.iterations.numpy())
+  writer = tf.summary.create_file_writer(os.path.join(config.model_dir, 'train'))
+  iterator = iter(strategy.experimental_distribute_dataset(dataset))
+  last_save = manager.latest_checkpoint
+  loss = math.nan
+  rate = 0.0
+  tick, tick_step = None, step
+  with _StopSignals() as signals, writer.as_default():
+    try:
+      while step < config.num_steps and signals.received is None:
+        batch = next(iterator)
+        scalars, outputs = trainer(batch)
+        step = int(optimizer.iterations.numpy())
+        loss = float(scalars['loss'])
+        if not math.isfinite(loss):
+          raise NonFiniteLossError(
+              f'Non-finite loss {loss} at step {step}; stopping. The last good checkpoint '
+              f'is {manager.latest_checkpoint} (not overwritten).')
+        if tick is None:  # The first step includes tracing and compilation.
+          tick, tick_step = time.perf_counter(), step
+        elif step > tick_step:
+          rate = (step - tick_step) / (time.perf_counter() - tick)
+        if step % config.summary_every == 0:
+          summaries.write_scalars({k: float(v) for k, v in scalars.items()}, step,
+                                  {'learning_rate': config.learning_rate,
+                                   'steps_per_second': rate})
+        if step % config.image_summary_every == 0:
+          local = strategy.experimental_local_results(batch)[0]
+          summaries.write_images(local, outputs, step, model_config.max_disparity)
+        if step % config.log_every == 0 or step == config.num_steps:
+          eta = (config.num_steps - step) / rate if rate > 0 else math.nan
+          logging.info('step %d/%d  loss %.4f  %.3f steps/s  ETA %.0f s', step,
+                       config.num_steps, loss, rate, eta)
+        if step % config.checkpoint_every == 0:
+          last_save = manager.save(checkpoint_number=step)
+    except NonFiniteLossError:
+      raise
+    except BaseException:
+      # A crash in the data or the step: keep the weights of the last completed step.
+      last_save = manager.save(checkpoint_number=step)
+      logging.error('Training failed at step %d; checkpoint saved to %s.', step, last_save)
+      raise
+    if last_save is None or int(last_save.rsplit('-', 1)[-1]) != step:
+      last_save = manager.save(checkpoint_number=step)
+    if signals.received:
+      logging.warning('Stopped by %s at step %d; checkpoint %s.', signals.received, step,
+                      last_save)
+  writer.flush()
+  return TrainResult(start_step=start_step, final_step=step,
+                     interrupted_by=signals.received, last_checkpoint=last_save,
+                     final_loss=loss, steps_per_second=rate,
+                     num_replicas=strategy.num_replicas_in_sync)
