@@ -1,5 +1,7 @@
 """Architecture tests: the paper's parameter budget, shapes, configs, gradient paths."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 import tensorflow as tf
@@ -57,6 +59,15 @@ def test_mirrored_pass_swaps_the_disparities():
                              tf.reverse(direct['disparity_right'], [2]).numpy(), atol=1e-4)
   np.testing.assert_allclose(mirrored['disparity_right'].numpy(),
                              tf.reverse(direct['disparity_left'], [2]).numpy(), atol=1e-4)
+
+
+def test_conv3d_implementations_give_the_same_model():
+  native = models.build_model(dataclasses.replace(TINY, conv3d_implementation='native'))
+  dense = models.build_model(dataclasses.replace(TINY, conv3d_implementation='dense'))
+  dense.set_weights(native.get_weights())
+  expected = native(_mixture())
+  for key, value in dense(_mixture()).items():
+    np.testing.assert_allclose(value.numpy(), expected[key].numpy(), atol=1e-4)
 
 
 def test_input_not_a_multiple_of_32_is_a_clear_error():

@@ -3,6 +3,8 @@
 import dataclasses
 from typing import Any, Dict, Mapping, Tuple
 
+from mixstereo_tf.ops import conv3d
+
 
 @dataclasses.dataclass(frozen=True)
 class ModelConfig:
@@ -16,12 +18,15 @@ class ModelConfig:
     stereo_3d_widths: widths of the 3D encoder levels (GC-Net: 64, 64, 64, 128); the number
       of entries is the depth of the 3D encoder-decoder.
     max_disparity: disparity levels at full resolution (paper: 96; 48 at 1/2 resolution).
+    conv3d_implementation: how stride-2 3D (transposed) convs run, 'auto' | 'native' |
+      'dense' (`ops/conv3d.py`); the same function and weights either way.
   """
   separation_widths: Tuple[int, ...] = (32, 64, 128, 256, 512, 512)
   stereo_features: int = 32
   stereo_residual_blocks: int = 8
   stereo_3d_widths: Tuple[int, ...] = (64, 64, 64, 128)
   max_disparity: int = 96
+  conv3d_implementation: str = 'auto'
 
   def __post_init__(self):
     object.__setattr__(self, 'separation_widths', tuple(int(w) for w in self.separation_widths))
@@ -37,6 +42,9 @@ class ModelConfig:
     if self.stereo_features <= 0 or self.stereo_residual_blocks < 0:
       raise ValueError('ModelConfig.stereo_features must be positive and '
                        'stereo_residual_blocks non-negative.')
+    if self.conv3d_implementation not in conv3d.IMPLEMENTATIONS:
+      raise ValueError(f'ModelConfig.conv3d_implementation must be one of '
+                       f'{conv3d.IMPLEMENTATIONS}, got {self.conv3d_implementation!r}.')
     volume_multiple = 2 ** (len(self.stereo_3d_widths) + 1)
     if self.max_disparity <= 0 or self.max_disparity % volume_multiple:
       raise ValueError(

@@ -28,7 +28,8 @@ class MixStereoNet(tf.keras.Model):
     self.stereo = stereo.StereoNet(model_config.stereo_features,
                                    model_config.stereo_residual_blocks,
                                    model_config.stereo_3d_widths,
-                                   model_config.max_disparity, name='stereo')
+                                   model_config.max_disparity,
+                                   model_config.conv3d_implementation, name='stereo')
 
   @property
   def size_multiple(self) -> int:

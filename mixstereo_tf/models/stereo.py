@@ -24,21 +24,62 @@ from typing import Dict, Sequence
 import tensorflow as tf
 
 from mixstereo_tf.models import layers_util
+from mixstereo_tf.ops import conv3d
 from mixstereo_tf.ops import cost_volume
+
+
+class Strided3D(tf.keras.layers.Layer):
+  """A stride-2 3x3x3 conv or transposed conv (`ops/conv3d.py` picks the implementation).
+
+  The kernel has Keras' layout ([k, k, k, in, out], transposed: [k, k, k, out, in]) and
+  initialiser, so the layer is a drop-in for Conv3D / Conv3DTranspose with strides=2.
+  """
+
+  def __init__(self, filters: int, kernel: int = 3, transposed: bool = False,
+               use_bias: bool = False, implementation: str = 'auto', **kwargs):
+    super().__init__(**kwargs)
+    self.filters, self.kernel_size, self.transposed = filters, kernel, transposed
+    self.use_bias, self.implementation = use_bias, implementation
+    conv3d.resolve_implementation(implementation)  # Validates the name.
+
+  def build(self, input_shape):
+    channels = int(input_shape[-1])
+    k = self.kernel_size
+    shape = (k, k, k, self.filters, channels) if self.transposed else (
+        k, k, k, channels, self.filters)
+    self.kernel = self.add_weight(name='kernel', shape=shape,
+                                  initializer='glorot_uniform')
+    self.bias = (self.add_weight(name='bias', shape=(self.filters,), initializer='zeros')
+                 if self.use_bias else None)
+
+  def call(self, x):
+    if self.transposed:
+      y = conv3d.conv3d_transpose_stride2(x, self.kernel, self.implementation)
+    else:
+      y = conv3d.conv3d_stride2(x, self.kernel, self.implementation)
+    return y + self.bias if self.use_bias else y
+
+  def get_config(self):
+    config = super().get_config()
+    config.update(filters=self.filters, kernel=self.kernel_size, transposed=self.transposed,
+                  use_bias=self.use_bias, implementation=self.implementation)
+    return config
 
 
 class ConvBnRelu(tf.keras.layers.Layer):
   """conv (no bias) -> batch norm -> ReLU, 2D or 3D, optionally transposed."""
 
   def __init__(self, filters: int, kernel: int, strides: int = 1, rank: int = 2,
-               transposed: bool = False, **kwargs):
+               transposed: bool = False, implementation: str = 'auto', **kwargs):
     super().__init__(**kwargs)
     self.filters, self.kernel, self.strides = filters, kernel, strides
-    self.rank, self.transposed = rank, transposed
-    layer = {(2, False): tf.keras.layers.Conv2D, (3, False): tf.keras.layers.Conv3D,
-             (2, True): tf.keras.layers.Conv2DTranspose,
-             (3, True): tf.keras.layers.Conv3DTranspose}[(rank, transposed)]
-    self.conv = layer(filters, kernel, strides=strides, padding='same', use_bias=False)
+    self.rank, self.transposed, self.implementation = rank, transposed, implementation
+    if rank == 3 and strides == 2:
+      self.conv = Strided3D(filters, kernel, transposed, implementation=implementation)
+    else:
+      layer = {(2, False): tf.keras.layers.Conv2D, (3, False): tf.keras.layers.Conv3D,
+               (2, True): tf.keras.layers.Conv2DTranspose}[(rank, transposed)]
+      self.conv = layer(filters, kernel, strides=strides, padding='same', use_bias=False)
     self.bn = tf.keras.layers.BatchNormalization()
 
   def call(self, x, training=False):
@@ -47,7 +88,8 @@ class ConvBnRelu(tf.keras.layers.Layer):
   def get_config(self):
     config = super().get_config()
     config.update(filters=self.filters, kernel=self.kernel, strides=self.strides,
-                  rank=self.rank, transposed=self.transposed)
+                  rank=self.rank, transposed=self.transposed,
+                  implementation=self.implementation)
     return config
 
 
@@ -56,8 +98,10 @@ class StereoNet(tf.keras.Model):
 
   def __init__(self, features: int = 32, residual_blocks: int = 8,
                widths_3d: Sequence[int] = (64, 64, 64, 128), max_disparity: int = 96,
-               **kwargs):
+               conv3d_implementation: str = 'auto', **kwargs):
     super().__init__(**kwargs)
+    self.conv3d_implementation = conv3d_implementation
+    impl = {'implementation': conv3d_implementation}
     self.features, self.residual_blocks = int(features), int(residual_blocks)
     self.widths_3d, self.max_disparity = tuple(int(w) for w in widths_3d), int(max_disparity)
     f = self.features
@@ -68,16 +112,16 @@ class StereoNet(tf.keras.Model):
     self.tower_out = layers_util.conv2d(f, 3, activation=None, name='conv_tower_out')
     self.volume_in = [ConvBnRelu(f, 3, rank=3, name='conv3d_a'),
                       ConvBnRelu(f, 3, rank=3, name='conv3d_b')]
-    self.encoder = [(ConvBnRelu(w, 3, strides=2, rank=3, name=f'conv3d_down{i}'),
+    self.encoder = [(ConvBnRelu(w, 3, strides=2, rank=3, name=f'conv3d_down{i}', **impl),
                      ConvBnRelu(w, 3, rank=3, name=f'conv3d_down{i}_a'),
                      ConvBnRelu(w, 3, rank=3, name=f'conv3d_down{i}_b'))
                     for i, w in enumerate(self.widths_3d)]
     skip_widths = (f,) + self.widths_3d[:-1]
     self.decoder = [ConvBnRelu(w, 3, strides=2, rank=3, transposed=True,
-                               name=f'deconv3d_{i}')
+                               name=f'deconv3d_{i}', **impl)
                     for i, w in reversed(list(enumerate(skip_widths)))]
-    self.volume_out = tf.keras.layers.Conv3DTranspose(1, 3, strides=2, padding='same',
-                                                      name='deconv3d_out')
+    self.volume_out = Strided3D(1, 3, transposed=True, use_bias=True, name='deconv3d_out',
+                                **impl)
 
   @property
   def size_multiple(self) -> int:
@@ -135,7 +179,8 @@ class StereoNet(tf.keras.Model):
   def get_config(self):
     config = super().get_config()
     config.update(features=self.features, residual_blocks=self.residual_blocks,
-                  widths_3d=list(self.widths_3d), max_disparity=self.max_disparity)
+                  widths_3d=list(self.widths_3d), max_disparity=self.max_disparity,
+                  conv3d_implementation=self.conv3d_implementation)
     return config
 
   @classmethod
