@@ -5,8 +5,8 @@ the forward pass of `conv3d_transpose`) was measured 20-60x slower than a stride
 the same output size (experiments/BENCHMARKS.md). The 'dense' implementations below compute
 exactly the same function with stride-1 convolutions only:
   * stride-2 conv = stride-1 conv, then keep every other voxel;
-  * stride-2 transposed conv = zero-insertion upsampling, then a stride-1 conv with the
-    spatially flipped kernel.
+  * stride-2 transposed conv = its sub-pixel form: one stride-1 conv at the input
+    resolution whose 8 x C_out channels are the 8 output phases, interleaved afterwards.
 'native' calls the strided ops directly (the better choice on GPUs). Both take the same
 kernels, so checkpoints do not depend on the choice.
 
@@ -43,29 +43,43 @@ def conv3d_stride2(x: tf.Tensor, kernel: tf.Tensor, implementation: str = 'auto'
   return full[:, start::2, start::2, start::2, :]
 
 
-def _zero_insert(x: tf.Tensor) -> tf.Tensor:
-  """[B, D, H, W, C] -> [B, 2D, 2H, 2W, C] with x at even positions, zeros elsewhere."""
-  for axis in (1, 2, 3):
-    x = tf.stack([x, tf.zeros_like(x)], axis=axis + 1)
-    shape = tf.unstack(tf.shape(x))
-    new_shape = shape[:axis] + [shape[axis] * 2] + shape[axis + 2:]
-    x = tf.reshape(x, tf.stack(new_shape))
-  return x
+def _phase_taps(size: int):
+  """Per axis: for each output phase a (o = 2j + a), the kernel index of each input tap.
+
+  A stride-2 'SAME' transposed conv sends input i through kernel index kk to output
+  o = 2i + kk - p, p = (size - 2) // 2. Output 2j + a therefore reads inputs j + m with
+  kk = a + p - 2m. Returns (table [2, taps] with `size` meaning 'no weight', first offset).
+  """
+  p = (size - 2) // 2
+  offsets = {a: {(a + p - kk) // 2: kk for kk in range(size) if (a + p - kk) % 2 == 0}
+             for a in (0, 1)}
+  low = min(min(o) for o in offsets.values())
+  high = max(max(o) for o in offsets.values())
+  table = [[offsets[a].get(m, size) for m in range(low, high + 1)] for a in (0, 1)]
+  return table, low, high
 
 
 def conv3d_transpose_stride2(x: tf.Tensor, kernel: tf.Tensor,
                              implementation: str = 'auto') -> tf.Tensor:
   """3D transposed conv, stride 2, 'SAME': [B, D, H, W, C_in] -> [B, 2D, 2H, 2W, C_out]."""
   batch, depth, height, width = tf.unstack(tf.shape(x)[:4])
-  out_channels = kernel.shape[3]
+  size, out_channels, in_channels = kernel.shape[0], kernel.shape[3], kernel.shape[4]
   if resolve_implementation(implementation) == 'native':
     output_shape = tf.stack([batch, 2 * depth, 2 * height, 2 * width, out_channels])
     return tf.nn.conv3d_transpose(x, kernel, output_shape, [1, 2, 2, 2, 1], 'SAME')
-  size = kernel.shape[0]
-  # The transposed conv scatters x[i] to outputs 2i + k - p (p = (k - 2) // 2); as a
-  # correlation over the zero-inserted input that is padding k - 1 - p before, p after.
-  before = (size - 2) // 2
-  pads = [[0, 0]] + [[size - 1 - before, before]] * 3 + [[0, 0]]
-  flipped = tf.transpose(tf.reverse(kernel, [0, 1, 2]), [0, 1, 2, 4, 3])
-  upsampled = tf.pad(_zero_insert(x), pads)
-  return tf.nn.conv3d(upsampled, flipped, [1, 1, 1, 1, 1], 'VALID')
+  # Sub-pixel form: one stride-1 conv at the input resolution computes all 8 output
+  # phases (2 per axis) as channels, then they are interleaved into the doubled grid.
+  table, low, high = _phase_taps(size)
+  taps = high - low + 1
+  padded = tf.pad(kernel, [[0, 1]] * 3 + [[0, 0]] * 2)  # Index `size` = zero weight.
+  phased = padded
+  for axis in range(3):  # [.., k+1, ..] -> [.., 2, taps, ..] on each spatial axis.
+    phased = tf.gather(phased, table, axis=2 * axis)
+  # [2, T, 2, T, 2, T, out, in] -> [T, T, T, in, 2, 2, 2, out] -> [T, T, T, in, 8 out].
+  phased = tf.transpose(phased, [1, 3, 5, 7, 0, 2, 4, 6])
+  phased = tf.reshape(phased, [taps, taps, taps, in_channels, 8 * out_channels])
+  pads = [[0, 0]] + [[-low, high]] * 3 + [[0, 0]]
+  y = tf.nn.conv3d(tf.pad(x, pads), phased, [1, 1, 1, 1, 1], 'VALID')
+  y = tf.reshape(y, tf.stack([batch, depth, height, width, 2, 2, 2, out_channels]))
+  y = tf.transpose(y, [0, 1, 4, 2, 5, 3, 6, 7])
+  return tf.reshape(y, tf.stack([batch, 2 * depth, 2 * height, 2 * width, out_channels]))
