@@ -1,0 +1,129 @@
+"""Classical de-anaglyph / de-diplopia baselines on synthetic scenes with known disparity."""
+
+import cv2
+import numpy as np
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf import baselines
+from mixstereo_tf import mixtures
+from mixstereo_tf.baselines import colour_transfer
+from mixstereo_tf.baselines import diplopia
+from mixstereo_tf.baselines import sgm
+from mixstereo_tf.evaluation import metrics
+
+_H, _W = 64, 96
+_RECT = (16, 48, 32, 72)  # y0, y1, x0, x1 of the foreground in the left view.
+
+
+def _texture(rng, height, width):
+  """Smooth random colour texture, channels correlated like natural images, [0, 255]."""
+  def blur():
+    noise = cv2.GaussianBlur(rng.normal(size=(height, width)).astype(np.float32), (0, 0), 1.5)
+    return noise / noise.std()
+
+  base = blur()
+  channels = [0.8 * base + 0.4 * blur() + rng.uniform(-0.5, 0.5) for _ in range(3)]
+  return np.clip(127.5 + 40.0 * np.stack(channels, -1), 0, 255)
+
+
+def _scene(d_bg, d_fg, seed=0):
+  """Background plane (disparity d_bg) behind a fronto-parallel rectangle (d_fg).
+
+  Returns uint8 left, right, the true left disparity [H, W] and the non-occluded left mask.
+  """
+  rng = np.random.default_rng(seed)
+  background = _texture(rng, _H, _W + d_bg)
+  foreground = _texture(rng, _H, _W)
+  y0, y1, x0, x1 = _RECT
+  left, right = background[:, :_W].copy(), background[:, d_bg:].copy()
+  left[y0:y1, x0:x1] = foreground[y0:y1, x0:x1]
+  right[y0:y1, x0 - d_fg:x1 - d_fg] = foreground[y0:y1, x0:x1]
+  d_left = np.full((_H, _W), d_bg, np.float32)
+  d_left[y0:y1, x0:x1] = d_fg
+  d_right = np.full((_H, _W), d_bg, np.float32)
+  d_right[y0:y1, x0 - d_fg:x1 - d_fg] = d_fg
+  match = np.arange(_W)[None, :] - d_left.astype(np.int64)
+  nonocc = (match >= 0) & (np.take_along_axis(d_right, np.clip(match, 0, _W - 1), 1) == d_left)
+  return np.rint(left).astype(np.uint8), np.rint(right).astype(np.uint8), d_left, nonocc
+
+
+def _mix(name, left, right):
+  to_tf = lambda a: tf.constant(a.astype(np.float32) / 127.5 - 1.0)
+  return metrics.to_uint8(mixtures.mix(name, to_tf(left), to_tf(right)).numpy())
+
+
+def test_fill_holes_takes_the_smaller_neighbour():
+  disparity = np.array([[9., 0., 0., 4., 0.], [0., 7., 0., 0., 0.]], np.float32)
+  valid = disparity > 0
+  np.testing.assert_array_equal(sgm.fill_holes(disparity, valid),
+                                [[9, 4, 4, 4, 4], [7, 7, 7, 7, 7]])
+
+
+def test_lr_check_flags_an_inconsistent_pixel():
+  d_left = np.full((1, 8), 2.0, np.float32)
+  d_right = d_left.copy()
+  d_right[0, 3] = 5.0  # Left pixel 5 matches right pixel 3.
+  ok_left, ok_right = sgm.lr_check(d_left, d_right, 1.0)
+  np.testing.assert_array_equal(ok_left[0], [0, 0, 1, 1, 1, 0, 1, 1])
+  np.testing.assert_array_equal(ok_right[0], [1, 1, 1, 0, 1, 1, 0, 0])
+
+
+def test_local_linear_transfer_recovers_an_affine_channel():
+  rng = np.random.default_rng(1)
+  guide = rng.uniform(0.2, 0.8, (24, 24, 1))
+  target = 0.5 * guide + 0.1
+  train = rng.uniform(size=(24, 24)) < 0.5
+  predicted = colour_transfer.local_linear_transfer(guide, target, train, radius=3,
+                                                    eps=1e-6)
+  np.testing.assert_allclose(predicted, target, atol=2e-3)
+
+
+@pytest.mark.parametrize('name', ['anaglyph', 'green_magenta'])
+def test_anaglyph_disparity_and_colours(name):
+  left, right, d_left, nonocc = _scene(d_bg=3, d_fg=8)
+  mixture = _mix(name, left, right)
+  out = baselines.unmix_classical(mixture, name)
+  bad1 = metrics.bad_pixel_rate(out['disparity_left'], d_left, nonocc, 1.0)
+  trivial = metrics.bad_pixel_rate(np.full_like(d_left, np.median(d_left)), d_left, nonocc, 1.0)
+  assert bad1 < 0.15 and bad1 < trivial / 2, (bad1, trivial)
+  assert out['left'].dtype == np.uint8 and out['disparity_right'].shape == (_H, _W)
+  for view, truth in (('left', left), ('right', right)):
+    gain = metrics.psnr(out[view], truth) - metrics.psnr(mixture, truth)
+    assert gain >= 6.0, (view, gain)
+
+
+def test_diplopia_constant_shift_and_layers():
+  left, right, d_left, nonocc = _scene(d_bg=5, d_fg=5)
+  mixture = _mix('diplopia', left, right)
+  out = diplopia.unmix_diplopia(mixture)
+  assert out['global_shift'] == 5
+  interior = nonocc & (np.arange(_W)[None, :] >= 8)
+  assert abs(np.median(out['disparity_left'][interior]) - 5.0) < 1.0
+  assert metrics.bad_pixel_rate(out['disparity_left'], d_left, interior, 1.0) < 0.25
+  for view, truth in (('left', left), ('right', right)):
+    gain = metrics.psnr(out[view], truth) - metrics.psnr(mixture, truth)
+    assert gain >= 1.0, (view, gain)
+
+
+def test_diplopia_layers_with_true_shift_beat_the_mixture():
+  left, right, _, _ = _scene(d_bg=5, d_fg=5)
+  mixture01 = _mix('diplopia', left, right) / 255.0
+  layers = diplopia.separate_layers(mixture01, np.full((_H, _W), 5.0),
+                                    diplopia.DiplopiaConfig())
+  gain = (metrics.psnr(colour_transfer.to_uint8(layers['left']), left) -
+          metrics.psnr(mixture01 * 255.0, left))
+  assert gain >= 4.0, gain
+
+
+@pytest.mark.parametrize('name', ['monocular', 'gray', 'dubois', 'nonsense'])
+def test_unsupported_mixture_raises(name):
+  with pytest.raises(ValueError, match=name):
+    baselines.unmix_classical(np.zeros((8, 16, 3), np.uint8), name)
+
+
+def test_bad_image_raises():
+  with pytest.raises(ValueError, match='mixture'):
+    baselines.unmix_classical(np.zeros((8, 16), np.uint8), 'anaglyph')
+  with pytest.raises(ValueError, match=r'\[0, 1\]'):
+    baselines.unmix_classical(np.full((8, 16, 3), 2.0), 'diplopia')
