@@ -14,6 +14,19 @@ def conv2d_transpose(filters: int, kernel: int, name=None) -> tf.keras.layers.La
                                          activation='relu', name=name)
 
 
+def tracked(owner: tf.keras.layers.Layer, name: str, layers):
+  """Makes each layer of a list an attribute of `owner`, and returns the list.
+
+  Keras 3 keeps layers held in lists for its own variable collection, but
+  `tf.train.Checkpoint` only follows attributes; without this, checkpoints silently miss
+  every layer kept in a list.
+  """
+  layers = list(layers)
+  for index, layer in enumerate(layers):
+    setattr(owner, f'{name}_{index}', layer)
+  return layers
+
+
 def check_size(image: tf.Tensor, multiple: int, what: str) -> None:
   """Raises ValueError when a static height or width is not a multiple of `multiple`."""
   height, width = image.shape[1], image.shape[2]

@@ -25,17 +25,20 @@ class SeparationNet(tf.keras.Model):
     self.widths = tuple(int(w) for w in widths)
     conv = layers_util.conv2d
     self.stem = conv(self.widths[0], 3, name='conv1')
-    self.down = []
+    down_strided, down_plain, up_transposed, up_plain = [], [], [], []
     index = 2
     for width in self.widths[1:]:
-      self.down.append((conv(width, 3, strides=2, name=f'conv{index}'),
-                        conv(width, 3, name=f'conv{index + 1}')))
+      down_strided.append(conv(width, 3, strides=2, name=f'conv{index}'))
+      down_plain.append(conv(width, 3, name=f'conv{index + 1}'))
       index += 2
-    self.up = []
     for width in reversed(self.widths[:-1]):
-      self.up.append((layers_util.conv2d_transpose(width, 2, name=f'conv{index}'),
-                      conv(width, 3, name=f'conv{index + 1}')))
+      up_transposed.append(layers_util.conv2d_transpose(width, 2, name=f'conv{index}'))
+      up_plain.append(conv(width, 3, name=f'conv{index + 1}'))
       index += 2
+    self.down_strided = layers_util.tracked(self, 'down_strided', down_strided)
+    self.down_plain = layers_util.tracked(self, 'down_plain', down_plain)
+    self.up_transposed = layers_util.tracked(self, 'up_transposed', up_transposed)
+    self.up_plain = layers_util.tracked(self, 'up_plain', up_plain)
     # Last layer: no ReLU, tanh to [-1, 1]; 6 channels = left RGB, right RGB.
     self.head = conv(6, 3, activation='tanh', name=f'conv{index}')
     self.num_conv_layers = index
@@ -48,11 +51,11 @@ class SeparationNet(tf.keras.Model):
     layers_util.check_size(mixture, self.size_multiple, 'SeparationNet input')
     x = self.stem(mixture)
     skips = [x]
-    for strided, plain in self.down:
+    for strided, plain in zip(self.down_strided, self.down_plain):
       x = plain(strided(x))
       skips.append(x)
     skips.pop()
-    for (transposed, plain), skip in zip(self.up, reversed(skips)):
+    for transposed, plain, skip in zip(self.up_transposed, self.up_plain, reversed(skips)):
       x = plain(transposed(x) + skip)  # Element-wise ADD skip connection (paper).
     views = self.head(x)
     return {'left': views[..., :3], 'right': views[..., 3:]}

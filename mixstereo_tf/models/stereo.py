@@ -19,6 +19,7 @@ the right view into the left view of a mirrored pair, whose left-referenced disp
 right disparity mirrored; both passes run as one batch of 2B through shared weights.
 """
 
+import functools
 from typing import Dict, Sequence
 
 import tensorflow as tf
@@ -106,20 +107,27 @@ class StereoNet(tf.keras.Model):
     self.widths_3d, self.max_disparity = tuple(int(w) for w in widths_3d), int(max_disparity)
     f = self.features
     self.tower_in = ConvBnRelu(f, 5, strides=2, name='conv1')
-    self.tower_blocks = [(ConvBnRelu(f, 3, name=f'conv{2 + 2 * i}'),
-                          ConvBnRelu(f, 3, name=f'conv{3 + 2 * i}'))
-                         for i in range(self.residual_blocks)]
+    track = functools.partial(layers_util.tracked, self)
+    self.tower_first = track('tower_first', [ConvBnRelu(f, 3, name=f'conv{2 + 2 * i}')
+                                             for i in range(self.residual_blocks)])
+    self.tower_second = track('tower_second', [ConvBnRelu(f, 3, name=f'conv{3 + 2 * i}')
+                                               for i in range(self.residual_blocks)])
     self.tower_out = layers_util.conv2d(f, 3, activation=None, name='conv_tower_out')
-    self.volume_in = [ConvBnRelu(f, 3, rank=3, name='conv3d_a'),
-                      ConvBnRelu(f, 3, rank=3, name='conv3d_b')]
-    self.encoder = [(ConvBnRelu(w, 3, strides=2, rank=3, name=f'conv3d_down{i}', **impl),
-                     ConvBnRelu(w, 3, rank=3, name=f'conv3d_down{i}_a'),
-                     ConvBnRelu(w, 3, rank=3, name=f'conv3d_down{i}_b'))
-                    for i, w in enumerate(self.widths_3d)]
+    self.volume_in = track('volume_in', [ConvBnRelu(f, 3, rank=3, name='conv3d_a'),
+                                         ConvBnRelu(f, 3, rank=3, name='conv3d_b')])
+    self.encoder_strided = track('encoder_strided', [
+        ConvBnRelu(w, 3, strides=2, rank=3, name=f'conv3d_down{i}', **impl)
+        for i, w in enumerate(self.widths_3d)])
+    self.encoder_first = track('encoder_first', [
+        ConvBnRelu(w, 3, rank=3, name=f'conv3d_down{i}_a')
+        for i, w in enumerate(self.widths_3d)])
+    self.encoder_second = track('encoder_second', [
+        ConvBnRelu(w, 3, rank=3, name=f'conv3d_down{i}_b')
+        for i, w in enumerate(self.widths_3d)])
     skip_widths = (f,) + self.widths_3d[:-1]
-    self.decoder = [ConvBnRelu(w, 3, strides=2, rank=3, transposed=True,
-                               name=f'deconv3d_{i}', **impl)
-                    for i, w in reversed(list(enumerate(skip_widths)))]
+    self.decoder = track('decoder', [
+        ConvBnRelu(w, 3, strides=2, rank=3, transposed=True, name=f'deconv3d_{i}', **impl)
+        for i, w in reversed(list(enumerate(skip_widths)))])
     self.volume_out = Strided3D(1, 3, transposed=True, use_bias=True, name='deconv3d_out',
                                 **impl)
 
@@ -129,7 +137,7 @@ class StereoNet(tf.keras.Model):
 
   def _features(self, image, training):
     x = self.tower_in(image, training=training)
-    for first, second in self.tower_blocks:
+    for first, second in zip(self.tower_first, self.tower_second):
       x = x + second(first(x, training=training), training=training)  # Residual block.
     return self.tower_out(x)
 
@@ -144,7 +152,8 @@ class StereoNet(tf.keras.Model):
       x = layer(x, training=training)
     skips = [x]
     down = volume
-    for strided, first, second in self.encoder:
+    for strided, first, second in zip(self.encoder_strided, self.encoder_first,
+                                      self.encoder_second):
       down = strided(down, training=training)
       skips.append(second(first(down, training=training), training=training))
     x = skips.pop()
