@@ -1,0 +1,212 @@
+"""Reading inputs and writing results of the unmix tool: images, videos, disparity files.
+
+Images are uint8 RGB `[H, W, 3]` (docs/DESIGN.md reader convention); disparities float32
+`[H, W]` in pixels, positive. Video goes through OpenCV (`cv2.VideoCapture` /
+`cv2.VideoWriter` with the 'mp4v' codec, which the opencv-python-headless wheels can write).
+"""
+
+import dataclasses
+import glob
+import os
+from typing import Iterator, List, Tuple, Union
+
+import cv2
+import numpy as np
+
+from mixstereo_tf.data import image_io
+from mixstereo_tf.training import summaries
+
+LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
+IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
+                    '.tiff', '.webp')
+VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv')
+# Frame rate written when a video does not report one.
+DEFAULT_FPS = 25.0
+
+
+def colorize_disparity(disparity: np.ndarray, max_disparity: float) -> np.ndarray:
+  """Colour-maps disparity with a FIXED range, so colours are comparable between frames.
+
+  Uses the TensorBoard summaries' dark-to-bright ramp (`training.summaries`): 0 px (far) is
+  black-purple, `max_disparity` px and above (near) pale yellow, linear in between.
+
+  Args:
+    disparity: [H, W] (or [H, W, 1]) pixels.
+    max_disparity: disparity shown with the brightest colour; keep it constant for a run.
+
+  Returns:
+    uint8 RGB [H, W, 3].
+  """
+  if not max_disparity > 0:
+    raise ValueError(f'max_disparity must be positive, got {max_disparity!r}.')
+  disparity = np.nan_to_num(np.asarray(disparity, np.float32).reshape(
+      np.shape(disparity)[:2]), nan=0.0)
+  colour = summaries.colorize_disparity(disparity[None, :, :, None], float(max_disparity))
+  return colour[0].numpy()
+
+
+def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
+  """Writes disparity KITTI-style: uint16 PNG holding round(d * 256), 0 = invalid.
+
+  Values <= 0 and NaN are stored as 0 (invalid); positive values are stored as at least 1
+  so a valid estimate never reads back as invalid; values are clipped to 65535 (255.996 px).
+
+  Args:
+    path: output .png path.
+    disparity: [H, W] (or [H, W, 1]) float pixels.
+  """
+  disparity = np.asarray(disparity, np.float64)
+  disparity = disparity.reshape(disparity.shape[:2])
+  disparity = np.nan_to_num(disparity, nan=0.0, posinf=65535.0 / 256.0, neginf=0.0)
+  stored = np.clip(np.round(disparity * 256.0), 0, 65535)
+  stored = np.where(disparity > 0, np.maximum(stored, 1), 0).astype(np.uint16)
+  if not cv2.imwrite(path, stored):
+    raise ValueError(f'Cannot write PNG file: {path}')
+
+
+def write_image(path: str, image: np.ndarray) -> None:
+  """Writes a uint8 RGB image (format from the extension)."""
+  if not cv2.imwrite(path, np.ascontiguousarray(image[:, :, ::-1])):
+    raise ValueError(f'Cannot write image file: {path}')
+
+
+def compose(left: np.ndarray, right: np.ndarray,
+            layout: str) -> Union[np.ndarray, Tuple[np.ndarray, np.ndarray]]:
+  """Arranges two equally sized views [H, W, C].
+
+  Layouts: 'separate' returns (left, right); 'sbs' [H, 2W, C] left then right; 'sbs_half'
+  [H, W, C], each view squeezed to half width (left (W + 1) // 2 columns, right W // 2;
+  area interpolation), the frame keeping the input size; 'tb' [2H, W, C] left on top.
+  """
+  if left.shape != right.shape:
+    raise ValueError(f'Views differ in shape: {left.shape} vs {right.shape}.')
+  if layout == 'separate':
+    return left, right
+  if layout == 'sbs':
+    return np.concatenate([left, right], axis=1)
+  if layout == 'tb':
+    return np.concatenate([left, right], axis=0)
+  if layout == 'sbs_half':
+    height, width = left.shape[:2]
+    halves = [cv2.resize(view, (w, height), interpolation=cv2.INTER_AREA).reshape(
+        height, w, *view.shape[2:]) for view, w in ((left, (width + 1) // 2),
+                                                     (right, width // 2)) if w > 0]
+    return np.concatenate(halves, axis=1)
+  raise ValueError(f'Unknown layout {layout!r}; valid: {", ".join(LAYOUTS)}.')
+
+
+def layout_images(left: np.ndarray, right: np.ndarray, layout: str) -> List[Tuple[str, np.ndarray]]:
+  """`compose` as (file-name suffix, image) pairs: left/right for 'separate', else layout."""
+  composed = compose(left, right, layout)
+  if layout == 'separate':
+    return [('left', composed[0]), ('right', composed[1])]
+  return [(layout, composed)]
+
+
+@dataclasses.dataclass(frozen=True)
+class MediaItem:
+  """One input: an image or a video file; `stem` names its outputs."""
+  path: str
+  is_video: bool
+
+  @property
+  def stem(self) -> str:
+    return os.path.splitext(os.path.basename(self.path))[0]
+
+
+def _extension(path: str) -> str:
+  return os.path.splitext(path)[1].lower()
+
+
+def iter_inputs(spec: str) -> Iterator[MediaItem]:
+  """Expands an input specification into items, without reading them.
+
+  Args:
+    spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images, sorted
+      by name; other files ignored) or a glob pattern (matching images and videos, sorted).
+
+  Raises:
+    ValueError: nothing exists at `spec`, or the folder / pattern holds no usable file.
+  """
+  if os.path.isdir(spec):
+    paths = sorted(os.path.join(spec, name) for name in os.listdir(spec)
+                   if _extension(name) in IMAGE_EXTENSIONS
+                   and os.path.isfile(os.path.join(spec, name)))
+    if not paths:
+      raise ValueError(f'No images ({" ".join(IMAGE_EXTENSIONS)}) in folder {spec}')
+  elif os.path.isfile(spec):
+    paths = [spec]
+  elif glob.has_magic(spec):
+    paths = sorted(p for p in glob.glob(spec) if os.path.isfile(p)
+                   and _extension(p) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)
+    if not paths:
+      raise ValueError(f'No images or videos match the pattern {spec}')
+  else:
+    raise ValueError(f'Input not found: {spec}')
+  for path in paths:
+    yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS)
+
+
+def read_image(path: str) -> np.ndarray:
+  """uint8 RGB [H, W, 3] (gray and alpha images converted); ValueError naming bad files."""
+  return image_io.read_image(path)
+
+
+def video_frames(path: str) -> Tuple[float, Iterator[np.ndarray]]:
+  """Opens a video: (frames per second, iterator over uint8 RGB frames [H, W, 3]).
+
+  Raises:
+    ValueError: the file cannot be opened or holds no decodable frame.
+  """
+  capture = cv2.VideoCapture(path)
+  if not capture.isOpened():
+    raise ValueError(f'Cannot open video file: {path}')
+  ok, first = capture.read()
+  if not ok:
+    capture.release()
+    raise ValueError(f'No decodable frame in video file: {path}')
+  fps = capture.get(cv2.CAP_PROP_FPS)
+  fps = fps if fps and np.isfinite(fps) and fps > 0 else DEFAULT_FPS
+
+  def frames():
+    frame, grabbed = first, True
+    try:
+      while grabbed:
+        yield np.ascontiguousarray(frame[:, :, ::-1])
+        grabbed, frame = capture.read()
+    finally:
+      capture.release()
+
+  return fps, frames()
+
+
+class VideoWriter:
+  """Writes uint8 RGB frames to an 'mp4v' video; the size comes from the first frame."""
+
+  def __init__(self, path: str, fps: float):
+    self.path, self.fps = path, fps
+    self._writer = None
+    self._size = None
+
+  def write(self, frame: np.ndarray) -> None:
+    size = (frame.shape[1], frame.shape[0])
+    if self._writer is None:
+      self._writer = cv2.VideoWriter(self.path, cv2.VideoWriter_fourcc(*'mp4v'), self.fps,
+                                     size)
+      if not self._writer.isOpened():
+        raise ValueError(f'Cannot write video file: {self.path}')
+      self._size = size
+    elif size != self._size:
+      raise ValueError(f'Frame size {size} differs from {self._size} in {self.path}')
+    self._writer.write(np.ascontiguousarray(frame[:, :, ::-1]))
+
+  def close(self) -> None:
+    if self._writer is not None:
+      self._writer.release()
+      self._writer = None
+
+  def __enter__(self):
+    return self
+
+  def __exit__(self, *exc):
+    self.close()
