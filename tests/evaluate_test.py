@@ -1,0 +1,144 @@
+"""Tests for the result tables (evaluation/report.py) and the mixstereo-eval binary."""
+
+import csv
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf import models
+from mixstereo_tf.evaluation import report
+from mixstereo_tf.evaluation import runner
+from tests import runner_test
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# Size multiple 4, disparity range 8: a forward pass on 32 x 64 takes milliseconds.
+TINY = models.ModelConfig(separation_widths=(4, 4), stereo_features=4,
+                          stereo_residual_blocks=1, stereo_3d_widths=(4,), max_disparity=8)
+
+
+def _oracle_result(config):
+  return runner.evaluate(config, runner_test.oracle(config))
+
+
+def test_middlebury_table_has_the_papers_rows_for_matching_scenes(tmp_path):
+  root = runner_test.make_middlebury(tmp_path / 'mb')
+  result = _oracle_result(runner.EvalConfig('middlebury', 'anaglyph', root))
+  text = report.format_report(result)
+  lines = text.splitlines()
+  assert 'this run (model)' in text and '2 of 2 images' in lines[0]
+  # Ours first, then the trivial baseline and the paper's three rows per known scene.
+  tsukuba = lines.index(next(l for l in lines if l.startswith('tsukuba')))
+  assert '100.00' in lines[tsukuba] and '0.00%' in lines[tsukuba]
+  assert 'mixture as each view' in lines[tsukuba + 1]
+  for offset, numbers in ((2, ('32.99', '35.31', '10.44%')), (3, ('30.83', '14.02%')),
+                          (4, ('30.32', '12.53%'))):
+    assert all(n in lines[tsukuba + offset] for n in numbers), lines[tsukuba + offset]
+  assert '26.31' in text and '4.51%' in text  # Cones (folder 'Cones').
+  mean = next(i for i, l in enumerate(lines) if l.startswith('mean'))
+  assert '5.93%' in lines[mean + 1] and '26.82%' in lines[mean + 2]
+  # The paper has no diplopia Middlebury numbers: only our rows.
+  diplopia = _oracle_result(runner.EvalConfig('middlebury', 'diplopia', root))
+  assert 'paper' not in report.format_report(diplopia)
+
+
+def test_kitti_tables_partial_rule_and_paper_rows(tmp_path):
+  root = runner_test.make_kitti2015(tmp_path / 'kitti')
+  config = runner.EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
+  result = _oracle_result(config)
+  text = report.format_report(result)
+  assert 'partial: 2 of 200 images' in text
+  for number in ('26.30', '28.76', '5.96%', '13.66%', '14.40%', '19.5009', '20.0914'):
+    assert number in text, number
+  ours = next(l for l in text.splitlines() if l.startswith('this run'))
+  assert ours.split()[3:6] == ['100.00', '100.00', '0.00%']
+  refused = dataclasses.replace(result, config=dataclasses.replace(config, allow_partial=False))
+  with pytest.raises(ValueError, match='allow_partial'):
+    report.format_report(refused)
+  diplopia = _oracle_result(dataclasses.replace(config, mixture='diplopia'))
+  text = report.markdown_report(diplopia)
+  assert '| paper: oracle (clean pair) |' in text and '5.28%' in text and '6.67%' in text
+  assert '17.03' in text and '13.66%' not in text
+
+
+def test_eigen_and_sample_tables(tmp_path):
+  list_path = runner_test._write_eigen(str(tmp_path))  # pylint: disable=protected-access
+  config = runner.EvalConfig('eigen', 'monocular', str(tmp_path), eigen_list=list_path)
+  result = runner.evaluate(config, lambda m: {'left': m, 'right': m,
+                                              'disparity_left': m[..., 0] * 0.0 + 1.0})
+  text = report.format_report(result)
+  assert 'abs_rel' in text and 'a3' in text and '1 of 1 images' in text
+  assert '0.126' in text and 'paper: Godard et al.' in text and '4.471' in text
+  assert text.splitlines()[3].split()[3] == '7.000'  # 389.6 m clamped to 80 m: abs_rel 7.
+  sample = _oracle_result(runner.EvalConfig('sample', 'anaglyph', max_disparity=8,
+                                            sample_scenes=1))
+  lines = report.format_report(sample).splitlines()
+  assert lines[3].startswith('synthetic_heldout_00000')
+  assert lines[5].startswith('mean') and 'this run' in lines[5] and '0.00%' in lines[5]
+  assert lines[6].startswith('mean') and 'mixture as each view' in lines[6]
+
+
+def test_write_csv_one_row_per_image(tmp_path):
+  root = runner_test.make_kitti2015(tmp_path / 'kitti', frames=3)
+  result = _oracle_result(runner.EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True))
+  path = str(tmp_path / 'rows.csv')
+  report.write_csv(path, result.rows)
+  with open(path, newline='', encoding='utf-8') as f:
+    rows = list(csv.DictReader(f))
+  assert [r['name'] for r in rows] == ['000000_10', '000001_10', '000002_10']
+  assert float(rows[0]['d1_all']) == 0.0 and float(rows[2]['psnr_left']) == 100.0
+  assert rows[0]['width'] == '64'
+
+
+@pytest.fixture(scope='module')
+def run_dir(tmp_path_factory):
+  """A tiny untrained run in the layout training writes (config.json + checkpoint)."""
+  path = tmp_path_factory.mktemp('run')
+  tf.keras.utils.set_random_seed(3)
+  model = models.build_model(TINY)
+  prefix = tf.train.Checkpoint(model=model).write(str(path / 'ckpt-1'))
+  with open(path / 'config.json', 'w', encoding='utf-8') as f:
+    json.dump({'model': TINY.to_dict(),
+               'pipeline': {'mixture': 'anaglyph', 'crop_height': 32, 'crop_width': 64}}, f)
+  return prefix
+
+
+def _cli(*args):
+  env = dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2')
+  return subprocess.run([sys.executable, '-m', 'mixstereo_tf.evaluate', *args],
+                        capture_output=True, text=True, env=env, cwd=REPO, timeout=300,
+                        check=False)
+
+
+def test_cli_kitti_partial_rule_csv_and_markdown(run_dir, tmp_path):
+  root = runner_test.make_kitti2015(tmp_path / 'kitti')
+  refused = _cli('--protocol=kitti2015', f'--data_dir={root}', f'--checkpoint={run_dir}')
+  assert refused.returncode != 0
+  assert '2 of 200' in refused.stderr and '--allow_partial' in refused.stderr
+  csv_path, md_path = tmp_path / 'rows.csv', tmp_path / 'table.md'
+  done = _cli('--protocol=kitti2015', f'--data_dir={root}', f'--checkpoint={run_dir}',
+              '--allow_partial', f'--output_csv={csv_path}', f'--output_markdown={md_path}')
+  assert done.returncode == 0, done.stderr[-3000:]
+  assert 'partial: 2 of 200 images' in done.stdout and 'KITTI 2015, anaglyph' in done.stdout
+  assert '26.30' in done.stdout and 'paper: Williem et al.' in done.stdout
+  with open(csv_path, newline='', encoding='utf-8') as f:
+    rows = list(csv.DictReader(f))
+  assert len(rows) == 2 and all(0.0 <= float(r['d1_all']) <= 1.0 for r in rows)
+  assert float(rows[0]['psnr_left']) < 40.0  # Untrained: far from the true view.
+  assert '| Method |' in md_path.read_text() and 'partial: 2 of 200' in md_path.read_text()
+
+
+def test_cli_middlebury_and_flag_errors(run_dir, tmp_path):
+  root = runner_test.make_middlebury(tmp_path / 'mb')
+  done = _cli('--protocol=middlebury', f'--data_dir={root}', f'--checkpoint={run_dir}',
+              '--max_images=1')
+  assert done.returncode == 0, done.stderr[-3000:]
+  assert done.stdout.startswith('Middlebury, anaglyph') and '1 of 2 images' in done.stdout
+  assert 'Cones' in done.stdout and '26.31' in done.stdout and '10.44%' not in done.stdout
+  mismatch = _cli('--protocol=middlebury', f'--data_dir={root}', f'--checkpoint={run_dir}',
+                  '--mixture=diplopia')
+  assert mismatch.returncode != 0 and "trained on 'anaglyph'" in mismatch.stderr

@@ -1,0 +1,245 @@
+"""Tests for mixstereo_tf.evaluation.runner on tiny benchmark folders written here."""
+
+import os
+
+import cv2
+import numpy as np
+import pytest
+
+from mixstereo_tf.data import records
+from mixstereo_tf.evaluation import metrics
+from mixstereo_tf.evaluation import runner
+
+HEIGHT, WIDTH = 32, 64
+
+
+def _views(rng, height=HEIGHT, width=WIDTH):
+  return [rng.randint(0, 256, (height, width, 3)).astype(np.uint8) for _ in range(2)]
+
+
+def _write_rgb(path, image):
+  os.makedirs(os.path.dirname(path), exist_ok=True)
+  assert cv2.imwrite(str(path), image[..., ::-1])
+
+
+def make_kitti2015(root, frames=2, seed=0):
+  """A KITTI 2015 training folder: image_2/3, disp_occ_0 / disp_noc_0 (uint16, d * 256)."""
+  rng = np.random.RandomState(seed)
+  for i in range(frames):
+    name = f'{i:06d}_10.png'
+    left, right = _views(rng)
+    _write_rgb(os.path.join(root, 'training', 'image_2', name), left)
+    _write_rgb(os.path.join(root, 'training', 'image_3', name), right)
+    disparity = rng.uniform(5.0, 20.0, (HEIGHT, WIDTH))
+    disparity[:, :4] = 0.0  # Unknown.
+    occ = np.round(disparity * 256).astype(np.uint16)
+    noc = occ.copy()
+    noc[:, 4:10] = 0  # Occluded: in disp_occ only.
+    for folder, image in (('disp_occ_0', occ), ('disp_noc_0', noc)):
+      path = os.path.join(root, 'training', folder, name)
+      os.makedirs(os.path.dirname(path), exist_ok=True)
+      assert cv2.imwrite(path, image)
+  return str(root)
+
+
+def make_middlebury(root, seed=0):
+  """Tsukuba (2001 names, GT / 16) and Cones (2003 im2 / im6, GT / 4) scene folders."""
+  rng = np.random.RandomState(seed)
+  scenes = (('tsukuba', 'scene1.row3.col3.ppm', 'scene1.row3.col4.ppm',
+             'truedisp.row3.col3.pgm', 16), ('Cones', 'im2.png', 'im6.png', 'disp2.png', 4))
+  for folder, left_name, right_name, gt_name, scale in scenes:
+    left, right = _views(rng)
+    _write_rgb(os.path.join(root, folder, left_name), left)
+    _write_rgb(os.path.join(root, folder, right_name), right)
+    gt = rng.randint(2, 15, (HEIGHT, WIDTH)) * scale
+    gt[0] = 0  # Unknown row.
+    assert cv2.imwrite(os.path.join(root, folder, gt_name), gt.astype(np.uint8))
+  return str(root)
+
+
+def oracle(config, offset=0.0):
+  """A predictor returning each pair's true views and its GT disparity + offset, in order."""
+  loaded = iter([records.load_sample(s) for s in runner.list_samples(config)])
+
+  def predict(mixture):
+    data = next(loaded)
+    assert mixture.shape == data['left'].shape and mixture.dtype == np.uint8
+    return {'left': data['left'], 'right': data['right'],
+            'disparity_left': data['disparity_left'] + offset,
+            'disparity_right': data['disparity_right']}
+
+  return predict
+
+
+def test_kitti_oracle_is_perfect_and_shifted_disparities_hit_the_d1_rule(tmp_path):
+  root = make_kitti2015(tmp_path / 'kitti')
+  config = runner.EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
+  result = runner.evaluate(config, oracle(config))
+  assert [r['name'] for r in result.rows] == ['000000_10', '000001_10']
+  assert result.coverage == 'partial: 2 of 200 images'
+  assert result.averages['d1_all'] == 0.0 and result.averages['epe'] < 1e-6
+  assert result.averages['psnr_left'] == result.averages['psnr_right'] == 100.0
+  # 2 px off is within 3 px: not bad; 4 px off is > 3 px and > 5 % of gt <= 20: all bad.
+  assert runner.evaluate(config, oracle(config, 2.0)).averages['d1_all'] == 0.0
+  shifted = runner.evaluate(config, oracle(config, 4.0))
+  assert shifted.averages['d1_all'] == 1.0 and shifted.averages['d1_noc'] == 1.0
+  assert shifted.averages['epe'] == pytest.approx(4.0, abs=1e-4)
+
+
+def test_mixture_is_the_quantised_anaglyph_and_the_trivial_baseline(tmp_path):
+  root = make_kitti2015(tmp_path / 'kitti', frames=1)
+  config = runner.EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
+  data = records.load_sample(runner.list_samples(config)[0])
+  mixture = runner.synthesise_mixture('anaglyph', data['left'], data['right'])
+  expected = np.concatenate([data['left'][..., :1], data['right'][..., 1:]], axis=-1)
+  np.testing.assert_array_equal(mixture, expected)  # Lossless for 8-bit views.
+  row = runner.evaluate(config, oracle(config)).rows[0]
+  assert row['mixture_psnr_left'] == pytest.approx(metrics.psnr(expected, data['left']))
+  assert row['mixture_psnr_left'] < 40.0
+  mono = runner.EvalConfig('kitti2015', 'monocular', root, allow_partial=True)
+  assert runner.evaluate(mono, oracle(mono)).rows[0]['mixture_psnr_left'] == 100.0
+
+
+def test_kitti2015_partial_run_is_refused_before_any_prediction(tmp_path):
+  root = make_kitti2015(tmp_path / 'kitti')
+  config = runner.EvalConfig('kitti2015', 'anaglyph', root)
+
+  def never(mixture):
+    raise AssertionError('predicted although the run is refused')
+
+  with pytest.raises(ValueError, match=r'2 of 200.*--allow_partial'):
+    runner.evaluate(config, never)
+  # max_images keeps the first pairs; allow_partial lets the short run through.
+  one = runner.EvalConfig('kitti2015', 'diplopia', root, allow_partial=True, max_images=1)
+  assert runner.evaluate(one, oracle(one)).coverage == 'partial: 1 of 200 images'
+
+
+def test_middlebury_bad1_known_answers(tmp_path):
+  root = make_middlebury(tmp_path / 'mb')
+  config = runner.EvalConfig('middlebury', 'anaglyph', root)
+  assert [s.name for s in runner.list_samples(config)] == ['Cones', 'tsukuba']
+  result = runner.evaluate(config, oracle(config))
+  assert result.coverage == '2 of 2 images'
+  assert result.averages['bad1_all'] == 0.0 and result.averages['bad1_nonocc'] == 0.0
+  # The GT is integer pixels after its scale: 0.9 px off is good, 1.1 px off is bad.
+  assert runner.evaluate(config, oracle(config, 0.9)).averages['bad1_all'] == 0.0
+  assert runner.evaluate(config, oracle(config, 1.1)).averages['bad1_all'] == 1.0
+
+
+def test_sample_protocol_oracle(tmp_path):
+  config = runner.EvalConfig('sample', 'diplopia', max_disparity=8, sample_scenes=1)
+  result = runner.evaluate(config, oracle(config))
+  assert result.count == 2 and result.rows[-1]['name'].startswith('motorcycle')
+  assert result.averages['bad1'] == 0.0 and result.averages['bad3'] == 0.0
+  assert result.averages['epe'] == 0.0 and result.averages['psnr'] == 100.0
+  assert result.averages['mixture_psnr_left'] < 60.0
+  assert all(r['seconds'] >= 0.0 for r in result.rows)
+
+
+def _write_eigen(root):
+  """KITTI raw layout, one frame 16 x 1242 (a width with a known focal length)."""
+  date, drive = '2011_09_26', '2011_09_26_drive_0001_sync'
+  calib = os.path.join(root, date)
+  os.makedirs(calib)
+  with open(os.path.join(calib, 'calib_velo_to_cam.txt'), 'w') as f:
+    f.write('R: 0 -1 0 0 0 -1 1 0 0\nT: 0 0 0\n')
+  with open(os.path.join(calib, 'calib_cam_to_cam.txt'), 'w') as f:
+    f.write('R_rect_00: 1 0 0 0 1 0 0 0 1\nP_rect_02: 100 0 621 0 0 100 10 0 0 0 1 0\n')
+  views = _views(np.random.RandomState(3), 16, 1242)
+  for camera, view in zip(('image_02', 'image_03'), views):
+    _write_rgb(os.path.join(root, date, drive, camera, 'data', '0000000000.png'), view)
+  # Ten points 10 m ahead, spread across the image centre (inside the Garg crop).
+  points = np.array([[10.0, y, 0.0, 1.0] for y in np.linspace(-5, 5, 10)], np.float32)
+  scans = os.path.join(root, date, drive, 'velodyne_points', 'data')
+  os.makedirs(scans)
+  points.tofile(os.path.join(scans, '0000000000.bin'))
+  list_path = os.path.join(root, 'eigen_test.txt')
+  with open(list_path, 'w') as f:
+    f.write(f'{date}/{drive}/image_02/data/0000000000.jpg '
+            f'{date}/{drive}/image_03/data/0000000000.jpg\n')
+  return list_path
+
+
+@pytest.mark.parametrize('depth, abs_rel, a1', [(10.0, 0.0, 1.0), (20.0, 1.0, 0.0)])
+def test_eigen_depth_from_velodyne(tmp_path, depth, abs_rel, a1):
+  list_path = _write_eigen(str(tmp_path))
+  config = runner.EvalConfig('eigen', 'monocular', str(tmp_path), eigen_list=list_path)
+  disparity = metrics.kitti_focal_length(1242) * 0.54 / depth
+
+  def predict(mixture):
+    return {'left': mixture, 'right': mixture,
+            'disparity_left': np.full(mixture.shape[:2], disparity, np.float32)}
+
+  row = runner.evaluate(config, predict).rows[0]
+  assert row['abs_rel'] == pytest.approx(abs_rel, abs=1e-5)
+  assert row['a1'] == a1 and row['mixture_psnr_left'] == 100.0
+
+
+def test_bad_configs_and_outputs_raise(tmp_path):
+  with pytest.raises(ValueError, match='protocol'):
+    runner.EvalConfig('kitti', 'anaglyph', 'x')
+  with pytest.raises(ValueError, match='valid mixtures'):
+    runner.EvalConfig('middlebury', 'nope', 'x')
+  with pytest.raises(ValueError, match='data_dir'):
+    runner.EvalConfig('middlebury', 'anaglyph')
+  with pytest.raises(ValueError, match='Split list not found'):
+    runner.list_samples(runner.EvalConfig('eigen', 'monocular', 'x', eigen_list='no.txt'))
+  root = make_middlebury(tmp_path / 'mb')
+  config = runner.EvalConfig('middlebury', 'anaglyph', root)
+  with pytest.raises(ValueError, match=r"Cones: predictor output 'disparity_left'"):
+    runner.evaluate(config, lambda m: {'left': m, 'right': m,
+                                       'disparity_left': np.zeros((2, 2))})
+  nan_prediction = runner.evaluate(config, lambda m: {
+      'left': m, 'right': m, 'disparity_left': np.full(m.shape[:2], np.nan, np.float32)})
+  assert nan_prediction.averages['bad1_all'] == 1.0  # NaN counts as bad, not as missing.
+
+
+def test_classical_baseline_runs_through_the_harness(tmp_path):
+  from mixstereo_tf import baselines  # pylint: disable=g-import-not-at-top
+  root = make_middlebury(tmp_path / 'mb')
+  config = runner.EvalConfig('middlebury', 'anaglyph', root, method='classical',
+                             max_images=1)
+  row = runner.evaluate(config, lambda m: baselines.unmix_classical(m, 'anaglyph')).rows[0]
+  assert 0.0 <= row['bad1_all'] <= 1.0 and row['psnr_left'] > 0.0
+
+
+def test_default_eigen_list_resolves_to_the_repository_copy():
+  path = runner.resolve_list_path(runner.DEFAULT_EIGEN_LIST)
+  with open(path, encoding='utf-8') as f:
+    assert len([line for line in f if line.strip()]) == 697
+
+
+def test_oracle_method_feeds_the_clean_pair(tmp_path):
+  root = make_kitti2015(tmp_path / 'kitti')
+  config = runner.EvalConfig('kitti2015', 'diplopia', root, method='oracle',
+                             allow_partial=True)
+  truth = iter([records.load_sample(s) for s in runner.list_samples(config)])
+
+  def pair_predictor(left, right):
+    data = next(truth)
+    np.testing.assert_array_equal(left, data['left'])
+    np.testing.assert_array_equal(right, data['right'])
+    return {'disparity_left': data['disparity_left']}
+
+  result = runner.evaluate(config, pair_predictor)
+  assert result.averages['d1_all'] == 0.0 and 'psnr_left' not in result.averages
+  assert result.averages['mixture_psnr_left'] < 40.0
+
+
+def test_stereo_pair_predictor_pads_runs_the_stereo_module_and_crops():
+  import tensorflow as tf  # pylint: disable=g-import-not-at-top
+  from mixstereo_tf import models  # pylint: disable=g-import-not-at-top
+  tf.keras.utils.set_random_seed(0)
+  config = models.ModelConfig(separation_widths=(4, 4), stereo_features=4,
+                              stereo_residual_blocks=1, stereo_3d_widths=(4,),
+                              max_disparity=8)
+  model = models.build_model(config)
+  predict = runner.stereo_pair_predictor(model, config.size_multiple)
+  left, right = _views(np.random.RandomState(1), 32, 64)
+  out = predict(left, right)
+  direct = model.compute_disparity(tf.constant(left[None], tf.float32) / 127.5 - 1.0,
+                                   tf.constant(right[None], tf.float32) / 127.5 - 1.0)
+  np.testing.assert_allclose(out['disparity_left'], direct['disparity_left'][0, ..., 0],
+                             atol=1e-5)
+  cropped = predict(left[:30, :62], right[:30, :62])
+  assert cropped['disparity_left'].shape == cropped['disparity_right'].shape == (30, 62)
