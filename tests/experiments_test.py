@@ -1,0 +1,67 @@
+"""Every experiment flagfile parses into valid configs of the training binary."""
+
+import glob
+import json
+import os
+import subprocess
+import sys
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+# Runs in a fresh interpreter: the binaries define absl flags with the same names.
+_PARSE_ALL = r'''
+import dataclasses, json, sys
+from absl import flags
+from mixstereo_tf import train
+out = {}
+for path in sys.argv[1:]:
+  flags.FLAGS.unparse_flags()
+  flags.FLAGS(['train', '--flagfile=' + path, '--model_dir=/tmp/unused',
+               '--data_dir=/tmp/unused'])
+  data, pipe, model, loss = train.build_configs()
+  out[path] = {'data': dataclasses.asdict(data), 'pipeline': dataclasses.asdict(pipe),
+               'model': model.to_dict(), 'loss': dataclasses.asdict(loss),
+               'num_steps': flags.FLAGS.num_steps, 'num_epochs': flags.FLAGS.num_epochs,
+               'mode': flags.FLAGS.mode, 'init_checkpoint': flags.FLAGS.init_checkpoint}
+print(json.dumps(out))
+'''
+
+
+def _parse(paths):
+  env = dict(os.environ, TF_CPP_MIN_LOG_LEVEL='3', CUDA_VISIBLE_DEVICES='',
+             PYTHONPATH=REPO + os.pathsep + os.environ.get('PYTHONPATH', ''))
+  result = subprocess.run([sys.executable, '-c', _PARSE_ALL, *paths], cwd=REPO, env=env,
+                          capture_output=True, text=True, timeout=300, check=False)
+  assert result.returncode == 0, result.stderr[-3000:]
+  return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def test_every_flagfile_builds_valid_configs():
+  paths = sorted(glob.glob(os.path.join(REPO, 'experiments', '*.flags')))
+  parsed = {os.path.basename(k): v for k, v in _parse(paths).items()}
+  assert {'demo.flags', 'kitti_anaglyph.flags', 'kitti_diplopia.flags',
+          'eigen_monocular.flags', 'kitti_anaglyph_separation_only.flags',
+          'middlebury_anaglyph_finetune.flags'} <= set(parsed)
+  for name, run in parsed.items():
+    assert (run['num_steps'] is None) != (run['num_epochs'] is None), name
+    if name == 'demo.flags':
+      continue
+    # Paper configuration: 96 levels, batch 1, the paper's loss weights, full widths.
+    assert run['model']['max_disparity'] == 96, name
+    assert run['model']['separation_widths'] == [32, 64, 128, 256, 512, 512], name
+    assert run['pipeline']['batch_size'] == 1, name
+    assert run['loss']['alpha_p'] == 0.2 and run['loss']['omega_s'] == 0.05, name
+  assert parsed['kitti_anaglyph.flags']['pipeline']['crop_width'] == 512
+  assert parsed['middlebury_anaglyph_finetune.flags']['pipeline']['crop_height'] == 384
+  assert parsed['eigen_monocular.flags']['pipeline']['mixture'] == 'monocular'
+  assert parsed['eigen_monocular.flags']['num_epochs'] == 10
+  assert parsed['kitti_anaglyph_separation_only.flags']['mode'] == 'separation_only'
+
+
+def test_train_lists_named_by_the_flagfiles_exist_with_the_papers_sizes():
+  sizes = {'kitti_train_files.txt': 29000, 'eigen_train_files.txt': 22600,
+           'eigen_val_files.txt': 888, 'eigen_test_files.txt': 697,
+           'kitti_stereo_2015_test_files.txt': 200}
+  for name, lines in sizes.items():
+    with open(os.path.join(REPO, 'data_lists', 'kitti', name)) as f:
+      assert sum(1 for line in f if line.strip()) == lines, name
