@@ -1,9 +1,11 @@
 """End-to-end tests of the training CLI on the embedded `sample` source."""
 
 import dataclasses
+import json
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -119,3 +121,28 @@ def test_a_few_dozen_steps_on_the_sample_source_lower_the_loss(tmp_path):
   # The untrained U-Net outputs ~0 (L1 of about 0.5 per view); 80 RMSProp steps learn to
   # copy the observed channels. Measured once: 0.99 -> 0.51; a 25% margin leaves room.
   assert trained < 0.75 * initial, (initial, trained)
+
+
+def _free_port():
+  with socket.socket() as s:
+    s.bind(('localhost', 0))
+    return s.getsockname()[1]
+
+
+def test_multi_worker_strategy_from_tf_config_trains_with_two_workers(tmp_path):
+  cluster = {'worker': [f'localhost:{_free_port()}', f'localhost:{_free_port()}']}
+  workers = []
+  for index in range(2):
+    os.environ['TF_CONFIG'] = json.dumps({'cluster': cluster,
+                                          'task': {'type': 'worker', 'index': index}})
+    try:
+      workers.append(_train_cli(tmp_path / 'run', '--strategy=multi_worker',
+                                '--batch_size=2', '--num_steps=2', '--checkpoint_every=1'))
+    finally:
+      del os.environ['TF_CONFIG']
+  outputs = [w.communicate(timeout=300)[0] for w in workers]
+  for worker, output in zip(workers, outputs):
+    assert worker.returncode == 0, output[-3000:]
+  assert 'with 2 replica(s)' in outputs[0]
+  # Only the chief (worker 0) writes into model_dir.
+  assert tf.train.latest_checkpoint(str(tmp_path / 'run')).endswith('ckpt-2')

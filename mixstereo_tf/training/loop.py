@@ -11,8 +11,9 @@ import dataclasses
 import math
 import os
 import signal
+import tempfile
 import time
-from typing import Callable, Optional
+from typing import Callable, Optional, Tuple
 
 from absl import logging
 import tensorflow as tf
@@ -58,6 +59,24 @@ def _device_type(strategy: tf.distribute.Strategy) -> str:
     return 'GPU' if tf.config.list_logical_devices('GPU') else 'CPU'
   devices = strategy.extended.worker_devices
   return tf.DeviceSpec.from_string(devices[0]).device_type or 'CPU'
+
+
+def _write_dir(strategy: tf.distribute.Strategy, model_dir: str) -> Tuple[bool, str]:
+  """(is_chief, where this worker writes checkpoints).
+
+  Under MultiWorkerMirroredStrategy every worker takes part in saving (it is a collective
+  operation) but only the chief writes to `model_dir`; the others write to a scratch folder.
+  """
+  resolver = getattr(strategy, 'cluster_resolver', None)
+  cluster = resolver.cluster_spec().as_dict() if resolver else {}
+  if not cluster:
+    return True, model_dir
+  task_type, task_id = resolver.task_type, resolver.task_id
+  chief = task_type == 'chief' or (task_type == 'worker' and task_id == 0 and
+                                   'chief' not in cluster)
+  if chief:
+    return True, model_dir
+  return False, os.path.join(tempfile.gettempdir(), f'mixstereo_{task_type}_{task_id}')
 
 
 def _set_precision(enabled: bool, device_type: str) -> None:
@@ -121,15 +140,16 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
   Raises:
     NonFiniteLossError: the loss became non-finite; the newest checkpoint is the last good.
   """
-  tf.io.gfile.makedirs(config.model_dir)
-  if flags_text is not None:
-    with tf.io.gfile.GFile(os.path.join(config.model_dir, 'flags.txt'), 'w') as f:
-      f.write(flags_text)
-  with tf.io.gfile.GFile(os.path.join(config.model_dir, 'config.json'), 'w') as f:
-    f.write(config_lib.to_json(train=config, model=model_config, loss=loss_config,
-                               **(extra_configs or {})))
-
   strategy = make_strategy(config.strategy)
+  chief, write_dir = _write_dir(strategy, config.model_dir)
+  if chief:
+    tf.io.gfile.makedirs(config.model_dir)
+    if flags_text is not None:
+      with tf.io.gfile.GFile(os.path.join(config.model_dir, 'flags.txt'), 'w') as f:
+        f.write(flags_text)
+    with tf.io.gfile.GFile(os.path.join(config.model_dir, 'config.json'), 'w') as f:
+      f.write(config_lib.to_json(train=config, model=model_config, loss=loss_config,
+                                 **(extra_configs or {})))
   device_type = _device_type(strategy)
   jit = step_lib.resolve_jit_compile(config.jit_compile, device_type)
   _set_precision(config.mixed_precision, device_type)
@@ -147,20 +167,22 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
     trainer = step_lib.TrainStep(model, optimizer, loss_config, config.mode, strategy, jit)
     optimizer.build(trainer.variables)
     checkpoint = tf.train.Checkpoint(model=model, optimizer=optimizer)
-  manager = tf.train.CheckpointManager(checkpoint, config.model_dir,
+  manager = tf.train.CheckpointManager(checkpoint, write_dir,
                                        max_to_keep=config.max_checkpoints)
-  if manager.latest_checkpoint:
-    checkpoint.restore(manager.latest_checkpoint).assert_existing_objects_matched()
-    logging.info('Resumed from %s at step %d.', manager.latest_checkpoint,
+  latest = tf.train.latest_checkpoint(config.model_dir)  # Every worker resumes the chief's.
+  if latest:
+    checkpoint.restore(latest).assert_existing_objects_matched()
+    logging.info('Resumed from %s at step %d.', latest,
                  int(optimizer.iterations.numpy()))
   elif config.init_checkpoint:
     tf.train.Checkpoint(model=model).read(config.init_checkpoint).expect_partial()
     logging.info('Initialised the model from %s.', config.init_checkpoint)
 
   start_step = step = int(optimizer.iterations.numpy())
-  writer = tf.summary.create_file_writer(os.path.join(config.model_dir, 'train'))
+  writer = (tf.summary.create_file_writer(os.path.join(config.model_dir, 'train')) if chief
+            else tf.summary.create_noop_writer())
   iterator = iter(strategy.experimental_distribute_dataset(dataset))
-  last_save = manager.latest_checkpoint
+  last_save = latest
   loss = math.nan
   rate = 0.0
   tick, tick_step = None, step
