@@ -35,6 +35,7 @@ flags.DEFINE_enum('method', 'model', runner.METHODS,
                   'the stereo module of --checkpoint (a stereo_only run) on the clean pairs.')
 flags.DEFINE_boolean('restore_colour', None, "Rebuild the views' exact channels from the "
                      'mixture and disparities (paper 4.2); default: on for channel anaglyphs.')
+flags.DEFINE_alias('restore_colors', 'restore_colour')
 flags.DEFINE_string('output_csv', None, 'Write the per-image rows here.')
 flags.DEFINE_string('output_markdown', None, 'Write the tables as Markdown here.')
 flags.DEFINE_boolean('allow_partial', False, 'Allow a kitti2015 average over fewer than its '

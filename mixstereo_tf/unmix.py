@@ -34,6 +34,7 @@ flags.DEFINE_enum('layout', 'separate', media.LAYOUTS,
                   'half width (sbs_half) or top-bottom (tb).')
 flags.DEFINE_boolean('restore_colour', None, 'Rebuild the views\' exact channels from the '
                      'mixture and disparities (paper 4.2); default: on for channel anaglyphs.')
+flags.DEFINE_alias('restore_colors', 'restore_colour')
 flags.DEFINE_float('max_display_disparity', None, 'Disparity (pixels) shown brightest in '
                    'the colour maps, fixed for the run (default: the model\'s max_disparity).')
 
