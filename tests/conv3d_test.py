@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import tensorflow as tf
 
+from mixstereo_tf.models import stereo
 from mixstereo_tf.ops import conv3d
 
 
@@ -27,20 +28,89 @@ def test_dense_stride2_transposed_conv_matches_native(size):
   np.testing.assert_allclose(dense.numpy(), native.numpy(), atol=1e-5)
 
 
-def test_gradients_match_native():
+def _value_and_gradients(op, x, kernel, implementation, upstream, jit_compile=False):
+  """op's output and the gradients of <op(x, kernel), upstream> w.r.t. x and kernel."""
+
+  @tf.function(jit_compile=jit_compile)
+  def run():
+    with tf.GradientTape() as tape:
+      tape.watch([x, kernel])
+      y = op(x, kernel, implementation)
+      loss = tf.reduce_sum(y * upstream)
+    return [y] + tape.gradient(loss, [x, kernel])
+
+  return [t.numpy() for t in run()]
+
+
+@pytest.mark.parametrize('size,channels', [(2, 3), (3, 3), (4, 3), (5, 3), (3, 17)])
+def test_stride2_conv_gradients_match_native(size, channels):
+  # 3 input channels take the phase-form kernel gradient, 17 TF's strided one.
+  x = tf.random.stateless_normal([2, 4, 6, 8, channels], [6, size])
+  kernel = tf.random.stateless_normal([size, size, size, channels, 5], [7, size])
+  upstream = tf.random.stateless_normal([2, 2, 3, 4, 5], [8, size])
+  native = _value_and_gradients(conv3d.conv3d_stride2, x, kernel, 'native', upstream)
+  dense = _value_and_gradients(conv3d.conv3d_stride2, x, kernel, 'dense', upstream)
+  for name, want, got in zip(('y', 'dx', 'dkernel'), native, dense):
+    assert got.shape == want.shape, name
+    np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-4, err_msg=name)
+
+
+@pytest.mark.parametrize('size', [2, 3, 4, 5])
+def test_stride2_transposed_conv_gradients_match_native(size):
+  x = tf.random.stateless_normal([2, 2, 3, 4, 3], [9, size])
+  kernel = tf.random.stateless_normal([size, size, size, 5, 3], [10, size])
+  upstream = tf.random.stateless_normal([2, 4, 6, 8, 5], [11, size])
+  op = conv3d.conv3d_transpose_stride2
+  native = _value_and_gradients(op, x, kernel, 'native', upstream)
+  dense = _value_and_gradients(op, x, kernel, 'dense', upstream)
+  for name, want, got in zip(('y', 'dx', 'dkernel'), native, dense):
+    assert got.shape == want.shape, name
+    np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-4, err_msg=name)
+
+
+def test_stride2_conv_input_gradient_of_an_impulse_is_the_kernel():
+  # TF's SAME stride-2 conv with k = 3 on size 4 pads 0 before (1 after), so output voxel
+  # (0, 0, 0) reads x[kk] through kernel[kk]: d y[0,0,0] / dx is the kernel in the corner.
+  x = tf.zeros([1, 4, 4, 4, 1])
+  kernel = tf.reshape(tf.range(27, dtype=tf.float32), [3, 3, 3, 1, 1])
+  upstream = np.zeros([1, 2, 2, 2, 1], np.float32)
+  upstream[0, 0, 0, 0, 0] = 1.0
+  _, dx, _ = _value_and_gradients(conv3d.conv3d_stride2, x, kernel, 'dense',
+                                  tf.constant(upstream))
+  expected = np.zeros([4, 4, 4], np.float32)
+  expected[:3, :3, :3] = kernel.numpy()[..., 0, 0]
+  np.testing.assert_array_equal(dx[0, ..., 0], expected)
+
+
+def test_chained_gradients_match_native_under_xla():
   x = tf.random.stateless_normal([1, 4, 4, 4, 2], [4, 0])
   kernel = tf.random.stateless_normal([3, 3, 3, 2, 2], [5, 0])
 
-  def gradients(implementation):
-    with tf.GradientTape() as tape:
-      tape.watch([x, kernel])
-      y = conv3d.conv3d_transpose_stride2(
-          conv3d.conv3d_stride2(x, kernel, implementation), kernel, implementation)
-      loss = tf.reduce_sum(y * y)
-    return tape.gradient(loss, [x, kernel])
+  def chain(x, kernel, implementation):
+    return conv3d.conv3d_transpose_stride2(
+        conv3d.conv3d_stride2(x, kernel, implementation), kernel, implementation)
 
-  for native, dense in zip(gradients('native'), gradients('dense')):
-    np.testing.assert_allclose(dense.numpy(), native.numpy(), rtol=1e-4, atol=1e-4)
+  upstream = tf.random.stateless_normal([1, 4, 4, 4, 2], [12, 0])
+  native = _value_and_gradients(chain, x, kernel, 'native', upstream)
+  dense = _value_and_gradients(chain, x, kernel, 'dense', upstream, jit_compile=True)
+  for want, got in zip(native, dense):
+    np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-4)
+
+
+def test_gradient_reaches_a_keras_layer_kernel():
+  layer = stereo.Strided3D(4, 3, implementation='dense')
+  native = stereo.Strided3D(4, 3, implementation='native')
+  x = tf.random.stateless_normal([1, 4, 4, 4, 2], [13, 0])
+  layer(x)
+  native(x)
+  native.kernel.assign(layer.kernel)
+  gradients = []
+  for conv in (layer, native):
+    with tf.GradientTape() as tape:
+      loss = tf.reduce_sum(tf.square(conv(x)))
+    gradients.append(tape.gradient(loss, conv.kernel).numpy())
+  np.testing.assert_allclose(gradients[0], gradients[1], rtol=1e-4, atol=1e-4)
+  assert np.abs(gradients[0]).max() > 0
 
 
 def test_single_impulse_transposed_conv_places_the_kernel():

@@ -16,7 +16,8 @@ BN + ReLU follow every layer but 18 and 37 (convs before BN carry no bias).
 
 Right disparity: a mirrored pass. Flipping both views horizontally and swapping them turns
 the right view into the left view of a mirrored pair, whose left-referenced disparity is the
-right disparity mirrored; both passes run as one batch of 2B through shared weights.
+right disparity mirrored. In training both passes run as one batch of 2B through shared
+weights (batch norm sees both); in inference they run one after the other.
 """
 
 import functools
@@ -135,18 +136,15 @@ class StereoNet(tf.keras.Model):
   def size_multiple(self) -> int:
     return 2 ** (len(self.widths_3d) + 1)
 
-  def _features(self, image, training):
+  def feature_tower(self, image: tf.Tensor, training: bool = False) -> tf.Tensor:
+    """The shared 2D tower: [N, H, W, 3] -> [N, H/2, W/2, F] (layers 1-18)."""
     x = self.tower_in(image, training=training)
     for first, second in zip(self.tower_first, self.tower_second):
       x = x + second(first(x, training=training), training=training)  # Residual block.
     return self.tower_out(x)
 
-  def _disparity(self, left, right, training):
-    """Left-referenced disparity [B, H, W, 1] in pixels from a rectified pair."""
-    features = self._features(tf.concat([left, right], axis=0), training)
-    left_features, right_features = tf.split(features, 2, axis=0)
-    volume = cost_volume.concat_cost_volume(left_features, right_features,
-                                            self.max_disparity // 2)
+  def filter_volume(self, volume: tf.Tensor, training: bool = False) -> tf.Tensor:
+    """The 3D encoder-decoder (layers 19-37): [B, D/2, H/2, W/2, 2F] -> costs [B, D, H, W]."""
     x = volume
     for layer in self.volume_in:
       x = layer(x, training=training)
@@ -159,8 +157,15 @@ class StereoNet(tf.keras.Model):
     x = skips.pop()
     for deconv, skip in zip(self.decoder, reversed(skips)):
       x = deconv(x, training=training) + skip  # GC-Net's skip additions.
-    cost = self.volume_out(x)[..., 0]  # [B, D, H, W]
-    return cost_volume.soft_argmin(cost)
+    return self.volume_out(x)[..., 0]
+
+  def _disparity(self, left, right, training):
+    """Left-referenced disparity [B, H, W, 1] in pixels from a rectified pair."""
+    features = self.feature_tower(tf.concat([left, right], axis=0), training)
+    left_features, right_features = tf.split(features, 2, axis=0)
+    volume = cost_volume.concat_cost_volume(left_features, right_features,
+                                            self.max_disparity // 2)
+    return cost_volume.soft_argmin(self.filter_volume(volume, training))
 
   def call(self, left: tf.Tensor, right: tf.Tensor, training: bool = False
            ) -> Dict[str, tf.Tensor]:
@@ -179,9 +184,18 @@ class StereoNet(tf.keras.Model):
     layers_util.check_size(left, self.size_multiple, 'StereoNet input')
     mirrored_left = tf.reverse(right, axis=[2])
     mirrored_right = tf.reverse(left, axis=[2])
-    disparity = self._disparity(tf.concat([left, mirrored_left], axis=0),
-                                tf.concat([right, mirrored_right], axis=0), training)
-    disparity_left, mirrored = tf.split(disparity, 2, axis=0)
+    if training:
+      # One batch: batch-norm statistics are taken over both passes together.
+      disparity = self._disparity(tf.concat([left, mirrored_left], axis=0),
+                                  tf.concat([right, mirrored_right], axis=0), training)
+      disparity_left, mirrored = tf.split(disparity, 2, axis=0)
+    else:
+      # Batch norm uses its moving statistics, so the passes are independent: running them
+      # one after the other halves the peak memory of the 3D volumes (same results).
+      disparity_left = self._disparity(left, right, training)
+      with tf.control_dependencies([disparity_left]):
+        mirrored_left = tf.identity(mirrored_left)
+      mirrored = self._disparity(mirrored_left, mirrored_right, training)
     return {'disparity_left': disparity_left,
             'disparity_right': tf.reverse(mirrored, axis=[2])}
 
