@@ -1,0 +1,161 @@
+"""Markdown rendering of experiments/benchmark.py results (optionally beside a baseline)."""
+
+from typing import Optional
+
+
+def _get(run: Optional[dict], key: str) -> Optional[dict]:
+  return None if run is None else run['results'].get(key)
+
+
+def _time(result: Optional[dict]) -> str:
+  """'median s (min-max), first call X s' or the error."""
+  if result is None:
+    return 'not run'
+  if 'error' in result:
+    return f'FAILED: {result["error"]}'
+  return (f'{result["median"]:.3f} s ({result["min"]:.3f}-{result["max"]:.3f}); '
+          f'first {result["first"]:.1f} s')
+
+
+def _cells(run, baseline, key, fmt) -> str:
+  now = fmt(_get(run, key))
+  if baseline is None:
+    return f'| {now} |'
+  return f'| {fmt(_get(baseline, key))} | {now} |'
+
+
+def _header(first: str, baseline, baseline_label: str, label: str) -> list:
+  if baseline is None:
+    return [f'| {first} | {label} |', '|---|---|']
+  return [f'| {first} | {baseline_label} | {label} |', '|---|---|---|']
+
+
+def _train_cell(result) -> str:
+  if result is None or 'error' in result:
+    return _time(result)
+  return (f'{result["steps_per_s"]:.3f} steps/s; {_time(result)}; '
+          f'peak {result["peak_gib"]:.2f} GiB')
+
+
+def _machine_section(run) -> list:
+  m = run['machine']
+  return [f'Command: `{run["command"]}`', '',
+          f'Machine: {m["cpu"]}, {m["cores"]} cores, {m["memory_gib"]} GiB RAM; '
+          f'TensorFlow {m["tensorflow"]}, Python {m["python"]}; {m["date"]}; load average '
+          f'{", ".join(f"{x:.2f}" for x in m["load"])} at start, '
+          f'{", ".join(f"{x:.2f}" for x in m["load_after"])} at the end '
+          '(the machine is shared).', '']
+
+
+def _fraction(run, key) -> str:
+  train, flops, peak = (_get(run, k) for k in (key, 'flops/' + key.split('/')[1],
+                                                 'machine/conv3d'))
+  if not train or not flops or not peak or any('error' in r for r in (train, flops, peak)):
+    return 'n/a'
+  achieved = flops['train_gflop'] / train['median']
+  return f'{achieved:.1f} GFLOP/s = {100 * achieved / peak["gflop_per_s"]:.1f}%'
+
+
+def render(run: dict, baseline: Optional[dict], baseline_label: str) -> str:
+  """The full BENCHMARKS.md text."""
+  label = run['label']
+  lines = ['# Benchmarks', '']
+  lines += _machine_section(run)
+  if baseline is not None:
+    lines += [f'Baseline ("{baseline_label}"):', ''] + _machine_section(baseline)
+  lines += ['Times: median of the timed repeats after one warm-up call (min-max in '
+            'brackets); "first" = the first call, tracing / XLA compilation included. '
+            'Peak = VmHWM of the measurement\'s own process.', '']
+
+  lines += ['## 1. Machine limit', ''] + _header('kernel', baseline, baseline_label, label)
+  gflops = lambda r: ('not run' if r is None else f'FAILED: {r["error"]}' if 'error' in r
+                      else f'{r["gflop_per_s"]:.1f} GFLOP/s ({r["gflop"]:.1f} GFLOP in '
+                      f'{r["median"]:.3f} s)')
+  for key, name in (('machine/conv3d', 'tf.nn.conv3d [1,48,128,256,32] -> 32, 3x3x3'),
+                    ('machine/matmul', 'matmul 4096x4096x4096')):
+    lines.append(f'| {name} ' + _cells(run, baseline, key, gflops))
+
+  lines += ['', '## 2-3. Train step (joint, batch 1, RMSProp), FLOPs, throughput fraction',
+            ''] + _header('configuration', baseline, baseline_label, label)
+  for config in ('paper', 'demo'):
+    for jit in (False, True):
+      key = f'train/{config}/jit={jit}'
+      lines.append(f'| {config}, XLA {"on" if jit else "off"} ' +
+                   _cells(run, baseline, key, _train_cell))
+  lines += ['', 'FLOPs are counted analytically from the static shapes of every conv op '
+            'of the traced training forward pass (native strided ops; 2 FLOPs per '
+            'multiply-add; elementwise ops, BN, losses not counted); a train step counts '
+            '3x the forward (forward + input gradient + kernel gradient). Fraction = '
+            'train FLOPs / median step time / the conv3d GFLOP/s of section 1.', '']
+  lines += _header('configuration', baseline, baseline_label, label)
+  for config in ('paper', 'demo'):
+    flop = lambda r: ('n/a' if r is None or 'error' in r else
+                      f'{r["forward_gflop"]:.1f} fwd / {r["train_gflop"]:.1f} train GFLOP ('
+                      + ', '.join(f'{k} {v:.1f}' for k, v in r['per_module_gflop'].items())
+                      + ')')
+    lines.append(f'| {config}: FLOPs per step ' + _cells(run, baseline, f'flops/{config}',
+                                                        flop))
+    for jit in (False, True):
+      key = f'train/{config}/jit={jit}'
+      cells = (f'| {_fraction(run, key)} |' if baseline is None else
+               f'| {_fraction(baseline, key)} | {_fraction(run, key)} |')
+      lines.append(f'| {config}, XLA {"on" if jit else "off"}: achieved ' + cells)
+
+  lines += ['', '## 4. Per-module forward+backward time (paper configuration)', '',
+            'Each part timed alone (its own tf.function, XLA off) at the shapes it has in the '
+            'paper-configuration step, gradients w.r.t. its variables and inputs; the '
+            'stereo parts see the batch of 2 (direct + mirrored pass).', '']
+  lines += _header('module', baseline, baseline_label, label)
+  modules = _get(run, 'modules/paper') or {}
+  for name in [k for k in modules if k not in ('peak_gib', 'load', 'error')]:
+    cell = lambda r, name=name: _time(None if r is None or name not in r else r[name])
+    lines.append(f'| {name} ' + _cells(run, baseline, 'modules/paper', cell))
+  if 'error' in modules:
+    lines.append(f'| all | FAILED: {modules["error"]} |')
+
+  lines += ['', '## 5. Input pipeline (train_dataset, 256x512 crops) vs consumption', '']
+  lines += _header('source', baseline, baseline_label, label)
+  pipe = _get(run, 'pipeline') or {}
+  step = _get(run, 'train/paper/jit=False')
+  for name in [k for k in pipe if k not in ('peak_gib', 'load', 'error')]:
+    def cell(r, name=name, step_key='train/paper/jit=False', source=None):
+      if r is None or name not in r:
+        return 'n/a'
+      return f'{r[name]:.1f} pairs/s'
+    ratio = ('' if not step or 'error' in step else
+             f' = {pipe[name] * step["median"]:.0f}x the paper step\'s consumption')
+    lines.append(f'| {name} ' + _cells(run, baseline, 'pipeline', cell)[:-1] + ratio + ' |')
+
+  lines += ['', '## 6. SavedModel inference (paper configuration, random weights)', '']
+  lines += _header('frame', baseline, baseline_label, label)
+  keys = sorted({k for r in (run, baseline) if r for k in r['results']
+                 if k.startswith('inference/') and k != 'inference/export'})
+  def infer(r):
+    if r is None:
+      return 'not run'
+    if 'error' in r:
+      return f'FAILED: {r["error"]}'
+    return (f'{r["median"]:.2f} s = {r["frames_per_s"]:.3f} frames/s; first '
+            f'{r["first"]:.1f} s; peak {r["peak_gib"]:.2f} GiB')
+  for key in keys:
+    lines.append(f'| {key.split("/")[1]} ' + _cells(run, baseline, key, infer))
+
+  lines += ['', '## 7. Warp: forward+backward on [2, 256, 512, 3]', '']
+  lines += _header('implementation', baseline, baseline_label, label)
+  for name in ('warp.sample_horizontal', 'gather reference'):
+    cell = lambda r, name=name: _time(None if r is None or name not in r else r[name])
+    lines.append(f'| {name} ' + _cells(run, baseline, 'warp', cell))
+  warp_result = _get(run, 'warp')
+  if warp_result and 'max_abs_difference' in warp_result:
+    lines.append(f'\nMax |difference| of the two outputs: '
+                 f'{warp_result["max_abs_difference"]:.2e}.')
+
+  lines += ['', '## 8. Stride-2 3D conv implementations (`ops/conv3d.py`)', '']
+  lines += _header('measurement', baseline, baseline_label, label)
+  for implementation in ('native', 'dense'):
+    result = _get(run, f'conv3d/{implementation}') or {}
+    for name in [k for k in result if k not in ('peak_gib', 'load', 'error')]:
+      cell = lambda r, name=name: _time(None if r is None or name not in r else r[name])
+      lines.append(f'| {implementation}: {name} ' +
+                   _cells(run, baseline, f'conv3d/{implementation}', cell))
+  return '\n'.join(lines) + '\n'
