@@ -13,14 +13,18 @@ setuptools.setup(
     python_requires='>=3.9',
     packages=setuptools.find_packages(include=['mixstereo_tf', 'mixstereo_tf.*']),
     include_package_data=True,
+    # baselines/sgm.py uses np.bitwise_count (numpy >= 2.0). The TF, OpenCV, scikit-image and
+    # SciPy bounds are their first releases built for numpy 2; older wheels need numpy < 2.
     install_requires=[
-        'tensorflow>=2.15,<3',
-        'numpy>=1.23',
-        'opencv-python-headless>=4.6',
-        'scikit-image>=0.21',
+        'tensorflow>=2.18,<3',
+        'numpy>=2.0',
+        'opencv-python-headless>=4.10',
+        'scikit-image>=0.24',
+        # baselines/diplopia.py solves its layer system with scipy.sparse.
+        'scipy>=1.13',
         'absl-py>=1.0',
         # tf.summary's writers live in tensorboard, which recent TF no longer pulls in.
-        'tensorboard>=2.15',
+        'tensorboard>=2.18',
     ],
     extras_require={'test': ['pytest>=7']},
     entry_points={
