@@ -73,7 +73,8 @@ def test_eigen_and_sample_tables(tmp_path):
   text = report.format_report(result)
   assert 'abs_rel' in text and 'a3' in text and '1 of 1 images' in text
   assert '0.126' in text and 'paper: Godard et al.' in text and '4.471' in text
-  assert text.splitlines()[3].split()[3] == '7.000'  # 389.6 m clamped to 80 m: abs_rel 7.
+  # The calibration's focal length, 100 px: 1 px is 54 m for GT 10 m, abs_rel 4.4.
+  assert text.splitlines()[3].split()[3] == '4.400'
   sample = _oracle_result(runner.EvalConfig('sample', 'anaglyph', max_disparity=8,
                                             sample_scenes=1))
   lines = report.format_report(sample).splitlines()

@@ -100,15 +100,6 @@ def test_middlebury_bad_per_region():
   assert metrics.middlebury_bad(pred, gt) == pytest.approx({'valid': 1 / 3})
 
 
-def test_kitti_focal_length_table():
-  assert metrics.kitti_focal_length(1242) == 721.5377
-  assert metrics.kitti_focal_length(1241) == 718.856
-  assert metrics.kitti_focal_length(1224) == 707.0493
-  assert metrics.kitti_focal_length(1238) == 718.3351
-  with pytest.raises(ValueError, match='1240'):
-    metrics.kitti_focal_length(1240)
-
-
 def test_disparity_to_depth():
   depth = metrics.disparity_to_depth(np.array([[721.5377 * 0.54 / 10, 0.0, -1.0]]), 721.5377)
   np.testing.assert_allclose(depth[0, 0], 10.0)
@@ -121,7 +112,8 @@ def test_resize_disparity_scales_values_by_width_ratio():
   out = metrics.resize_disparity(disparity, 6, 16)
   assert out.shape == (6, 16)
   np.testing.assert_allclose(out, 6.0)
-  depth = metrics.prediction_to_kitti_depth(np.full((2, 4), 1242 / 4 * 2.0), 3, 1242)
+  depth = metrics.prediction_to_kitti_depth(np.full((2, 4), 1242 / 4 * 2.0), 3, 1242,
+                                           721.5377)
   np.testing.assert_allclose(depth, 721.5377 * 0.54 / (1242 / 4 * 2.0 * 1242 / 4))
 
 

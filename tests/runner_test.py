@@ -136,16 +136,20 @@ def test_sample_protocol_oracle(tmp_path):
   assert all(r['seconds'] >= 0.0 for r in result.rows)
 
 
-def _write_eigen(root):
-  """KITTI raw layout, one frame 16 x 1242 (a width with a known focal length)."""
+def _write_eigen(root, width=1242, focal=100.0, rect_size=''):
+  """KITTI raw layout, one frame 16 x `width`; P_rect_02 has the given focal length.
+
+  `rect_size`: an optional 'W H' S_rect_02 entry.
+  """
   date, drive = '2011_09_26', '2011_09_26_drive_0001_sync'
   calib = os.path.join(root, date)
   os.makedirs(calib)
   with open(os.path.join(calib, 'calib_velo_to_cam.txt'), 'w') as f:
     f.write('R: 0 -1 0 0 0 -1 1 0 0\nT: 0 0 0\n')
   with open(os.path.join(calib, 'calib_cam_to_cam.txt'), 'w') as f:
-    f.write('R_rect_00: 1 0 0 0 1 0 0 0 1\nP_rect_02: 100 0 621 0 0 100 10 0 0 0 1 0\n')
-  views = _views(np.random.RandomState(3), 16, 1242)
+    f.write(f'R_rect_00: 1 0 0 0 1 0 0 0 1\nP_rect_02: {focal} 0 {width / 2} 0 0 {focal} 10 0 '
+            '0 0 1 0\n' + (f'S_rect_02: {rect_size}\n' if rect_size else ''))
+  views = _views(np.random.RandomState(3), 16, width)
   for camera, view in zip(('image_02', 'image_03'), views):
     _write_rgb(os.path.join(root, date, drive, camera, 'data', '0000000000.png'), view)
   # Ten points 10 m ahead, spread across the image centre (inside the Garg crop).
@@ -160,19 +164,32 @@ def _write_eigen(root):
   return list_path
 
 
+# 1226 px wide with 707.0912 px focal: the 2011_09_30 drives, which no width table covered.
+@pytest.mark.parametrize('width, focal, rect_size', [(1242, 100.0, ''),
+                                                     (1226, 707.0912, '1226 16')])
 @pytest.mark.parametrize('depth, abs_rel, a1', [(10.0, 0.0, 1.0), (20.0, 1.0, 0.0)])
-def test_eigen_depth_from_velodyne(tmp_path, depth, abs_rel, a1):
-  list_path = _write_eigen(str(tmp_path))
+def test_eigen_depth_from_velodyne_uses_the_calibration_focal_length(
+    tmp_path, width, focal, rect_size, depth, abs_rel, a1):
+  list_path = _write_eigen(str(tmp_path), width, focal, rect_size)
   config = runner.EvalConfig('eigen', 'monocular', str(tmp_path), eigen_list=list_path)
-  disparity = metrics.kitti_focal_length(1242) * 0.54 / depth
+  disparity = focal * 0.54 / depth
 
   def predict(mixture):
     return {'left': mixture, 'right': mixture,
             'disparity_left': np.full(mixture.shape[:2], disparity, np.float32)}
 
   row = runner.evaluate(config, predict).rows[0]
+  assert row['width'] == width
   assert row['abs_rel'] == pytest.approx(abs_rel, abs=1e-5)
   assert row['a1'] == a1 and row['mixture_psnr_left'] == 100.0
+
+
+def test_eigen_refuses_images_of_another_size_than_the_calibration(tmp_path):
+  list_path = _write_eigen(str(tmp_path), 1226, 707.0912, '1242 375')
+  config = runner.EvalConfig('eigen', 'monocular', str(tmp_path), eigen_list=list_path)
+  with pytest.raises(ValueError, match=r'calib_cam_to_cam.txt: S_rect_02 is 1242x375'):
+    runner.evaluate(config, lambda m: {'left': m, 'right': m,
+                                       'disparity_left': np.ones(m.shape[:2], np.float32)})
 
 
 def test_bad_configs_and_outputs_raise(tmp_path):

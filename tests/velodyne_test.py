@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import velodyne
 
 # Velodyne (x forward, y left, z up) -> camera (x right, y down, z forward).
@@ -130,3 +131,31 @@ def test_bad_shapes_raise():
     velodyne.project_velodyne_to_depth(np.zeros((3, 2)), np.zeros((3, 4)), 4, 4)
   with pytest.raises(ValueError, match='projection'):
     velodyne.project_velodyne_to_depth(np.zeros((3, 4)), np.zeros((4, 4)), 4, 4)
+
+
+def test_focal_length_from_the_calibration_gives_depth_exactly(tmp_path):
+  # The 2011_09_30 drives: 1226 x 370 images, a focal length no width table had.
+  (tmp_path / 'calib_cam_to_cam.txt').write_text(
+      'calib_time: 09-Jan-2012 13:57:47\n'
+      'S_rect_02: 1.226000e+03 3.700000e+02\n'
+      'P_rect_02: 7.070912e+02 0 6.018873e+02 4.688783e+01 0 7.070912e+02 1.831104e+02 '
+      '1.178601e-01 0 0 1 6.203223e-03\n')
+  focal = velodyne.rectified_focal_length(str(tmp_path), 370, 1226)
+  assert focal == 707.0912
+  disparity = np.full((370, 1226), 37.5, np.float32)
+  disparity[0, :3] = [3.0, 0.25, 96.0]
+  depth = metrics.prediction_to_kitti_depth(disparity, 370, 1226, focal)
+  np.testing.assert_array_equal(depth, 707.0912 * 0.54 / disparity.astype(np.float64))
+  assert depth[0, 0] == 707.0912 * 0.54 / 3.0
+
+
+def test_focal_length_errors_name_the_file(tmp_path):
+  path = tmp_path / 'calib_cam_to_cam.txt'
+  path.write_text(f'S_rect_02: 1242 375\nP_rect_02: {_FOCAL} 0 {_CX} 0 0 {_FOCAL} {_CY} 0 '
+                  '0 0 1 0\n')
+  assert velodyne.rectified_focal_length(str(tmp_path), 375, 1242) == _FOCAL
+  with pytest.raises(ValueError, match=r'calib_cam_to_cam.txt: S_rect_02 is 1242x375 but '
+                                       r'the image is 1226x370'):
+    velodyne.rectified_focal_length(str(tmp_path), 370, 1226)
+  with pytest.raises(ValueError, match=r"calib_cam_to_cam.txt: .*'P_rect_03'"):
+    velodyne.rectified_focal_length(str(tmp_path), 375, 1242, camera=3)

@@ -14,8 +14,8 @@ from typing import Dict, Iterable, Mapping, Optional
 import cv2
 import numpy as np
 
-# monodepth's KITTI focal lengths (pixels) by rectified image width.
-KITTI_FOCAL_LENGTHS = {1242: 721.5377, 1241: 718.856, 1224: 707.0493, 1238: 718.3351}
+# The KITTI stereo rig's baseline; the focal length comes from each frame's calibration
+# (`velodyne.rectified_focal_length`), since the raw drives differ in it and in image width.
 KITTI_BASELINE_M = 0.54
 
 # Crop fractions (top, bottom, left, right) of the image height / width.
@@ -138,14 +138,6 @@ def middlebury_bad(pred, gt, masks: Optional[Mapping[str, np.ndarray]] = None,
   return {name: bad_pixel_rate(pred, gt, mask, threshold) for name, mask in masks.items()}
 
 
-def kitti_focal_length(width: int) -> float:
-  """Focal length in pixels of the rectified KITTI colour cameras, by image width."""
-  if width not in KITTI_FOCAL_LENGTHS:
-    raise ValueError(f'No KITTI focal length for image width {width}; known widths: '
-                     f'{sorted(KITTI_FOCAL_LENGTHS)}.')
-  return KITTI_FOCAL_LENGTHS[width]
-
-
 def disparity_to_depth(disparity_px, focal_px: float,
                        baseline_m: float = KITTI_BASELINE_M) -> np.ndarray:
   """Depth in metres = focal_px · baseline_m / disparity_px; disparity <= 0 gives inf.
@@ -172,11 +164,19 @@ def resize_disparity(disparity_px, height: int, width: int) -> np.ndarray:
   return resized.astype(np.float64) * (width / disparity.shape[1])
 
 
-def prediction_to_kitti_depth(disparity_px, height: int, width: int,
+def prediction_to_kitti_depth(disparity_px, height: int, width: int, focal_px: float,
                               baseline_m: float = KITTI_BASELINE_M) -> np.ndarray:
-  """A predicted [h, w] disparity as depth in metres at the [height, width] GT size."""
-  return disparity_to_depth(resize_disparity(disparity_px, height, width),
-                            kitti_focal_length(width), baseline_m)
+  """A predicted [h, w] disparity as depth in metres at the [height, width] GT size.
+
+  Args:
+    disparity_px: [h, w] pixels of the prediction's size.
+    height, width: ground-truth size.
+    focal_px: focal length in pixels at the ground-truth size (KITTI raw: P_rect_02[0, 0]
+      of the drive's calib_cam_to_cam.txt).
+    baseline_m: stereo baseline in metres.
+  """
+  return disparity_to_depth(resize_disparity(disparity_px, height, width), focal_px,
+                            baseline_m)
 
 
 def eigen_crop_mask(height: int, width: int, crop: Optional[str] = 'garg') -> np.ndarray:

@@ -15,7 +15,8 @@ Per-image rows hold, by protocol (rates are FRACTIONS; tables print percent):
   kitti2015 / kitti2012: d1_all (all GT pixels), d1_noc (non-occluded), epe;
   middlebury: bad1_all (GT pixels inside the 'all' mask), bad1_nonocc;
   sample: bad1, bad3, epe over the valid pixels;
-  eigen: the depth metrics of `metrics.DEPTH_METRIC_NAMES` against Velodyne GT.
+  eigen: the depth metrics of `metrics.DEPTH_METRIC_NAMES` against Velodyne GT, depth =
+    f · 0.54 m / d with f = P_rect_02[0, 0] of the drive's calibration.
 Dataset numbers are means over images; an image without evaluated pixels is left out of
 that metric's mean (`metrics.Accumulator`).
 """
@@ -182,7 +183,8 @@ def _eigen_metrics(sample: records.StereoSample, pred: np.ndarray) -> Dict[str, 
   height, width = pred.shape
   gt = velodyne.eigen_ground_truth(sample.calib, kitti.velodyne_path(sample.left), height,
                                    width)
-  depth = metrics.prediction_to_kitti_depth(pred, height, width, metrics.KITTI_BASELINE_M)
+  focal = velodyne.rectified_focal_length(sample.calib, height, width)
+  depth = metrics.prediction_to_kitti_depth(pred, height, width, focal)
   return metrics.depth_metrics(depth, gt)
 
 

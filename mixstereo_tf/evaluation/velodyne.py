@@ -154,6 +154,40 @@ def project_velodyne_to_depth(points: np.ndarray, projection: np.ndarray, height
   return np.where(np.isfinite(nearest), nearest, 0.0).astype(np.float32)
 
 
+def rectified_focal_length(calib_dir: str, image_height: int, image_width: int,
+                           camera: int = 2) -> float:
+  """Focal length in pixels of a rectified KITTI raw camera: P_rect_0c[0, 0].
+
+  Read from the date folder's `calib_cam_to_cam.txt`, like the projection of the ground
+  truth, so depth from disparity uses the drive's own focal length (2011_09_26: 721.5377 px
+  at 1242 px width; 2011_09_30: 707.0912 px at 1226 px).
+
+  Args:
+    calib_dir: the drive date folder holding `calib_cam_to_cam.txt`.
+    image_height, image_width: size of the image the focal length is used for.
+    camera: 2 (left colour) or 3 (right colour).
+
+  Raises:
+    ValueError naming the file: P_rect_0c missing or malformed, or S_rect_0c (the
+    rectified size, when the file has it) differs from the image size, which would make
+    both the focal length and the projected ground truth wrong for this image.
+  """
+  path = os.path.join(calib_dir, 'calib_cam_to_cam.txt')
+  calib = read_calib_file(path)
+  try:
+    focal = float(_matrix(calib, f'P_rect_{camera:02d}', 3, 4)[0, 0])
+    size_key = f'S_rect_{camera:02d}'
+    if size_key in calib:
+      width, height = _matrix(calib, size_key, 1, 2)[0]
+      if (height, width) != (image_height, image_width):
+        raise ValueError(f'{size_key} is {width:g}x{height:g} but the image is '
+                         f'{image_width}x{image_height}; evaluate the rectified images '
+                         'at their original size.')
+  except ValueError as error:
+    raise ValueError(f'{path}: {error}') from error
+  return focal
+
+
 def eigen_ground_truth(calib_dir: str, velodyne_bin: str, image_height: int,
                        image_width: int, camera: int = 2) -> np.ndarray:
   """Sparse GT depth [image_height, image_width] for one KITTI raw frame.
