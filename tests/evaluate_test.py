@@ -10,7 +10,10 @@ import sys
 import pytest
 import tensorflow as tf
 
+from mixstereo_tf import inference
 from mixstereo_tf import models
+from mixstereo_tf import serving
+from mixstereo_tf.data import sample
 from mixstereo_tf.evaluation import report
 from mixstereo_tf.evaluation import runner
 from tests import runner_test
@@ -75,9 +78,9 @@ def test_eigen_and_sample_tables(tmp_path):
   assert '0.126' in text and 'paper: Godard et al.' in text and '4.471' in text
   # The calibration's focal length, 100 px: 1 px is 54 m for GT 10 m, abs_rel 4.4.
   assert text.splitlines()[3].split()[3] == '4.400'
-  sample = _oracle_result(runner.EvalConfig('sample', 'anaglyph', max_disparity=8,
-                                            sample_scenes=1))
-  lines = report.format_report(sample).splitlines()
+  sample_result = _oracle_result(runner.EvalConfig('sample', 'anaglyph', max_disparity=8,
+                                                   sample_scenes=1))
+  lines = report.format_report(sample_result).splitlines()
   assert lines[3].startswith('synthetic_heldout_00000')
   assert lines[5].startswith('mean') and 'this run' in lines[5] and '0.00%' in lines[5]
   assert lines[6].startswith('mean') and 'mixture as each view' in lines[6]
@@ -143,3 +146,54 @@ def test_cli_middlebury_and_flag_errors(run_dir, tmp_path):
   mismatch = _cli('--protocol=middlebury', f'--data_dir={root}', f'--checkpoint={run_dir}',
                   '--mixture=diplopia')
   assert mismatch.returncode != 0 and "trained on 'anaglyph'" in mismatch.stderr
+
+
+def _sample_rows_in_process(run_dir, restore_colour):
+  """The sample protocol's rows for the run, evaluated in this process (the reference)."""
+  model, info = inference.load_run(run_dir)
+  config = runner.EvalConfig('sample', info.mixture, sample_scenes=1,
+                             max_disparity=info.model_config.max_disparity)
+  return runner.evaluate(config, inference.Unmixer.from_model(model, info, restore_colour)).rows
+
+
+def _assert_csv_matches(path, expected):
+  with open(path, newline='', encoding='utf-8') as f:
+    rows = list(csv.DictReader(f))
+  assert [r['name'] for r in rows] == [r['name'] for r in expected]
+  for got, want in zip(rows, expected):
+    for key in ('psnr_left', 'psnr_right', 'mixture_psnr_left'):
+      assert float(got[key]) == pytest.approx(want[key], abs=0.05), key
+    for key in ('bad1', 'bad3', 'epe'):
+      assert float(got[key]) == pytest.approx(want[key], abs=1e-2), key
+
+
+def test_cli_sample_protocol_on_a_checkpoint(run_dir, tmp_path):
+  csv_path = tmp_path / 'rows.csv'
+  done = _cli('--protocol=sample', f'--checkpoint={run_dir}', '--sample_scenes=1',
+              f'--output_csv={csv_path}')
+  assert done.returncode == 0, done.stderr[-3000:]
+  lines = done.stdout.splitlines()
+  assert lines[0].startswith('Sample held-out set, anaglyph') and '2 of 2 images' in lines[0]
+  # The ground truth is rendered below the model's range (8): Motorcycle shrunk 9 times.
+  factor = sample.motorcycle_factor(TINY.max_disparity)
+  assert factor == 9
+  assert lines[3].startswith('synthetic_heldout_00000')
+  assert lines[4].startswith(f'motorcycle_div{factor}')
+  # Colour restoration is on by default for anaglyphs: the rows match that evaluation.
+  _assert_csv_matches(csv_path, _sample_rows_in_process(run_dir, restore_colour=None))
+
+
+def test_cli_sample_protocol_on_a_saved_model(run_dir, tmp_path):
+  model, info = inference.load_run(run_dir)
+  export_dir = serving.export_saved_model(model, info, str(tmp_path / 'export'))
+  csv_path = tmp_path / 'rows.csv'
+  done = _cli('--protocol=sample', f'--saved_model={export_dir}', '--sample_scenes=1',
+              '--norestore_colour', f'--output_csv={csv_path}')
+  assert done.returncode == 0, done.stderr[-3000:]
+  assert done.stdout.startswith('Sample held-out set, anaglyph') and 'mean' in done.stdout
+  expected = _sample_rows_in_process(run_dir, restore_colour=False)
+  _assert_csv_matches(csv_path, expected)
+  # Without restoration the red channel is the network's, not the mixture's: a different
+  # left view than the restored one (so the flag reached the predictor).
+  restored = _sample_rows_in_process(run_dir, restore_colour=None)
+  assert abs(restored[0]['psnr_left'] - expected[0]['psnr_left']) > 0.1
