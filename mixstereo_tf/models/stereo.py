@@ -82,7 +82,7 @@ class ConvBnRelu(tf.keras.layers.Layer):
       layer = {(2, False): tf.keras.layers.Conv2D, (3, False): tf.keras.layers.Conv3D,
                (2, True): tf.keras.layers.Conv2DTranspose}[(rank, transposed)]
       self.conv = layer(filters, kernel, strides=strides, padding='same', use_bias=False)
-    self.bn = tf.keras.layers.BatchNormalization()
+    self.bn = layers_util.FusedBatchNorm()
 
   def call(self, x, training=False):
     return tf.nn.relu(self.bn(self.conv(x), training=training))
