@@ -81,6 +81,38 @@ def test_init_checkpoint_starts_a_new_run_from_given_weights(tmp_path):
   assert stereo and all(np.array_equal(weights[k], after[k]) for k in stereo)
 
 
+def test_init_checkpoint_may_name_a_run_directory(tmp_path):
+  pretrained = _train(tmp_path / 'pretrain', 2)
+  weights = _checkpoint_values(pretrained.last_checkpoint)
+  assert loop.resolve_checkpoint(str(tmp_path / 'pretrain')) == pretrained.last_checkpoint
+  finetune = _train(tmp_path / 'finetune', 1, init_checkpoint=str(tmp_path / 'pretrain'),
+                    mode='separation_only')
+  after = _checkpoint_values(finetune.last_checkpoint)
+  stereo = [k for k in weights if k.startswith('model/stereo/')]
+  assert stereo and all(np.array_equal(weights[k], after[k]) for k in stereo)
+
+
+def test_init_checkpoint_errors_name_the_path(tmp_path):
+  (tmp_path / 'empty').mkdir()
+  with pytest.raises(ValueError, match='directory without a checkpoint'):
+    loop.resolve_checkpoint(str(tmp_path / 'empty'))
+  with pytest.raises(ValueError, match='no .index file'):
+    loop.resolve_checkpoint(str(tmp_path / 'missing' / 'ckpt-3'))
+
+
+def test_a_crash_before_the_first_step_writes_no_checkpoint(tmp_path):
+  def broken_dataset():
+    def fail(element):
+      tf.debugging.assert_equal(0, 1, message='corrupt input')
+      return element
+    return training_helpers.dataset_fn(height=16, width=32, shift=2)().map(fail)
+
+  config = config_lib.TrainConfig(model_dir=str(tmp_path), num_steps=3)
+  with pytest.raises(tf.errors.InvalidArgumentError, match='corrupt input'):
+    loop.train(config, training_helpers.MINI, objective.LossConfig(), broken_dataset)
+  assert tf.train.latest_checkpoint(str(tmp_path)) is None
+
+
 def test_config_validation_names_the_field():
   with pytest.raises(ValueError, match='TrainConfig.num_steps'):
     config_lib.TrainConfig(model_dir='x', num_steps=0)

@@ -46,11 +46,24 @@ def test_step_compiles_with_xla_and_matches_the_eager_graph():
     np.testing.assert_allclose(float(compiled[key]), float(eager[key]), rtol=1e-3)
 
 
-def test_step_reports_every_loss_term_and_psnr():
+def test_xla_step_accepts_a_pipeline_batch_with_its_string_name():
+  # Pipeline batches carry `name` (tf.string), which XLA cannot take as an argument.
+  model = models.build_model(training_helpers.MINI)
+  trainer = step_lib.TrainStep(model, tf.keras.optimizers.RMSprop(1e-3),
+                               objective.LossConfig(), 'joint', tf.distribute.get_strategy(),
+                               jit_compile=True)
+  batch = dict(training_helpers.stereo_batch(height=16, width=32, shift=2),
+               name=tf.constant(['scene_0']))
+  scalars, _ = trainer(batch)
+  assert np.isfinite(float(scalars['loss']))
+
+
+def test_step_reports_every_loss_term_psnr_and_the_gradient_norm():
   _, _, scalars = _one_step('joint')
   for key in ('loss', 'separation/total', 'stereo/total', 'metrics/psnr_left',
               'metrics/psnr_right'):
     assert key in scalars
+  assert 0 < float(scalars['metrics/gradient_norm']) < np.inf
 
 
 @pytest.mark.parametrize('setting, device, expected', [

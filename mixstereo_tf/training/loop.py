@@ -41,6 +41,23 @@ class TrainResult:
   num_replicas: int
 
 
+def resolve_checkpoint(path: str) -> str:
+  """A checkpoint prefix from a prefix or a run directory (its newest checkpoint).
+
+  Raises:
+    ValueError: the directory holds no checkpoint, or the prefix does not exist.
+  """
+  if tf.io.gfile.isdir(path):
+    latest = tf.train.latest_checkpoint(path)
+    if latest is None:
+      raise ValueError(f'init_checkpoint {path!r} is a directory without a checkpoint.')
+    return latest
+  if not tf.io.gfile.exists(path + '.index'):
+    raise ValueError(f'init_checkpoint {path!r} is neither a run directory nor a '
+                     'checkpoint prefix (no .index file).')
+  return path
+
+
 def make_strategy(name: str) -> tf.distribute.Strategy:
   """'default' (one device), 'mirrored' (all local devices), 'multi_worker' (TF_CONFIG)."""
   if name == 'default':
@@ -175,8 +192,9 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
     logging.info('Resumed from %s at step %d.', latest,
                  int(optimizer.iterations.numpy()))
   elif config.init_checkpoint:
-    tf.train.Checkpoint(model=model).read(config.init_checkpoint).expect_partial()
-    logging.info('Initialised the model from %s.', config.init_checkpoint)
+    init = resolve_checkpoint(config.init_checkpoint)
+    tf.train.Checkpoint(model=model).read(init).expect_partial()
+    logging.info('Initialised the model from %s.', init)
 
   start_step = step = int(optimizer.iterations.numpy())
   writer = (tf.summary.create_file_writer(os.path.join(config.model_dir, 'train')) if chief
@@ -193,10 +211,13 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
         scalars, outputs = trainer(batch)
         step = int(optimizer.iterations.numpy())
         loss = float(scalars['loss'])
-        if not math.isfinite(loss):
+        gradient_norm = float(scalars['metrics/gradient_norm'])
+        if not (math.isfinite(loss) and (trainer.loss_scaled or
+                                         math.isfinite(gradient_norm))):
           raise NonFiniteLossError(
-              f'Non-finite loss {loss} at step {step}; stopping. The last good checkpoint '
-              f'is {manager.latest_checkpoint} (not overwritten).')
+              f'Non-finite loss {loss} (gradient norm {gradient_norm}) at step {step}; '
+              f'stopping. The last good checkpoint is {manager.latest_checkpoint} '
+              '(not overwritten).')
         if tick is None:  # The first step includes tracing and compilation.
           tick, tick_step = time.perf_counter(), step
         elif step > tick_step:
@@ -217,9 +238,11 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
     except NonFiniteLossError:
       raise
     except BaseException:
-      # A crash in the data or the step: keep the weights of the last completed step.
-      last_save = manager.save(checkpoint_number=step)
-      logging.error('Training failed at step %d; checkpoint saved to %s.', step, last_save)
+      # A crash in the data or the step: keep the weights of the last completed step, if
+      # this run completed one (before that, the newest checkpoint already holds them).
+      if step > start_step:
+        last_save = manager.save(checkpoint_number=step)
+      logging.error('Training failed at step %d; newest checkpoint: %s.', step, last_save)
       raise
     if last_save is None or int(last_save.rsplit('-', 1)[-1]) != step:
       last_save = manager.save(checkpoint_number=step)

@@ -81,24 +81,33 @@ class TrainStep:
     self.mode = mode
     self.strategy = strategy
     self.variables = trainable_variables(model, mode)
+    # Dynamic loss scaling makes inf gradients a normal event (the step is skipped).
+    self.loss_scaled = isinstance(optimizer, tf.keras.mixed_precision.LossScaleOptimizer)
     self._gradients = tf.function(self._loss_and_gradients, jit_compile=jit_compile)
     self._step = tf.function(self._distributed_step)
 
   def _loss_and_gradients(self, batch):
+    """The XLA-compilable part: forward, objective, backward, on numeric tensors only."""
     with tf.GradientTape() as tape:
       outputs = forward(self.model, batch, self.mode, training=True)
       scalars = objective.total_loss(outputs, batch, self.loss_config, self.mode)
       # Each replica's loss is a mean over its share of the global batch; the gradients are
       # summed across replicas, so dividing by their number gives the global mean.
       loss = scalars['loss'] / self.strategy.num_replicas_in_sync
-      if isinstance(self.optimizer, tf.keras.mixed_precision.LossScaleOptimizer):
+      if self.loss_scaled:
         loss = self.optimizer.scale_loss(loss)
     gradients = tape.gradient(loss, self.variables)
     scalars.update(separation_psnr(outputs, batch))
+    # NaN gradients with a finite loss would silently poison the weights: the loop checks
+    # this norm as well as the loss.
+    scalars['metrics/gradient_norm'] = tf.linalg.global_norm(gradients)
     return scalars, outputs, gradients
 
   def _replica_step(self, batch):
-    scalars, outputs, gradients = self._gradients(batch)
+    # XLA takes no string arguments: the pipeline's `name` (and any other non-numeric
+    # entry) stays outside the compiled function.
+    numeric = {k: v for k, v in batch.items() if v.dtype != tf.string}
+    scalars, outputs, gradients = self._gradients(numeric)
     self.optimizer.apply_gradients(zip(gradients, self.variables))
     return scalars, outputs
 
