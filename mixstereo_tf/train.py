@@ -30,6 +30,8 @@ flags.DEFINE_enum('dataset', 'sample', sources.DATASETS, 'Training data source.'
 flags.DEFINE_string('data_dir', None, 'Dataset root (not needed for `sample`).')
 flags.DEFINE_string('train_list', None, 'Split list of `left right` lines (kitti_raw).')
 flags.DEFINE_boolean('skip_bad_pairs', False, 'Log and skip unreadable pairs.')
+flags.DEFINE_list('middlebury_scale', [], 'Ground-truth disparity scale per Middlebury scene '
+                  '(--dataset=middlebury) as scene:scale items, e.g. tsukuba:16,venus:8.')
 flags.DEFINE_integer('crop_height', 256, 'Training crop height (paper: 256 KITTI, 384 '
                      'Middlebury); a multiple of 32.')
 flags.DEFINE_integer('crop_width', 512, 'Training crop width (paper: 512 KITTI, 384 '
@@ -93,7 +95,8 @@ def build_configs():
       # `sample` scenes default to the crop size so that crops are not mostly padding.
       sample_height=FLAGS.sample_height or FLAGS.crop_height,
       sample_width=FLAGS.sample_width or FLAGS.crop_width,
-      max_disparity=FLAGS.max_disparity)
+      max_disparity=FLAGS.max_disparity,
+      middlebury_scales=sources.parse_scene_scales(FLAGS.middlebury_scale))
   pipeline_config = pipeline.PipelineConfig(
       mixture=FLAGS.mixture, crop_height=FLAGS.crop_height, crop_width=FLAGS.crop_width,
       batch_size=FLAGS.batch_size, augment=FLAGS.augment, flip=FLAGS.flip, seed=FLAGS.seed,

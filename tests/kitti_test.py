@@ -1,5 +1,7 @@
 """Tests for mixstereo_tf.data.kitti on tiny KITTI-layout folders written into tmp_path."""
 
+import dataclasses
+import logging
 import os
 
 import cv2
@@ -8,6 +10,7 @@ import pytest
 
 from mixstereo_tf.data import kitti
 from mixstereo_tf.data import records
+from mixstereo_tf.data import sources
 
 _DRIVE = '2011_09_26/2011_09_26_drive_0002_sync'
 
@@ -85,8 +88,28 @@ def test_skip_bad_pairs_counts_skips(tmp_path):
   split = kitti.read_split_list(_list(tmp_path, '\n'.join(lines)), data_dir,
                                 skip_bad_pairs=True)
   assert [s.name[-1] for s in split.samples] == ['1', '3']
-  assert len(split.skipped) == 2
+  assert len(split.skipped) == 2 and split.skipped_lines == [2, 4]
   assert 'files.txt:2' in split.skipped[0] and 'files.txt:4' in split.skipped[1]
+
+
+def test_load_samples_reports_skipped_pairs(tmp_path, caplog):
+  data_dir = str(tmp_path / 'raw')
+  for frame in ('0000000001', '0000000004'):
+    _raw_frame(data_dir, frame)
+  list_path = _list(tmp_path, '\n'.join(['# header'] + [_entry(f'000000000{i}')
+                                                         for i in (1, 2, 3, 4)]))
+  config = sources.DataConfig(dataset='kitti_raw', data_dir=data_dir, train_list=list_path,
+                              skip_bad_pairs=True)
+  caplog.set_level(logging.WARNING)
+  samples = sources.load_samples(config)
+  assert [s.name[-1] for s in samples] == ['1', '4']
+  summary = [r.getMessage() for r in caplog.records if 'skipped 2 of 4 pairs' in r.getMessage()]
+  assert len(summary) == 1 and summary[0].endswith('at lines 3, 4.'), caplog.text
+  assert list_path in summary[0]
+  caplog.clear()
+  sources.load_samples(dataclasses.replace(config, train_list=_list(tmp_path, _entry(
+      '0000000001'))))
+  assert 'skipped' not in caplog.text
 
 
 def test_check_files_false_keeps_paths_as_written(tmp_path):

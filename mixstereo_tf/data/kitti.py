@@ -42,9 +42,11 @@ class SplitList:
   Attributes:
     samples: one StereoSample per usable line, in file order.
     skipped: one message per line dropped by `skip_bad_pairs`.
+    skipped_lines: the (1-based) list line number of each entry of `skipped`.
   """
   samples: List[records.StereoSample]
   skipped: List[str]
+  skipped_lines: List[int]
 
 
 def sample_name(path: str) -> str:
@@ -108,7 +110,7 @@ def read_split_list(list_path: str, data_dir: str, skip_bad_pairs: bool = False,
     raise ValueError(f'Split list not found: {list_path}')
   with open(list_path, encoding='utf-8') as f:
     lines = f.read().splitlines()
-  samples, skipped, calib_cache = [], [], {}
+  samples, skipped, skipped_lines, calib_cache = [], [], [], {}
   for number, line in enumerate(lines, start=1):
     fields = line.split()
     if not fields or fields[0].startswith('#'):
@@ -126,6 +128,7 @@ def read_split_list(list_path: str, data_dir: str, skip_bad_pairs: bool = False,
           raise ValueError(message) from None
         logging.warning('Skipping pair: %s', message)
         skipped.append(message)
+        skipped_lines.append(number)
         continue
     samples.append(records.StereoSample(
         name=sample_name(fields[0]), left=left, right=right,
@@ -134,7 +137,7 @@ def read_split_list(list_path: str, data_dir: str, skip_bad_pairs: bool = False,
     what = f' ({len(skipped)} skipped for missing files)' if skipped else ''
     raise ValueError(f"{list_path}: no pairs{what}; expected lines 'left right' with paths "
                      f'relative to {data_dir}')
-  return SplitList(samples=samples, skipped=skipped)
+  return SplitList(samples=samples, skipped=skipped, skipped_lines=skipped_lines)
 
 
 def _split_folder(data_dir: str, split: str, left_folder: str) -> str:
