@@ -173,10 +173,14 @@ def test_load_sample_keys_dtypes_and_masks(tmp_path):
   all_mask[:, -1] = 0
   nonocc = np.full((8, 12), 255, np.uint8)
   nonocc[0] = 128
+  disc = np.zeros((8, 12), np.uint8)
+  disc[:, 2:6] = 255
+  disc[:, 6] = 128
   sample = records.StereoSample(
       'a', left, right, disparity_left=_write(tmp_path / 'd.png', disp), disparity_scale=256,
       all_left=_write(tmp_path / 'all.png', all_mask),
-      nonocc_left=_write(tmp_path / 'noc.png', nonocc), source='list.txt:3')
+      nonocc_left=_write(tmp_path / 'noc.png', nonocc),
+      disc_left=_write(tmp_path / 'disc.png', disc), source='list.txt:3')
   loaded = records.load_sample(sample)
   assert set(loaded) == set(records.LOADED_KEYS)
   for key, dtype in records.LOADED_KEYS.items():
@@ -187,6 +191,9 @@ def test_load_sample_keys_dtypes_and_masks(tmp_path):
   expected_valid[:, 4:11] = True
   np.testing.assert_array_equal(loaded['valid_left'], expected_valid)
   np.testing.assert_array_equal(loaded['disparity_left'], np.where(expected_valid, 3.0, 0.0))
+  disc_expected = expected_valid & (disc == 255)  # Columns 4-5: GT known and white.
+  assert disc_expected[:, 4:6].all() and disc_expected.sum() == 16
+  np.testing.assert_array_equal(loaded['disc_left'], disc_expected)
   expected_valid[0] = False
   np.testing.assert_array_equal(loaded['nonocc_left'], expected_valid)
   assert not loaded['valid_right'].any() and not loaded['disparity_right'].any()
@@ -198,6 +205,7 @@ def test_load_sample_without_gt_or_masks(tmp_path):
   image_io.write_pfm(pfm, np.ones((8, 12), np.float32))
   loaded = image_io.load_file_sample(records.StereoSample('a', left, right))
   assert not loaded['valid_left'].any() and not loaded['nonocc_left'].any()
+  assert not loaded['disc_left'].any()
   loaded = image_io.load_file_sample(records.StereoSample('a', left, right,
                                                           disparity_right=pfm))
   assert loaded['valid_right'].all() and loaded['nonocc_left'].sum() == 0
@@ -211,6 +219,10 @@ def test_load_sample_size_mismatches_name_the_files(tmp_path):
   disp = _write(tmp_path / 'disp.png', np.zeros((4, 12), np.uint16))
   with pytest.raises(ValueError, match=r'scene7.*disp\.png'):
     image_io.load_file_sample(records.StereoSample('a', left, left, disparity_left=disp,
+                                                   source='scene7'))
+  disc = _write(tmp_path / 'disc.png', np.zeros((8, 10), np.uint8))
+  with pytest.raises(ValueError, match=r'scene7.*mask .*disc\.png'):
+    image_io.load_file_sample(records.StereoSample('a', left, left, disc_left=disc,
                                                    source='scene7'))
   with pytest.raises(ValueError, match=r'scene7.*gone\.png'):
     image_io.load_file_sample(records.StereoSample('a', left, str(tmp_path / 'gone.png'),

@@ -1,6 +1,7 @@
 """Tests for mixstereo_tf.data.middlebury on tiny scene folders written into tmp_path."""
 
 import os
+import re
 
 import cv2
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 from mixstereo_tf.data import image_io
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import records
+from mixstereo_tf.data import sources
 
 _SHAPE = (8, 12)
 
@@ -21,8 +23,10 @@ def _write(folder, name, array):
 
 
 def _views(folder, left_name, right_name):
-  _write(folder, left_name, np.full(_SHAPE + (3,), 10, np.uint8))
-  _write(folder, right_name, np.full(_SHAPE + (3,), 20, np.uint8))
+  # PGM holds gray only; the reader copies gray to the three channels.
+  channels = () if left_name.endswith('.pgm') else (3,)
+  _write(folder, left_name, np.full(_SHAPE + channels, 10, np.uint8))
+  _write(folder, right_name, np.full(_SHAPE + channels, 20, np.uint8))
 
 
 def _tsukuba(folder, stored=80):
@@ -30,17 +34,17 @@ def _tsukuba(folder, stored=80):
   _write(folder, 'truedisp.row3.col3.pgm', np.full(_SHAPE, stored, np.uint8))
 
 
-def _classic(folder, stored=20):
-  _views(folder, 'im2.ppm', 'im6.ppm')
+def _classic(folder, stored=20, ext='.ppm'):
+  _views(folder, 'im2' + ext, 'im6' + ext)
   _write(folder, 'disp2.pgm', np.full(_SHAPE, stored, np.uint8))
   _write(folder, 'disp6.png', np.full(_SHAPE, stored, np.uint8))
 
 
-def _scene_2014(folder):
+def _scene_2014(folder, disparity_name='disp0.pfm'):
   _views(folder, 'im0.png', 'im1.png')
   disparity = np.full(_SHAPE, 37.25, np.float32)
   disparity[0, 0] = np.inf
-  image_io.write_pfm(os.path.join(folder, 'disp0.pfm'), disparity)
+  image_io.write_pfm(os.path.join(folder, disparity_name), disparity)
   mask = np.full(_SHAPE, 255, np.uint8)
   mask[1, :3] = [128, 0, 255]
   _write(folder, 'mask0nocc.png', mask)
@@ -60,14 +64,20 @@ def test_tsukuba_scale_and_official_masks(tmp_path):
   nonocc[:, 1] = 0
   _write(folder, 'all.png', all_mask)
   _write(folder, 'nonocc.png', nonocc)
-  _write(folder, 'disc.png', np.zeros(_SHAPE, np.uint8))  # Ignored.
+  disc = np.zeros(_SHAPE, np.uint8)
+  disc[:, :3] = 255  # Column 0 is outside all.png, so only columns 1-2 remain.
+  disc[:, 3] = 128  # Gray (occluded or not near a discontinuity) is not evaluated.
+  _write(folder, 'disc.png', disc)
   sample, = middlebury.middlebury_samples(str(tmp_path))
   assert sample.name == 'tsukuba' and sample.disparity_scale == 16
+  assert sample.disc_left == os.path.join(folder, 'disc.png')
   loaded = records.load_sample(sample)
   assert loaded['left'][0, 0, 0] == 10 and loaded['right'][0, 0, 0] == 20
   np.testing.assert_array_equal(loaded['disparity_left'][0], [0] + [5] * 11)
   np.testing.assert_array_equal(loaded['valid_left'][0], [False] + [True] * 11)
   np.testing.assert_array_equal(loaded['nonocc_left'][0], [False] * 2 + [True] * 10)
+  np.testing.assert_array_equal(loaded['disc_left'],
+                                np.broadcast_to([False, True, True] + [False] * 9, _SHAPE))
   assert not loaded['valid_right'].any()
 
 
@@ -81,6 +91,19 @@ def test_classic_scale_by_folder_name(tmp_path, scene, pixels):
   np.testing.assert_allclose(loaded['disparity_left'], pixels)
   np.testing.assert_allclose(loaded['disparity_right'], pixels)
   assert loaded['nonocc_left'].all()  # No occlusion information: equals valid_left.
+  assert sample.disc_left is None and not loaded['disc_left'].any()  # No disc.png.
+
+
+@pytest.mark.parametrize('ext', ['.ppm', '.png', '.pgm'])
+def test_classic_image_formats(tmp_path, ext):
+  _classic(str(tmp_path / 'venus'), ext=ext)
+  sample, = middlebury.middlebury_samples(str(tmp_path))
+  assert sample.left.endswith('im2' + ext) and sample.right.endswith('im6' + ext)
+  loaded = records.load_sample(sample)
+  assert loaded['left'].shape == _SHAPE + (3,)
+  np.testing.assert_array_equal(loaded['left'][3, 4], [10, 10, 10])
+  np.testing.assert_array_equal(loaded['right'][3, 4], [20, 20, 20])
+  np.testing.assert_allclose(loaded['disparity_left'], 2.5)
 
 
 def test_scale_overrides(tmp_path):
@@ -111,6 +134,41 @@ def test_nested_2014_scene_and_calib(tmp_path):
   assert calib['baseline'] == 193.001 and calib['doffs'] == 124.343
   assert calib['width'] == 2964 and isinstance(calib['ndisp'], int)
   assert calib['vmin'] == 23 and calib['vmax'] == 245 and calib['dyavg'] == -0.031
+
+
+def test_2014_scene_with_disp0gt(tmp_path):
+  folder = str(tmp_path / 'Adirondack')
+  _scene_2014(folder, disparity_name='disp0GT.pfm')
+  sample, = middlebury.middlebury_samples(str(tmp_path))
+  assert sample.disparity_left == os.path.join(folder, 'disp0GT.pfm')
+  loaded = records.load_sample(sample)
+  assert loaded['disparity_left'][2, 5] == np.float32(37.25) and not loaded['valid_left'][0, 0]
+
+
+def test_scale_flag_items_are_validated():
+  assert sources.parse_scene_scales(['tsukuba:16', ' Venus : 8.5']) == (('tsukuba', 16.0),
+                                                                       ('Venus', 8.5))
+  assert sources.parse_scene_scales([]) == ()
+  for item in ('tsukuba', 'tsukuba:abc', 'venus:0', 'venus:-2', ':8', 'venus:inf',
+               'venus:nan'):
+    with pytest.raises(ValueError, match=rf"--middlebury_scale: .*{re.escape(repr(item))}"):
+      sources.parse_scene_scales(['cones:4', item])
+  with pytest.raises(ValueError, match=r"--middlebury_scale: scene 'VENUS' is given twice"):
+    sources.parse_scene_scales(['venus:8', 'VENUS:4'])
+  with pytest.raises(ValueError, match='--middlebury_scale applies to --dataset=middlebury'):
+    sources.DataConfig(dataset='sample', middlebury_scales=(('venus', 8.0),))
+  with pytest.raises(ValueError, match=r"--middlebury_scale: .*'venus:-1'"):
+    sources.DataConfig(dataset='middlebury', data_dir='x', middlebury_scales=(('venus', -1),))
+
+
+def test_scale_override_reaches_the_loaded_sample(tmp_path):
+  _classic(str(tmp_path / 'Cones'), stored=20)
+  _classic(str(tmp_path / 'map'), stored=20)
+  config = sources.DataConfig(dataset='middlebury', data_dir=str(tmp_path),
+                              middlebury_scales=sources.parse_scene_scales(['cones:10']))
+  samples = {s.name: s for s in sources.load_samples(config)}
+  assert samples['Cones'].disparity_scale == 10 and samples['map'].disparity_scale == 8
+  np.testing.assert_allclose(records.load_sample(samples['Cones'])['disparity_left'], 2.0)
 
 
 def test_data_dir_is_one_scene(tmp_path):

@@ -33,8 +33,22 @@ _EXPECTED01 = {
 }
 
 
+# {view channel: mixture channel} kept exactly, per view (0 = R, 1 = G, 2 = B).
+_SURVIVING = {
+    'anaglyph': ({0: 0}, {1: 1, 2: 2}),
+    'diplopia': ({}, {}),
+    'monocular': ({0: 0, 1: 1, 2: 2}, {}),
+    'gray': ({}, {}),
+    'half_color': ({}, {1: 1, 2: 2}),
+    'optimized': ({}, {1: 1, 2: 2}),
+    'dubois': ({}, {}),
+    'green_magenta': ({1: 1}, {0: 0, 2: 2}),
+    'amber_blue': ({0: 0, 1: 1}, {2: 2}),
+}
+
+
 def test_every_operator_has_a_known_answer():
-  assert set(_EXPECTED01) == set(mixtures.MIXTURE_NAMES)
+  assert set(_EXPECTED01) == set(mixtures.MIXTURE_NAMES) == set(_SURVIVING)
 
 
 @pytest.mark.parametrize('name', sorted(_EXPECTED01))
@@ -63,6 +77,26 @@ def test_surviving_channels_are_copied(name):
   for view, channels in ((left, spec.left_channels), (right, spec.right_channels)):
     for view_channel, mixture_channel in channels.items():
       np.testing.assert_array_equal(out[..., mixture_channel], view.numpy()[..., view_channel])
+
+
+@pytest.mark.parametrize('name', sorted(_EXPECTED01))
+def test_surviving_channel_maps_are_pinned(name):
+  spec = mixtures.get_mixture(name)
+  assert (dict(spec.left_channels), dict(spec.right_channels)) == _SURVIVING[name]
+  keeps_both = bool(_SURVIVING[name][0]) and bool(_SURVIVING[name][1])
+  assert spec.is_channel_anaglyph == keeps_both
+
+
+@pytest.mark.parametrize('name', sorted(_EXPECTED01))
+def test_every_copied_channel_is_declared(name):
+  spec = mixtures.get_mixture(name)
+  rng = np.random.default_rng(1)
+  views = [rng.uniform(-1, 1, (1, 4, 5, 3)).astype(np.float32) for _ in range(2)]
+  out = spec.fn(tf.constant(views[0]), tf.constant(views[1])).numpy()
+  for view, declared in zip(views, (spec.left_channels, spec.right_channels)):
+    copied = {(c, m) for c in range(3) for m in range(3)
+              if np.array_equal(out[..., m], view[..., c])}
+    assert copied == set(declared.items())
 
 
 def test_unknown_name_lists_valid_ones():

@@ -51,6 +51,7 @@ def test_load_virtual_returns_loaded_keys_and_renders_deterministically():
     assert loaded[key].shape[:2] == (32, 64), key
   assert loaded['valid_left'].all() and loaded['valid_right'].all()
   assert 0.5 < loaded['nonocc_left'].mean() < 1.0
+  assert not loaded['disc_left'].any()  # No discontinuity mask: nothing selected.
   assert (loaded['disparity_left'] > 0).all() and loaded['disparity_left'].max() < 15
   again = sample.load_virtual(first)
   for key in loaded:
@@ -86,6 +87,7 @@ def test_motorcycle_downscale_keeps_left_referenced_geometry():
   assert record.name == 'motorcycle_div2' and loaded['left'].shape == (250, 370, 3)
   assert set(loaded) == set(records.LOADED_KEYS)
   assert not loaded['valid_right'].any() and not loaded['disparity_right'].any()
+  assert not loaded['disc_left'].any()
   # A fully known 2x2 block: mean disparity / 2; blocks with an unknown pixel are unknown.
   blocks = raw[:500, :740].reshape(250, 2, 370, 2)
   known = np.isfinite(blocks).all(axis=(1, 3))

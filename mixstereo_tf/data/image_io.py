@@ -214,6 +214,10 @@ def _load(sample: records.StereoSample) -> Dict[str, np.ndarray]:
                                           shape)
   valid_left &= _read_optional_mask(sample.all_left, shape)
   nonocc_left = valid_left & _read_optional_mask(sample.nonocc_left, shape)
+  # Unlike the other masks, a missing discontinuity mask selects no pixel: treating every
+  # pixel as 'near a discontinuity' would make a disc column repeat the all-pixel one.
+  disc_left = (valid_left & _read_optional_mask(sample.disc_left, shape)
+               if sample.disc_left else np.zeros(shape, bool))
   disparity_left = np.where(valid_left, disparity_left, 0).astype(np.float32)
   return {
       'left': left,
@@ -223,6 +227,7 @@ def _load(sample: records.StereoSample) -> Dict[str, np.ndarray]:
       'valid_left': valid_left,
       'valid_right': valid_right,
       'nonocc_left': nonocc_left,
+      'disc_left': disc_left,
   }
 
 
@@ -230,7 +235,8 @@ def load_file_sample(sample: records.StereoSample) -> Dict[str, np.ndarray]:
   """Loads a file-backed sample into arrays with exactly the keys of `records.LOADED_KEYS`.
 
   valid_left = GT known AND inside `all_left` (when given); nonocc_left = valid_left AND
-  `nonocc_left` (when given), else valid_left. Disparity outside the validity masks is 0.
+  `nonocc_left` (when given), else valid_left; disc_left = valid_left AND `disc_left` (when
+  given), else all False. Disparity outside the validity masks is 0.
   Missing ground truth gives zero disparity and all-False masks. Image paths go through
   `find_image`, so a .jpg entry also finds a .png file.
 

@@ -8,8 +8,8 @@ Layouts detected in each scene folder (first match wins):
     `truedisp.row3.col3.pgm` (GT, value / 16).
   2001/2003 classic: `im2` (left), `im6` (right) as .ppm/.png/.pgm, `disp2`/`disp6` as
     .pgm/.png; value / scale with the scale chosen by the folder name.
-Official evaluation masks `nonocc.png` and `all.png` in a scene folder become the
-`nonocc_left` / `all_left` masks; `disc.png` is ignored (StereoSample has no field for it).
+Official evaluation masks `nonocc.png`, `all.png` and `disc.png` in a scene folder become
+the `nonocc_left` / `all_left` / `disc_left` masks.
 """
 
 import os
@@ -72,6 +72,7 @@ def _detect(folder: str) -> Optional[Tuple[Dict[str, Optional[str]], Optional[fl
       return None
   files['nonocc_left'] = find('nonocc.png', 'mask0nocc.png')
   files['all_left'] = find('all.png')
+  files['disc_left'] = find('disc.png')
   return files, scale
 
 

@@ -8,7 +8,8 @@ mixture `f(left, right)` -> batch -> prefetch. Every random draw is a stateless 
 Elements are dicts with flat string keys (see docs/DESIGN.md): `mixture`, `left`, `right`
 ([H, W, 3] float32 in [-1, 1]), `disparity_left`, `disparity_right` ([H, W, 1] float32,
 pixels, 0 = unknown), `valid_left`, `valid_right`, `nonocc_left` ([H, W, 1] float32 0/1),
-`name` (string).
+`name` (string). Evaluation elements also carry `disc_left` ([H, W, 1] 0/1, the official
+Middlebury near-discontinuity mask, 0 where a dataset has none).
 """
 
 import dataclasses
@@ -22,6 +23,11 @@ from mixstereo_tf.data import records
 
 _IMAGE_KEYS = ('left', 'right')
 _MAP_KEYS = ('disparity_left', 'disparity_right', 'valid_left', 'valid_right', 'nonocc_left')
+# Loaded but evaluation-only: there is no right-view counterpart to swap it with on a flip.
+_EVAL_ONLY_KEYS = ('disc_left',)
+# Stream numbers of `_seed`: one per random draw of an element, so no two draws of any two
+# elements share a stateless seed.
+_STREAM_CROP_TOP, _STREAM_AUGMENT, _STREAM_FLIP, _STREAM_CROP_LEFT = 1, 2, 3, 4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,7 +43,9 @@ class PipelineConfig:
     flip: random horizontal flip-and-swap with probability 0.5.
     seed: seed of every random draw (shuffle, crop, augmentation, flip).
     shuffle_buffer: 0 shuffles the whole list each epoch.
-    skip_bad_pairs: log and drop pairs that fail to decode instead of stopping.
+    skip_bad_pairs: drop pairs that fail to decode while training instead of stopping;
+      tf.data logs each dropped element's error but does not count them (list entries with
+      missing files are counted earlier, by `sources.load_samples`).
   """
   mixture: str = 'anaglyph'
   crop_height: int = 256
@@ -97,8 +105,8 @@ def _pad_edge(image, height, width):
   return tf.gather(tf.gather(image, rows, axis=0), cols, axis=1)
 
 
-def _random_crop(element, height, width, seed):
-  """Crops all image-aligned keys at one random window.
+def _random_crop(element, height, width, top_seed, left_seed):
+  """Crops all image-aligned keys at one random window (offsets drawn from the two seeds).
 
   Images smaller than the crop are first padded by edge replication at the bottom/right;
   padded ground truth is marked unknown (0), not replicated.
@@ -111,14 +119,25 @@ def _random_crop(element, height, width, seed):
   for key in _MAP_KEYS:
     out[key] = tf.pad(element[key], pad)
   shape = tf.shape(out['left'])
-  top = tf.random.stateless_uniform([], seed, 0, shape[0] - height + 1, dtype=tf.int32)
-  left = tf.random.stateless_uniform([], seed + [0, 1], 0, shape[1] - width + 1,
-                                     dtype=tf.int32)
+  top = tf.random.stateless_uniform([], top_seed, 0, shape[0] - height + 1, dtype=tf.int32)
+  left = tf.random.stateless_uniform([], left_seed, 0, shape[1] - width + 1, dtype=tf.int32)
   for key in _IMAGE_KEYS + _MAP_KEYS:
     channels = 3 if key in _IMAGE_KEYS else 1
     out[key] = tf.ensure_shape(out[key][top:top + height, left:left + width],
                                [height, width, channels])
   return out
+
+
+def photometric_parameters(seed) -> Dict[str, tf.Tensor]:
+  """The random draws of `augment_photometric` for a stateless seed [2].
+
+  Returns:
+    'apply': bool scalar, True with probability 0.5; 'gamma' ~ U[0.8, 1.2]; 'brightness'
+    ~ U[0.5, 2.0]; 'colour': [3] ~ U[0.8, 1.2] per channel (monodepth's ranges).
+  """
+  draws = tf.random.stateless_uniform([6], seed)
+  return {'apply': draws[0] < 0.5, 'gamma': 0.8 + 0.4 * draws[1],
+          'brightness': 0.5 + 1.5 * draws[2], 'colour': 0.8 + 0.4 * draws[3:6]}
 
 
 def augment_photometric(left, right, seed):
@@ -129,20 +148,17 @@ def augment_photometric(left, right, seed):
     seed: a stateless seed [2].
 
   Returns:
-    The augmented pair, clipped to [0, 1]: x ** gamma, gamma ~ U[0.8, 1.2]; times a
-    brightness ~ U[0.5, 2.0]; times a per-channel colour ~ U[0.8, 1.2].
+    The pair unchanged, or (when `photometric_parameters(seed)['apply']`) each view as
+    clip(x ** gamma * brightness * colour, 0, 1).
   """
-  draws = tf.random.stateless_uniform([6], seed)
-  gamma = 0.8 + 0.4 * draws[1]
-  brightness = 0.5 + 1.5 * draws[2]
-  colour = 0.8 + 0.4 * draws[3:6]
-  apply = draws[0] < 0.5
+  params = photometric_parameters(seed)
 
   def change(image):
-    image = tf.pow(image, gamma) * brightness * colour
+    image = tf.pow(image, params['gamma']) * params['brightness'] * params['colour']
     return tf.clip_by_value(image, 0.0, 1.0)
 
-  return (tf.where(apply, change(left), left), tf.where(apply, change(right), right))
+  return (tf.where(params['apply'], change(left), left),
+          tf.where(params['apply'], change(right), right))
 
 
 def flip_and_swap(element: Dict[str, tf.Tensor]) -> Dict[str, tf.Tensor]:
@@ -181,7 +197,12 @@ def _check_samples(samples):
 
 def train_dataset(samples: Sequence[records.StereoSample],
                   config: PipelineConfig) -> tf.data.Dataset:
-  """An infinite, shuffled, augmented, batched dataset of training elements."""
+  """An infinite, shuffled, augmented, batched dataset of training elements.
+
+  A pair that fails to decode stops iteration with an error naming it, unless
+  `config.skip_bad_pairs`: then it is dropped with only tf.data's per-element warning, and
+  no count of such runtime failures is kept.
+  """
   _check_samples(samples)
   samples = list(samples)
   load = _load_fn(samples)
@@ -192,13 +213,16 @@ def train_dataset(samples: Sequence[records.StereoSample],
 
   def prepare(count, index):
     element = load(index)
-    crop_seed = _seed(config.seed, count, 1)
-    element = _random_crop(element, config.crop_height, config.crop_width, crop_seed)
+    for key in _EVAL_ONLY_KEYS:
+      del element[key]
+    element = _random_crop(element, config.crop_height, config.crop_width,
+                           _seed(config.seed, count, _STREAM_CROP_TOP),
+                           _seed(config.seed, count, _STREAM_CROP_LEFT))
     if config.augment:
       element['left'], element['right'] = augment_photometric(
-          element['left'], element['right'], _seed(config.seed, count, 2))
+          element['left'], element['right'], _seed(config.seed, count, _STREAM_AUGMENT))
     if config.flip:
-      coin = tf.random.stateless_uniform([], _seed(config.seed, count, 3))
+      coin = tf.random.stateless_uniform([], _seed(config.seed, count, _STREAM_FLIP))
       element = tf.cond(coin < 0.5, lambda e=element: flip_and_swap(e),
                         lambda e=element: dict(e))
     return _finish(element, config.mixture)
@@ -211,7 +235,10 @@ def train_dataset(samples: Sequence[records.StereoSample],
 
 
 def eval_dataset(samples: Sequence[records.StereoSample], mixture: str) -> tf.data.Dataset:
-  """Full-size, unaugmented elements in list order, batch 1, with ground truth."""
+  """Full-size, unaugmented elements in list order, batch 1, with ground truth.
+
+  Ground-truth disparities and masks (including `disc_left`) are passed through unchanged.
+  """
   _check_samples(samples)
   mixtures.get_mixture(mixture)
   load = _load_fn(list(samples))

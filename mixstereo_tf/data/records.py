@@ -27,6 +27,8 @@ class StereoSample:
     disparity_scale: stored value / disparity_scale = pixels (KITTI 256, Tsukuba 16, ...).
     nonocc_left: optional path of a non-occluded mask for the left view (white = evaluated).
     all_left: optional path of the 'all' evaluation mask for the left view (white = evaluated).
+    disc_left: optional path of the near-discontinuity evaluation mask for the left view
+      (Middlebury `disc.png`, white = evaluated).
     calib: optional path of a calibration file.
     source: where the sample was listed, as 'file:line' or the scene folder, for errors.
   """
@@ -38,6 +40,7 @@ class StereoSample:
   disparity_scale: float = 1.0
   nonocc_left: Optional[str] = None
   all_left: Optional[str] = None
+  disc_left: Optional[str] = None
   calib: Optional[str] = None
   source: str = ''
 
@@ -55,6 +58,7 @@ LOADED_KEYS: Mapping[str, type] = {
     'valid_left': np.bool_,       # [H, W] ground truth known (and inside the 'all' mask)
     'valid_right': np.bool_,      # [H, W]
     'nonocc_left': np.bool_,      # [H, W] valid and not occluded
+    'disc_left': np.bool_,        # [H, W] valid and near a discontinuity; False if unknown
 }
 
 

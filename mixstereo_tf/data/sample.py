@@ -12,7 +12,8 @@ resolution; left disparity from ~7 to ~60 px, inf where unknown; the left pixel 
 the right pixel x - d, checked photometrically). When its largest disparity does not fit
 below max_disparity - 1, images and disparities are shrunk by the smallest integer factor k
 that makes it fit (k x k block means; disparities divided by k; a block is valid only if all
-its pixels are). Its right disparity is unknown (zeros, all False).
+its pixels are). Its right disparity is unknown (zeros, all False). No source has a
+near-discontinuity mask (`disc_left` all False).
 """
 
 import functools
@@ -120,7 +121,7 @@ def load_virtual(sample: records.StereoSample) -> Dict[str, np.ndarray]:
     textures = synthetic.load_textures(netloc, config.texture_sigma)
     scene = synthetic.render_scene(scene_seed(netloc, int(path)), config, textures)
     full = np.ones(scene['nonocc_left'].shape, bool)
-    scene.update(valid_left=full, valid_right=full.copy())
+    scene.update(valid_left=full, valid_right=full.copy(), disc_left=np.zeros_like(full))
     return {key: scene[key].astype(dtype, copy=False)
             for key, dtype in records.LOADED_KEYS.items()}
   if scheme == 'skimage' and netloc == 'motorcycle' and set(query) == {'factor'}:
@@ -160,7 +161,8 @@ def _load_motorcycle(factor: int) -> Dict[str, np.ndarray]:
   nonocc = valid & ~occlusion_from_disparity(disparity, valid)
   return {'left': left.copy(), 'right': right.copy(), 'disparity_left': disparity.copy(),
           'disparity_right': np.zeros_like(disparity), 'valid_left': valid,
-          'valid_right': np.zeros_like(valid), 'nonocc_left': nonocc}
+          'valid_right': np.zeros_like(valid), 'nonocc_left': nonocc,
+          'disc_left': np.zeros_like(valid)}
 
 
 def occlusion_from_disparity(disparity_left: np.ndarray, valid: np.ndarray,
