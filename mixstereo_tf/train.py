@@ -42,7 +42,8 @@ flags.DEFINE_integer('num_steps', None, 'Total optimizer steps.')
 flags.DEFINE_float('num_epochs', None, 'Epochs over the training list (instead of '
                    '--num_steps).')
 flags.DEFINE_enum('mode', 'joint', objective.MODES, 'What to train.')
-flags.DEFINE_string('init_checkpoint', None, 'Start from these weights (fine-tuning).')
+flags.DEFINE_string('init_checkpoint', None, 'Start from these weights (fine-tuning): a '
+                    'checkpoint prefix or a run directory (its newest checkpoint).')
 flags.DEFINE_enum('jit_compile', 'auto', config_lib.JIT_CHOICES,
                   'XLA for the forward/backward pass; auto = on GPU, off on CPU.')
 flags.DEFINE_enum('strategy', 'default', config_lib.STRATEGIES, 'tf.distribute strategy.')

@@ -83,7 +83,25 @@ def test_sigterm_leaves_a_checkpoint_and_a_second_run_resumes_from_it(tmp_path):
   output = second.communicate(timeout=240)[0]
   assert second.returncode == 0, output
   assert f'Resumed from {saved} at step {saved_step}.' in output
-  assert tf.train.latest_checkpoint(str(model_dir)).endswith(f'ckpt-{saved_step + 2}')
+  resumed = tf.train.latest_checkpoint(str(model_dir))
+  assert resumed.endswith(f'ckpt-{saved_step + 2}')
+  # The second run continued from the saved weights: two RMSProp steps move a weight by at
+  # most ~2 x 3.2 x lr (first-step update lr / sqrt(1 - rho)), while a fresh
+  # initialisation would differ by O(0.1).
+  later = tf.train.load_checkpoint(resumed)
+  for i in range(len(model.trainable_variables)):
+    key = f'optimizer/_trainable_variables/{i}/.ATTRIBUTES/VARIABLE_VALUE'
+    change = np.abs(later.get_tensor(key) - reader.get_tensor(key)).max()
+    assert change <= 10 * config.learning_rate, (key, change)
+
+
+def test_jit_compile_true_trains_on_pipeline_batches(tmp_path):
+  process = _train_cli(tmp_path / 'run', '--num_steps=2', '--jit_compile=true',
+                       '--checkpoint_every=1')
+  output = process.communicate(timeout=240)[0]
+  assert process.returncode == 0, output[-3000:]
+  assert 'jit_compile=True' in output
+  assert tf.train.latest_checkpoint(str(tmp_path / 'run')).endswith('ckpt-2')
 
 
 def test_bad_flags_are_usage_errors_naming_the_flag(tmp_path):
