@@ -1,6 +1,9 @@
 """Architecture tests: the paper's parameter budget, shapes, configs, gradient paths."""
 
 import dataclasses
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -33,6 +36,18 @@ def test_parameter_table_ends_with_the_total():
   model = models.build_model(TINY)
   assert table.splitlines()[-1] == (
       f'total trainable parameters: {summary.count(model.trainable_variables)}')
+
+
+def test_models_module_prints_the_default_configuration_total():
+  # `python -m mixstereo_tf.models` builds the paper configuration (a subprocess keeps
+  # its 17M parameters out of this process).
+  env = dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2', CUDA_VISIBLE_DEVICES='')
+  done = subprocess.run([sys.executable, '-m', 'mixstereo_tf.models'], capture_output=True,
+                        text=True, timeout=300, env=env, check=True)
+  last = done.stdout.strip().splitlines()[-1]
+  total = int(last.removeprefix('total trainable parameters: '))
+  assert abs(total - 17.1e6) <= 0.01 * 17.1e6, last
+  assert 'stereo (total)' in done.stdout and 'separation (total)' in done.stdout
 
 
 def test_joint_outputs_shapes_and_ranges():
