@@ -112,6 +112,7 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str) -> str:
     lines.append(f'| {name} ' + _cells(run, baseline, 'modules/paper', cell))
   if 'error' in modules:
     lines.append(f'| all | FAILED: {modules["error"]} |')
+  lines += _module_throughput(run)
 
   lines += ['', '## 5. Input pipeline (train_dataset, 256x512 crops) vs consumption', '']
   lines += _header('source', baseline, baseline_label, label)
@@ -158,4 +159,42 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str) -> str:
       cell = lambda r, name=name: _time(None if r is None or name not in r else r[name])
       lines.append(f'| {implementation}: {name} ' +
                    _cells(run, baseline, f'conv3d/{implementation}', cell))
+
+  lines += ['', '## 9. Forward pass at the paper crop (Keras model, inference, 256x512)', '']
+  lines += _header('measurement', baseline, baseline_label, label)
+  lines.append('| both disparities, batch 1 ' + _cells(
+      run, baseline, 'forward/paper',
+      lambda r: _time(r) + ('' if r is None or 'error' in r else
+                            f'; peak {r["peak_gib"]:.2f} GiB')))
+
+  lines += ['', '## 10. Classical baseline (no training), one held-out `sample` scene', '']
+  lines += _header('mixture', baseline, baseline_label, label)
+  for name in ('anaglyph', 'diplopia'):
+    cell = lambda r, name=name: ('not run' if r is None else f'FAILED: {r["error"]}'
+                                 if 'error' in r else f'{r[name]["first"]:.2f} s per '
+                                 f'{r["size"]} frame')
+    lines.append(f'| {name} ' + _cells(run, baseline, 'classical', cell))
   return '\n'.join(lines) + '\n'
+
+
+_MODULE_FLOPS = {'separation (U-Net)': 'separation',
+                 'feature tower (2D, 4 images)': 'feature tower',
+                 '3D encoder-decoder': '3D encoder-decoder'}
+
+
+def _module_throughput(run) -> list:
+  """Achieved GFLOP/s of the conv-bearing modules timed alone, as a fraction of conv3d's."""
+  modules, flops, peak = (_get(run, k) for k in ('modules/paper', 'flops/paper',
+                                                 'machine/conv3d'))
+  if not modules or not flops or not peak or any('error' in r for r in (modules, flops,
+                                                                        peak)):
+    return []
+  lines = ['', f'Achieved by each module alone ({run["label"]}; 3 x its forward conv FLOPs '
+           '/ its median time / the conv3d GFLOP/s of section 1):', '']
+  for name, key in _MODULE_FLOPS.items():
+    if name in modules and key in flops['per_module_gflop']:
+      # The stereo parts run on the batch of 2 (direct + mirrored): FLOPs count both.
+      rate = 3 * flops['per_module_gflop'][key] / modules[name]['median']
+      lines.append(f'- {name}: {rate:.1f} GFLOP/s = '
+                   f'{100 * rate / peak["gflop_per_s"]:.1f}% of conv3d')
+  return lines

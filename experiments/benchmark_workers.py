@@ -14,13 +14,17 @@ import cv2
 import numpy as np
 import tensorflow as tf
 
+from mixstereo_tf import baselines
 from mixstereo_tf import inference
+from mixstereo_tf import mixtures
 from mixstereo_tf import models
 from mixstereo_tf import objective
 from mixstereo_tf import serving
 from mixstereo_tf.data import kitti
 from mixstereo_tf.data import pipeline
+from mixstereo_tf.data import records
 from mixstereo_tf.data import sample
+from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.models import stereo
 from mixstereo_tf.ops import conv3d
 from mixstereo_tf.ops import cost_volume
@@ -90,9 +94,8 @@ def train_batch(crop, max_disparity: int):
   samples = sample.sample_records('train', num_scenes=2, height=crop[0], width=crop[1],
                                   max_disparity=max_disparity)
   config = pipeline.PipelineConfig(crop_height=crop[0], crop_width=crop[1])
-  batch = next(iter(pipeline.train_dataset(samples, config)))
-  # The string 'name' is not a model input (and XLA cannot take string arguments).
-  return {k: v for k, v in batch.items() if v.dtype != tf.string}
+  # As the training loop does: the whole element, its string 'name' included.
+  return next(iter(pipeline.train_dataset(samples, config)))
 
 
 def train(config: str, jit: bool, steps: int, implementation: str = 'auto') -> dict:
@@ -347,10 +350,33 @@ def conv3d_implementation(implementation: str, repeats: int = 2) -> dict:
   return result
 
 
+def forward(config: str = 'paper', repeats: int = 2) -> dict:
+  """One inference forward pass of the Keras model (both disparities), batch 1."""
+  model_config, (height, width) = configuration(config)
+  model = models.build_model(model_config)
+  fn = tf.function(lambda x: model(x, training=False))
+  mixture = tf.random.stateless_uniform([1, height, width, 3], [3, 0], -1.0, 1.0)
+  return timed(lambda: _block(fn(mixture)), repeats)
+
+
+def classical(height: int = 375, width: int = 1242) -> dict:
+  """Seconds per frame of the training-free baseline (anaglyph, diplopia) on one scene."""
+  scene = sample.sample_records('heldout', num_scenes=1, height=height, width=width)[0]
+  views = records.load_sample(scene)
+  left, right = (tf.constant(views[k][None], tf.float32) / 127.5 - 1.0
+                 for k in ('left', 'right'))
+  result = {'size': f'{height}x{width}'}
+  for name in ('anaglyph', 'diplopia'):
+    mixture = metrics.to_uint8(mixtures.mix(name, left, right)[0].numpy())
+    result[name] = timed(lambda m=mixture, n=name: baselines.unmix_classical(m, n), 1,
+                         warmup=False)
+  return result
+
+
 WORKERS = {'train': train, 'modules': modules, 'flops': flops, 'conv3d_peak': conv3d_peak,
            'matmul_peak': matmul_peak, 'pipeline': input_pipeline, 'export': export,
            'inference': saved_model_inference, 'warp': warp_ops,
-           'conv3d_impl': conv3d_implementation}
+           'conv3d_impl': conv3d_implementation, 'forward': forward, 'classical': classical}
 
 
 def run(name: str, args: dict) -> dict:
