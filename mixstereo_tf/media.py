@@ -5,10 +5,11 @@ Images are uint8 RGB `[H, W, 3]` (docs/DESIGN.md reader convention); disparities
 `cv2.VideoWriter` with the 'mp4v' codec, which the opencv-python-headless wheels can write).
 """
 
+import collections
 import dataclasses
 import glob
 import os
-from typing import Iterator, List, Tuple, Union
+from typing import Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 import cv2
 import numpy as np
@@ -103,19 +104,66 @@ def layout_images(left: np.ndarray, right: np.ndarray, layout: str) -> List[Tupl
   return [(layout, composed)]
 
 
+def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: str,
+                        layout: str, max_disparity: float) -> List[str]:
+  """Writes one image's results (mixstereo_tf/unmixing.py); returns their paths.
+
+  Args:
+    outputs: {'left', 'right': uint8 [H, W, 3], 'disparity_left': [H, W] pixels}.
+    output_dir: existing folder.
+    name: the file-name prefix.
+    layout: one of LAYOUTS.
+    max_disparity: the colour map's fixed range.
+  """
+  paths = []
+  for suffix, image in layout_images(outputs['left'], outputs['right'], layout):
+    paths.append(os.path.join(output_dir, f'{name}_{suffix}.png'))
+    write_image(paths[-1], image)
+  disparity = np.asarray(outputs['disparity_left'], np.float32)
+  paths.append(os.path.join(output_dir, f'{name}_disparity.png'))
+  write_image(paths[-1], colorize_disparity(disparity, max_disparity))
+  paths.append(os.path.join(output_dir, f'{name}_disparity16.png'))
+  write_disparity_png16(paths[-1], disparity)
+  paths.append(os.path.join(output_dir, f'{name}_disparity.npy'))
+  np.save(paths[-1], disparity)
+  return paths
+
+
 @dataclasses.dataclass(frozen=True)
 class MediaItem:
-  """One input: an image or a video file; `stem` names its outputs."""
+  """One input: an image or a video file; `name` prefixes its outputs, unique in a run."""
   path: str
   is_video: bool
-
-  @property
-  def stem(self) -> str:
-    return os.path.splitext(os.path.basename(self.path))[0]
+  name: str
 
 
 def _extension(path: str) -> str:
   return os.path.splitext(path)[1].lower()
+
+
+def output_names(paths: Sequence[str]) -> List[str]:
+  """Output-name prefixes for input paths, distinct so no input overwrites another's files.
+
+  The file stem, unless several inputs share it (`a.png` and `a.jpg`): then stem + '_' +
+  extension (`a_png`, `a_jpg`). A name still taken (the same file name in two folders of a
+  glob, or another input's stem) gets '_2', '_3', ... in input order. Names are compared
+  case-insensitively, so outputs also stay apart on case-insensitive file systems.
+  """
+  stems = [os.path.splitext(os.path.basename(path))[0] for path in paths]
+  shared = collections.Counter(stem.casefold() for stem in stems)
+  wanted = [stem if shared[stem.casefold()] == 1 else f'{stem}_{os.path.splitext(path)[1][1:]}'
+            for stem, path in zip(stems, paths)]
+  reserved = {name.casefold() for name in wanted}
+  names, taken = [], set()
+  for name in wanted:
+    unique, number = name, 1
+    # A numbered name must not take a name another input wants as it is.
+    while unique.casefold() in taken or (number > 1 and unique.casefold() in reserved):
+      number += 1
+      unique = f'{name}_{number}'
+    taken.add(unique.casefold())
+    names.append(unique)
+  return names
 
 
 def iter_inputs(spec: str) -> Iterator[MediaItem]:
@@ -124,6 +172,7 @@ def iter_inputs(spec: str) -> Iterator[MediaItem]:
   Args:
     spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images, sorted
       by name; other files ignored) or a glob pattern (matching images and videos, sorted).
+      Items are named by `output_names`.
 
   Raises:
     ValueError: nothing exists at `spec`, or the folder / pattern holds no usable file.
@@ -143,8 +192,8 @@ def iter_inputs(spec: str) -> Iterator[MediaItem]:
       raise ValueError(f'No images or videos match the pattern {spec}')
   else:
     raise ValueError(f'Input not found: {spec}')
-  for path in paths:
-    yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS)
+  for path, name in zip(paths, output_names(paths)):
+    yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS, name)
 
 
 def read_image(path: str) -> np.ndarray:
@@ -152,8 +201,11 @@ def read_image(path: str) -> np.ndarray:
   return image_io.read_image(path)
 
 
-def video_frames(path: str) -> Tuple[float, Iterator[np.ndarray]]:
-  """Opens a video: (frames per second, iterator over uint8 RGB frames [H, W, 3]).
+def video_frames(path: str) -> Tuple[float, Optional[int], Iterator[np.ndarray]]:
+  """Opens a video: (frames per second, frame count, iterator over uint8 RGB frames).
+
+  Frames are [H, W, 3]. The count is the container's (None when it does not say); the
+  iterator yields what actually decodes.
 
   Raises:
     ValueError: the file cannot be opened or holds no decodable frame.
@@ -167,6 +219,8 @@ def video_frames(path: str) -> Tuple[float, Iterator[np.ndarray]]:
     raise ValueError(f'No decodable frame in video file: {path}')
   fps = capture.get(cv2.CAP_PROP_FPS)
   fps = fps if fps and np.isfinite(fps) and fps > 0 else DEFAULT_FPS
+  count = capture.get(cv2.CAP_PROP_FRAME_COUNT)
+  count = int(count) if count and np.isfinite(count) and count > 0 else None
 
   def frames():
     frame, grabbed = first, True
@@ -177,7 +231,7 @@ def video_frames(path: str) -> Tuple[float, Iterator[np.ndarray]]:
     finally:
       capture.release()
 
-  return fps, frames()
+  return fps, count, frames()
 
 
 class VideoWriter:

@@ -4,7 +4,9 @@ r"""Separates mixture images or videos into two views and a disparity map.
       --output_dir=out --layout=sbs
 
 Inputs: an image, a folder of images, a glob pattern or a video (.mp4 .avi .mov .mkv).
-Unreadable files are reported and skipped; the exit status is non-zero if all failed.
+An input that cannot be read, unmixed or written is reported with the reason and skipped;
+the others still run, and the exit status is non-zero if any failed. A progress bar with
+the measured frames per second is drawn on stderr when it is a terminal (logged otherwise).
 Outputs are described in mixstereo_tf/unmixing.py.
 """
 
@@ -47,7 +49,7 @@ def main(argv):
     setup = unmixing.make_unmixing(FLAGS.method, FLAGS.saved_model, FLAGS.checkpoint,
                                    FLAGS.mixture, FLAGS.restore_colour)
     report = unmixing.unmix_inputs(setup, FLAGS.input, FLAGS.output_dir, FLAGS.layout,
-                                   FLAGS.max_display_disparity)
+                                   FLAGS.max_display_disparity, progress_stream=sys.stderr)
   except ValueError as e:
     raise app.UsageError(str(e)) from None
   logging.info('%d input(s) done, %d failed; %d frame(s) in %.2f s: %.2f frames/s '

@@ -1,21 +1,24 @@
 """The unmix tool's logic: choose an unmixer, run it over images and videos, write results.
 
-Outputs per image `<stem>` in the output folder: the views (`<stem>_left.png` and
-`<stem>_right.png` for the 'separate' layout, else `<stem>_<layout>.png`), the colour-mapped
-left disparity `<stem>_disparity.png` (one fixed range per run), KITTI-style
-`<stem>_disparity16.png` (uint16, d * 256) and float32 pixels `<stem>_disparity.npy`.
-Per video: the layout as `<stem>_<layout>.mp4` (or `_left` / `_right`) and
-`<stem>_disparity.mp4`.
+Outputs per input `<name>` in the output folder, where `<name>` is the file stem, or stem
++ '_' + extension when inputs share a stem (`media.output_names`): the views
+(`<name>_left.png` and `<name>_right.png` for the 'separate' layout, else
+`<name>_<layout>.png`), the colour-mapped left disparity `<name>_disparity.png` (one fixed
+range per run), KITTI-style `<name>_disparity16.png` (uint16, d * 256) and float32 pixels
+`<name>_disparity.npy`. Per video: the layout as `<name>_<layout>.mp4` (or `_left` /
+`_right`) and `<name>_disparity.mp4`. Progress (`ProgressBar`) is shown for several inputs
+and for every video's frames.
 """
 
 import dataclasses
 import os
 import time
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, TextIO, Tuple
 
 from absl import logging
 import cv2
 import numpy as np
+import tensorflow as tf
 
 from mixstereo_tf import baselines
 from mixstereo_tf import inference
@@ -51,10 +54,98 @@ class UnmixReport:
 
 
 def failure_message(report: UnmixReport) -> Optional[str]:
-  """The error that ends the run with a non-zero status: every input failed."""
-  if report.failures and not report.processed:
-    return f'error: all {len(report.failures)} input(s) failed.'
-  return None
+  """The error that ends the run with a non-zero status: any input failed."""
+  if not report.failures:
+    return None
+  paths = ', '.join(path for path, _ in report.failures[:5])
+  more = ', ...' if len(report.failures) > 5 else ''
+  return (f'error: {len(report.failures)} of {report.processed + len(report.failures)} '
+          f'input(s) failed: {paths}{more}')
+
+
+def _duration(seconds: float) -> str:
+  minutes, seconds = divmod(int(round(seconds)), 60)
+  return f'{minutes} min {seconds:02d} s' if minutes else f'{seconds} s'
+
+
+def format_progress(done: int, total: Optional[int], seconds: float,
+                    frames: Optional[int] = None, label: str = '', bar_width: int = 10) -> str:
+  """One progress line, e.g. '[###.......] 3/10  1.2 frames/s  ETA 6 s'.
+
+  Args:
+    done: items (inputs or video frames) finished.
+    total: items in all; None when unknown (a video without a frame count): the line then
+      has neither bar nor ETA ('37 done  1.2 frames/s').
+    seconds: wall time since the start.
+    frames: frames produced so far (default `done`); frames/s is frames / seconds.
+    label: optional prefix, e.g. the video's file name.
+    bar_width: characters between the brackets.
+  """
+  frames = done if frames is None else frames
+  parts = [label] if label else []
+  if total:
+    filled = bar_width * min(done, total) // total
+    parts.append(f'[{"#" * filled}{"." * (bar_width - filled)}] {done}/{total}')
+  else:
+    parts.append(f'{done} done')
+  parts.append(f'{frames / seconds if seconds > 0 else 0.0:.1f} frames/s')
+  if total:
+    # The ETA extrapolates the time per finished item; unknown before the first one.
+    left = max(total - done, 0) * seconds / done if done else None
+    parts.append('ETA ' + ('?' if left is None else _duration(left)))
+  return '  '.join(parts)
+
+
+class ProgressBar:
+  """Shows `format_progress` lines: redrawn in place on a terminal, logged otherwise.
+
+  On a `stream` that is a TTY the line is rewritten after a carriage return at most every
+  `redraw_seconds`; otherwise (a pipe, a file, no stream) it goes to the INFO log at most
+  every `log_seconds`, so logs stay short. The first update and the last one (done >=
+  total, or `force`) are always shown; a count already shown is not repeated.
+  """
+
+  def __init__(self, total: Optional[int], label: str = '', stream: Optional[TextIO] = None,
+               clock: Callable[[], float] = time.perf_counter, redraw_seconds: float = 0.2,
+               log_seconds: float = 10.0):
+    self.total, self.label = total, label
+    self._stream = stream if stream is not None and stream.isatty() else None
+    self._clock = clock
+    self._start = clock()
+    self._interval = redraw_seconds if self._stream else log_seconds
+    self._shown_at = self._shown_done = None
+    self._drawn = 0  # Characters of the line currently on the terminal.
+
+  def update(self, done: int, frames: Optional[int] = None, force: bool = False) -> None:
+    """Shows the progress after `done` items (and `frames` frames) unless shown recently."""
+    now = self._clock()
+    last = force or (self.total is not None and done >= self.total)
+    if done == self._shown_done or (
+        self._shown_at is not None and not last and now - self._shown_at < self._interval):
+      return
+    self._shown_at, self._shown_done = now, done
+    line = format_progress(done, self.total, now - self._start, frames, self.label)
+    if self._stream is None:
+      logging.info('%s', line)
+      return
+    # Spaces overwrite the end of a longer previous line.
+    self._stream.write('\r' + line.ljust(self._drawn))
+    self._stream.flush()
+    self._drawn = len(line)
+
+  def clear(self) -> None:
+    """Erases the terminal line before other output; the next update redraws it."""
+    if self._drawn:
+      self._stream.write('\r' + ' ' * self._drawn + '\r')
+      self._stream.flush()
+      self._drawn, self._shown_at, self._shown_done = 0, None, None
+
+  def close(self) -> None:
+    """Ends the terminal line, leaving the last progress on screen."""
+    if self._drawn:
+      self._stream.write('\n')
+      self._stream.flush()
+      self._drawn = 0
 
 
 def _classical(mixture: str) -> Unmixing:
@@ -112,30 +203,28 @@ def make_unmixing(method: str = 'model', saved_model: Optional[str] = None,
                   unmixer.run_info.model_config.max_disparity)
 
 
-def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, stem: str,
-                        layout: str, max_disparity: float) -> List[str]:
-  """Writes one image's files (module docstring); returns their paths."""
-  paths = []
-  for suffix, image in media.layout_images(outputs['left'], outputs['right'], layout):
-    paths.append(os.path.join(output_dir, f'{stem}_{suffix}.png'))
-    media.write_image(paths[-1], image)
-  disparity = np.asarray(outputs['disparity_left'], np.float32)
-  paths.append(os.path.join(output_dir, f'{stem}_disparity.png'))
-  media.write_image(paths[-1], media.colorize_disparity(disparity, max_disparity))
-  paths.append(os.path.join(output_dir, f'{stem}_disparity16.png'))
-  media.write_disparity_png16(paths[-1], disparity)
-  paths.append(os.path.join(output_dir, f'{stem}_disparity.npy'))
-  np.save(paths[-1], disparity)
-  return paths
+def _reason(error: Exception) -> str:
+  """A one-line reason for a failed input (TensorFlow messages can span many lines)."""
+  message = error.message if isinstance(error, tf.errors.OpError) else str(error)
+  lines = message.strip().splitlines()
+  return f'{type(error).__name__}: {lines[0] if lines else ""}'
+
+
+# What one input may raise without stopping the others: unreadable or malformed files
+# (ValueError, cv2.error), failures inside TensorFlow (e.g. an image too large for memory)
+# and file-system errors while reading or writing.
+_INPUT_ERRORS = (ValueError, cv2.error, tf.errors.OpError, OSError)
 
 
 def _unmix_video(fn: UnmixFn, item: media.MediaItem, output_dir: str, layout: str,
-                 max_disparity: float, report: UnmixReport) -> int:
+                 max_disparity: float, report: UnmixReport,
+                 progress_stream: Optional[TextIO]) -> int:
   """Unmixes every frame of a video into layout and disparity videos; returns frames."""
-  fps, frames = media.video_frames(item.path)
+  fps, total, frames = media.video_frames(item.path)
   suffixes = ['left', 'right'] if layout == 'separate' else [layout]
-  writers = {s: media.VideoWriter(os.path.join(output_dir, f'{item.stem}_{s}.mp4'), fps)
+  writers = {s: media.VideoWriter(os.path.join(output_dir, f'{item.name}_{s}.mp4'), fps)
              for s in suffixes + ['disparity']}
+  bar = ProgressBar(total, os.path.basename(item.path), progress_stream)
   count = 0
   try:
     for frame in frames:
@@ -147,20 +236,26 @@ def _unmix_video(fn: UnmixFn, item: media.MediaItem, output_dir: str, layout: st
       writers['disparity'].write(
           media.colorize_disparity(outputs['disparity_left'], max_disparity))
       count += 1
-      if count % 50 == 0:
-        logging.info('  %s: %d frames', item.path, count)
+      bar.update(count)
+    bar.update(count, force=True)  # The container's frame count may be wrong or missing.
   finally:
+    bar.close()
     for writer in writers.values():
       writer.close()
   return count
 
 
 def unmix_inputs(unmixing: Unmixing, input_spec: str, output_dir: str,
-                 layout: str = 'separate',
-                 max_display_disparity: Optional[float] = None) -> UnmixReport:
+                 layout: str = 'separate', max_display_disparity: Optional[float] = None,
+                 progress_stream: Optional[TextIO] = None) -> UnmixReport:
   """Unmixes every image / video of `input_spec` (see `media.iter_inputs`).
 
-  Unreadable inputs are logged by name, recorded in `UnmixReport.failures` and skipped.
+  An input that cannot be read, unmixed or written is logged with its path and the reason,
+  recorded in `UnmixReport.failures` and skipped; the others still run.
+
+  `max_display_disparity` (pixels shown brightest) defaults to the unmixer's range.
+  Progress (`ProgressBar`) is drawn on `progress_stream` when it is a terminal (the CLI
+  passes stderr), else logged.
 
   Raises:
     ValueError: bad layout / display range, or `input_spec` names nothing usable.
@@ -174,25 +269,32 @@ def unmix_inputs(unmixing: Unmixing, input_spec: str, output_dir: str,
   os.makedirs(output_dir, exist_ok=True)
   report = UnmixReport()
   run_start = time.perf_counter()
+  bar = ProgressBar(len(items), stream=progress_stream) if len(items) > 1 else None
   for index, item in enumerate(items, 1):
-    start = time.perf_counter()
     try:
       if item.is_video:
-        frames = _unmix_video(unmixing.fn, item, output_dir, layout, max_disparity, report)
+        if bar:
+          bar.clear()  # The video draws its own frame progress.
+        frames = _unmix_video(unmixing.fn, item, output_dir, layout, max_disparity, report,
+                              progress_stream)
       else:
         image = media.read_image(item.path)
         unmix_start = time.perf_counter()
         outputs = unmixing.fn(image)
         report.unmix_seconds += time.perf_counter() - unmix_start
-        write_image_outputs(outputs, output_dir, item.stem, layout, max_disparity)
+        media.write_image_outputs(outputs, output_dir, item.name, layout, max_disparity)
         frames = 1
-    except (ValueError, cv2.error) as e:
-      logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, e)
-      report.failures.append((item.path, str(e)))
-      continue
-    report.processed += 1
-    report.frames += frames
-    logging.info('[%d/%d] %s: %d frame(s) in %.2f s', index, len(items), item.path, frames,
-                 time.perf_counter() - start)
+    except _INPUT_ERRORS as e:
+      if bar:
+        bar.clear()
+      logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, _reason(e))
+      report.failures.append((item.path, _reason(e)))
+    else:
+      report.processed += 1
+      report.frames += frames
+    if bar:
+      bar.update(index, report.frames)
+  if bar:
+    bar.close()
   report.seconds = time.perf_counter() - run_start
   return report

@@ -92,11 +92,36 @@ def test_iter_inputs_folder_glob_single(tmp_path):
   os.mkdir(tmp_path / 'sub.png')  # A folder with an image-like name is skipped.
   items = list(media.iter_inputs(str(tmp_path)))
   assert [os.path.basename(i.path) for i in items] == ['a.jpg', 'b.png']
-  assert [i.stem for i in items] == ['a', 'b'] and not any(i.is_video for i in items)
+  assert [i.name for i in items] == ['a', 'b'] and not any(i.is_video for i in items)
   items = list(media.iter_inputs(str(tmp_path / '*.png')))
   assert [os.path.basename(i.path) for i in items] == ['b.png']
   single = list(media.iter_inputs(str(tmp_path / 'a.jpg')))
   assert len(single) == 1 and single[0].path == str(tmp_path / 'a.jpg')
+
+
+def test_output_names_are_unique_when_stems_collide():
+  assert media.output_names(['in/a.png', 'in/b.jpg']) == ['a', 'b']
+  # Shared stem: the extension joins the name (its case kept).
+  assert media.output_names(['in/a.JPG', 'in/a.png', 'in/b.png']) == ['a_JPG', 'a_png', 'b']
+  # Same file name in two folders of a glob: numbered in input order.
+  assert media.output_names(['x/a.png', 'y/a.png', 'z/a.png']) == ['a_png', 'a_png_2',
+                                                                     'a_png_3']
+  # A fallback equal to another input's stem, and names differing only in case, are
+  # numbered too (case-insensitive file systems would merge them).
+  assert media.output_names(['a.jpg', 'a.png', 'a_png.bmp']) == ['a_jpg', 'a_png', 'a_png_2']
+  assert media.output_names(['A.png', 'a.png']) == ['A_png', 'a_png_2']
+  # A numbered name never takes the plain name another input still wants.
+  assert media.output_names(['x/a.png', 'y/a.png', 'a_png_2.bmp']) == [
+      'a_png', 'a_png_3', 'a_png_2']
+
+
+def test_iter_inputs_names_collisions_in_a_folder(tmp_path):
+  _write_png(tmp_path / 'a.png', 10)
+  _write_png(tmp_path / 'a.jpg', 20)
+  _write_png(tmp_path / 'b.png', 30)
+  items = list(media.iter_inputs(str(tmp_path)))
+  assert [(os.path.basename(i.path), i.name) for i in items] == [
+      ('a.jpg', 'a_jpg'), ('a.png', 'a_png'), ('b.png', 'b')]
 
 
 def test_iter_inputs_errors(tmp_path):
@@ -123,10 +148,10 @@ def test_video_round_trip_and_iter_inputs(tmp_path):
       frame[..., 0] = value  # Red only: checks the RGB order survives.
       writer.write(frame)
   items = list(media.iter_inputs(str(tmp_path / '*')))
-  assert len(items) == 1 and items[0].is_video and items[0].stem == 'clip'
-  fps, frames = media.video_frames(path)
+  assert len(items) == 1 and items[0].is_video and items[0].name == 'clip'
+  fps, count, frames = media.video_frames(path)
   frames = list(frames)
-  assert fps == pytest.approx(12.0)
+  assert fps == pytest.approx(12.0) and count == 3
   assert len(frames) == 3 and frames[0].shape == (64, 96, 3)
   for frame, value in zip(frames, (40, 120, 200)):
     assert abs(float(frame[..., 0].mean()) - value) < 6  # Lossy codec.
