@@ -16,6 +16,7 @@ from absl import logging
 
 from mixstereo_tf import mixtures
 from mixstereo_tf import unmixing
+from mixstereo_tf.data import sources
 from mixstereo_tf.evaluation import report
 from mixstereo_tf.evaluation import runner
 
@@ -42,6 +43,8 @@ flags.DEFINE_boolean('allow_partial', False, 'Allow a kitti2015 average over few
                      '200 images (the table is marked partial).')
 flags.DEFINE_integer('max_images', None, 'Evaluate only the first N pairs.', lower_bound=1)
 flags.DEFINE_string('eigen_list', runner.DEFAULT_EIGEN_LIST, 'Eigen test split list.')
+flags.DEFINE_list('middlebury_scale', [], 'Ground-truth disparity scale per Middlebury scene '
+                  '(--protocol=middlebury) as scene:scale items, e.g. tsukuba:16,venus:8.')
 flags.DEFINE_integer('sample_scenes', None, 'Procedural held-out scenes for --protocol=sample '
                      '(default: all of them).', lower_bound=1)
 
@@ -74,7 +77,8 @@ def main(argv):
         protocol=FLAGS.protocol, mixture=setup.mixture, data_dir=FLAGS.data_dir,
         method=FLAGS.method, allow_partial=FLAGS.allow_partial, max_images=FLAGS.max_images,
         eigen_list=FLAGS.eigen_list, restore_colour=FLAGS.restore_colour,
-        max_disparity=int(setup.default_max_disparity), sample_scenes=FLAGS.sample_scenes)
+        max_disparity=int(setup.default_max_disparity), sample_scenes=FLAGS.sample_scenes,
+        middlebury_scales=sources.parse_scene_scales(FLAGS.middlebury_scale))
 
     def progress(index, total, row):
       logging.info('[%d/%d] %s: %.3f s', index + 1, total, row['name'], row['seconds'])

@@ -57,6 +57,23 @@ def make_middlebury(root, seed=0):
   return str(root)
 
 
+def test_middlebury_scale_overrides_reach_the_loaded_ground_truth(tmp_path):
+  root = make_middlebury(tmp_path / 'mb')
+  default = {s.name: s for s in runner.list_samples(
+      runner.EvalConfig('middlebury', 'anaglyph', root))}
+  halved = {s.name: s for s in runner.list_samples(
+      runner.EvalConfig('middlebury', 'anaglyph', root, middlebury_scales=(('Cones', 8.0),)))}
+  cones = [name for name in default if 'cones' in name.lower()][0]
+  tsukuba = [name for name in default if 'tsukuba' in name.lower()][0]
+  # Cones' layout scale is 4: overriding it with 8 halves every known disparity.
+  np.testing.assert_allclose(records.load_sample(halved[cones])['disparity_left'],
+                             records.load_sample(default[cones])['disparity_left'] / 2)
+  np.testing.assert_array_equal(records.load_sample(halved[tsukuba])['disparity_left'],
+                                records.load_sample(default[tsukuba])['disparity_left'])
+  with pytest.raises(ValueError, match='middlebury protocol only'):
+    runner.EvalConfig('kitti2015', 'anaglyph', root, middlebury_scales=(('Cones', 8.0),))
+
+
 def oracle(config, offset=0.0):
   """A predictor returning each pair's true views and its GT disparity + offset, in order."""
   loaded = iter([records.load_sample(s) for s in runner.list_samples(config)])

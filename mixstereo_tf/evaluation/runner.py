@@ -24,7 +24,7 @@ that metric's mean (`metrics.Accumulator`).
 import dataclasses
 import os
 import time
-from typing import Any, Callable, Dict, List, Optional, Union
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import tensorflow as tf
@@ -64,6 +64,8 @@ class EvalConfig:
     restore_colour: paper section 4.2 colour restoration of the predictor (recorded only).
     max_disparity: the model's disparity range ('sample' renders its GT below it).
     sample_scenes: procedural held-out scenes for 'sample' (None = the source's default).
+    middlebury_scales: (scene, GT scale) pairs replacing the layout's disparity scale of
+      those Middlebury scenes ('middlebury'; see `sources.parse_scene_scales`).
   """
   protocol: str
   mixture: str
@@ -75,6 +77,7 @@ class EvalConfig:
   restore_colour: Optional[bool] = None
   max_disparity: int = 96
   sample_scenes: Optional[int] = None
+  middlebury_scales: Tuple[Tuple[str, float], ...] = ()
 
   def __post_init__(self):
     if self.protocol not in PROTOCOLS:
@@ -86,6 +89,9 @@ class EvalConfig:
       raise ValueError(f'max_images must be positive, got {self.max_images}.')
     if self.protocol != 'sample' and not self.data_dir:
       raise ValueError(f'Protocol {self.protocol!r} needs a data_dir.')
+    if self.middlebury_scales and self.protocol != 'middlebury':
+      raise ValueError('middlebury_scales apply to the middlebury protocol only, got '
+                       f'{self.protocol!r}.')
 
 
 @dataclasses.dataclass
@@ -136,7 +142,8 @@ def list_samples(config: EvalConfig) -> List[records.StereoSample]:
   if config.protocol in ('kitti2015', 'kitti2012'):
     return kitti.kitti_stereo_samples(config.data_dir, version=config.protocol[-4:])
   if config.protocol == 'middlebury':
-    return middlebury.middlebury_samples(config.data_dir)
+    return middlebury.middlebury_samples(config.data_dir,
+                                         scale_overrides=dict(config.middlebury_scales))
   if config.protocol == 'eigen':
     return kitti.read_split_list(resolve_list_path(config.eigen_list), config.data_dir).samples
   from mixstereo_tf.data import sample  # pylint: disable=g-import-not-at-top (textures)
