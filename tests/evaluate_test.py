@@ -59,6 +59,10 @@ def test_kitti_tables_partial_rule_and_paper_rows(tmp_path):
     assert number in text, number
   ours = next(l for l in text.splitlines() if l.startswith('this run'))
   assert ours.split()[3:6] == ['100.00', '100.00', '0.00%']
+  assert 'colour restoration on' in text  # The default for a channel anaglyph.
+  unrestored = dataclasses.replace(result, config=dataclasses.replace(config,
+                                                                      restore_colour=False))
+  assert 'colour restoration off' in report.format_report(unrestored)
   refused = dataclasses.replace(result, config=dataclasses.replace(config, allow_partial=False))
   with pytest.raises(ValueError, match='allow_partial'):
     report.format_report(refused)
@@ -146,6 +150,10 @@ def test_cli_middlebury_and_flag_errors(run_dir, tmp_path):
   mismatch = _cli('--protocol=middlebury', f'--data_dir={root}', f'--checkpoint={run_dir}',
                   '--mixture=diplopia')
   assert mismatch.returncode != 0 and "trained on 'anaglyph'" in mismatch.stderr
+  bad_scale = _cli('--protocol=middlebury', f'--data_dir={root}', f'--checkpoint={run_dir}',
+                   '--middlebury_scale=Cones')
+  assert bad_scale.returncode != 0 and '--middlebury_scale' in bad_scale.stderr
+  assert "'Cones'" in bad_scale.stderr
 
 
 def _sample_rows_in_process(run_dir, restore_colour):
