@@ -127,3 +127,9 @@ def test_single_impulse_transposed_conv_places_the_kernel():
 def test_unknown_implementation_is_an_error():
   with pytest.raises(ValueError, match='implementation'):
     conv3d.resolve_implementation('fast')
+
+
+def test_auto_is_the_benchmarked_native_implementation():
+  # experiments/BENCHMARKS.md: TF's strided ops were faster for every stride-2 layer.
+  assert conv3d.resolve_implementation('auto') == 'native'
+  assert conv3d.resolve_implementation('dense') == 'dense'

@@ -1,18 +1,20 @@
-"""Stride-2 3D convolution and transposed convolution with a CPU-fast implementation.
+"""Stride-2 3D convolution and transposed convolution, in two implementations.
 
-TensorFlow's CPU kernel for the input gradient of a stride-2 `conv3d` (Conv3DBackpropInputV2,
-which also runs the forward pass of `conv3d_transpose`) was measured several times slower
-than the other forms of the same maths (experiments/BENCHMARKS.md). The 'dense'
-implementations compute exactly the same function and gradients without that kernel:
-  * stride-2 conv: forward = TF's strided conv (fast); input gradient = the sub-pixel
-    transposed conv below; kernel gradient = a stride-1 filter gradient on the input's
-    8 phases for narrow inputs, TF's stride-2 Conv3DBackpropFilterV2 for wide ones;
+'native' calls TF's strided ops. 'dense' computes exactly the same function and gradients
+without TF's stride-2 input-gradient kernel (Conv3DBackpropInputV2, which also runs the
+forward pass of `conv3d_transpose`), which some TF/CPU builds run far slower than the other
+forms of the same maths:
+  * stride-2 conv: forward = TF's strided conv; input gradient = the sub-pixel transposed
+    conv below; kernel gradient = a stride-1 filter gradient on the input's 8 phases for
+    narrow inputs, TF's stride-2 Conv3DBackpropFilterV2 for wide ones;
   * stride-2 transposed conv: forward = its sub-pixel form, one stride-1 conv at the input
     resolution whose 8 x C_out channels are the 8 output phases, interleaved afterwards;
     input gradient = TF's strided conv; kernel gradient = the same phase form.
 Both are `tf.custom_gradient`s, so no activation larger than the layer's own input and
-output is kept for the backward pass. 'native' calls the strided ops directly (the better
-choice on GPUs). Both take the same kernels, so checkpoints do not depend on the choice.
+output is kept for the backward pass. 'auto' is 'native': on this project's CPU benchmark
+(TF 2.21, oneDNN; experiments/BENCHMARKS.md section 8) it was faster for every stride-2
+layer of the paper configuration, as it is on GPUs. Both take the same kernels, so
+checkpoints do not depend on the choice.
 
 Shapes: inputs [B, D, H, W, C]; kernels as Keras stores them: conv [k, k, k, C_in, C_out],
 transposed conv [k, k, k, C_out, C_in]. Padding is TF 'SAME'; sizes must be even for the
@@ -28,13 +30,11 @@ _PHASE_MAX_CHANNELS = 16
 
 
 def resolve_implementation(implementation: str) -> str:
-  """'auto' -> 'native' when a GPU is visible, else 'dense'."""
+  """Validates the name; 'auto' -> 'native' (the measured faster one, module docstring)."""
   if implementation not in IMPLEMENTATIONS:
     raise ValueError(f'conv3d implementation must be one of {IMPLEMENTATIONS}, got '
                      f'{implementation!r}.')
-  if implementation == 'auto':
-    return 'native' if tf.config.list_logical_devices('GPU') else 'dense'
-  return implementation
+  return 'native' if implementation == 'auto' else implementation
 
 
 def conv3d_stride2(x: tf.Tensor, kernel: tf.Tensor, implementation: str = 'auto'
