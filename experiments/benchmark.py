@@ -32,6 +32,8 @@ flags.DEFINE_string('json_out', '', 'Optional JSON dump of all results (for a la
 flags.DEFINE_string('baseline_json', '', 'Results of an earlier run shown as "before".')
 flags.DEFINE_string('label', 'this run', 'Name of this run in the report.')
 flags.DEFINE_string('baseline_label', 'before', 'Name of the baseline run in the report.')
+flags.DEFINE_string('baseline_note', '', 'What the baseline tree was (printed under its '
+                    'machine line).')
 flags.DEFINE_integer('paper_steps', 1, 'Timed train steps at paper scale (after warm-up).')
 flags.DEFINE_integer('demo_steps', 20, 'Timed train steps of the demo configuration.')
 flags.DEFINE_integer('timeout', 480, 'Seconds before a measurement subprocess is killed.')
@@ -156,7 +158,7 @@ def main(argv):
   if FLAGS.json_out:
     with open(FLAGS.json_out, 'w') as f:
       json.dump(run, f, indent=1)
-  text = benchmark_report.render(run, baseline, FLAGS.baseline_label)
+  text = benchmark_report.render(run, baseline, FLAGS.baseline_label, FLAGS.baseline_note)
   with open(FLAGS.output, 'w') as f:
     f.write(text)
   print(text)

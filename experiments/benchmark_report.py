@@ -56,13 +56,16 @@ def _fraction(run, key) -> str:
   return f'{achieved:.1f} GFLOP/s = {100 * achieved / peak["gflop_per_s"]:.1f}%'
 
 
-def render(run: dict, baseline: Optional[dict], baseline_label: str) -> str:
+def render(run: dict, baseline: Optional[dict], baseline_label: str,
+           baseline_note: str = '') -> str:
   """The full BENCHMARKS.md text."""
   label = run['label']
   lines = ['# Benchmarks', '']
   lines += _machine_section(run)
   if baseline is not None:
     lines += [f'Baseline ("{baseline_label}"):', ''] + _machine_section(baseline)
+    if baseline_note:
+      lines += [baseline_note, '']
   lines += ['Times: median of the timed repeats after one warm-up call (min-max in '
             'brackets); "first" = the first call, tracing / XLA compilation included. '
             'Peak = VmHWM of the measurement\'s own process.', '']
