@@ -29,7 +29,7 @@ flags.DEFINE_string('mixture', 'anaglyph', 'Mixture synthesised by the pipeline.
 FLAGS = flags.FLAGS
 
 
-def _write_kitti_folder(root: str, count: int) -> str:
+def write_kitti_folder(root: str, count: int) -> str:
   """Writes `count` random-texture 375x1242 pairs in the KITTI raw layout; returns a list."""
   rng = np.random.default_rng(0)
   lines = []
@@ -48,7 +48,8 @@ def _write_kitti_folder(root: str, count: int) -> str:
   return list_path
 
 
-def _pairs_per_second(dataset, count: int) -> float:
+def pairs_per_second(dataset, count: int) -> float:
+  """Elements per second of `dataset` over `count` elements, after 10 warm-up elements."""
   iterator = iter(dataset)
   for _ in range(10):
     next(iterator)
@@ -65,12 +66,12 @@ def main(argv):
   samples = sample.sample_records('train', num_scenes=FLAGS.num_pairs + 10,
                                   height=FLAGS.sample_height, width=FLAGS.sample_width)
   rows.append((f'sample ({FLAGS.sample_height}x{FLAGS.sample_width} scenes rendered)',
-               _pairs_per_second(pipeline.train_dataset(samples, config), FLAGS.num_pairs)))
+               pairs_per_second(pipeline.train_dataset(samples, config), FLAGS.num_pairs)))
   with tempfile.TemporaryDirectory() as root:
-    list_path = _write_kitti_folder(root, FLAGS.kitti_files)
+    list_path = write_kitti_folder(root, FLAGS.kitti_files)
     samples = kitti.read_split_list(list_path, root).samples
     rows.append(('KITTI-sized PNGs (375x1242, split list)',
-                 _pairs_per_second(pipeline.train_dataset(samples, config), FLAGS.num_pairs)))
+                 pairs_per_second(pipeline.train_dataset(samples, config), FLAGS.num_pairs)))
   print(f'{"source":<48}{"pairs/s at 256x512":>20}')
   for name, rate in rows:
     print(f'{name:<48}{rate:>20.1f}')

@@ -8,8 +8,9 @@ resident memory (VmHWM) is per measurement and an out-of-memory crash ends only 
 Measurements: machine limits (conv3d, matmul), train steps (paper and demo configurations,
 XLA on / off), analytic FLOPs per step, a per-module split of forward+backward time, the
 input pipeline, SavedModel inference, the warp op against a gather-based reference, and the
-stride-2 3D conv implementations, the paper-scale forward pass, and the classical
-baseline per 375x1242 frame. Times are medians of repeats after warm-up, with min/max.
+stride-2 3D conv implementations, the paper-scale forward pass, the classical baseline
+per 375x1242 frame, and where the 3D encoder-decoder's time goes (per layer and per
+stride-2 kernel). Times are medians of repeats after warm-up, with min/max.
 With --baseline_json (a --json_out of an earlier run) the table gets a 'before' column.
 Not a test: the machine is shared; the load average is recorded with the results.
 """
@@ -38,7 +39,8 @@ flags.DEFINE_integer('paper_steps', 1, 'Timed train steps at paper scale (after 
 flags.DEFINE_integer('demo_steps', 20, 'Timed train steps of the demo configuration.')
 flags.DEFINE_integer('timeout', 480, 'Seconds before a measurement subprocess is killed.')
 flags.DEFINE_list('sections', ['machine', 'train', 'modules', 'pipeline', 'inference',
-                               'warp', 'conv3d', 'forward', 'classical'], 'Sections to run.')
+                               'warp', 'conv3d', 'forward', 'classical', 'layers'],
+                  'Sections to run.')
 flags.DEFINE_string('worker', '', 'Internal: run one measurement and print its JSON.')
 flags.DEFINE_string('worker_args', '{}', 'Internal: JSON arguments of --worker.')
 FLAGS = flags.FLAGS
@@ -134,6 +136,9 @@ def collect(steps_paper: int, steps_demo: int, timeout: int, sections) -> dict:
     results['forward/paper'] = run_worker('forward', timeout, config='paper')
   if 'classical' in sections:
     results['classical'] = run_worker('classical', timeout)
+  if 'layers' in sections:
+    results['layers'] = run_worker('layers', timeout)
+    results['stride2_kernels'] = run_worker('stride2_kernels', timeout)
   return results
 
 

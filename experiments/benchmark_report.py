@@ -177,7 +177,43 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
                                  if 'error' in r else f'{r[name]["first"]:.2f} s per '
                                  f'{r["size"]} frame')
     lines.append(f'| {name} ' + _cells(run, baseline, 'classical', cell))
+  lines += _layer_sections(run)
   return '\n'.join(lines) + '\n'
+
+
+def _layer_sections(run) -> list:
+  """Sections 11-12 (this run only): the 3D encoder-decoder per layer and per kernel."""
+  peak = _get(run, 'machine/conv3d')
+  peak = None if not peak or 'error' in peak else peak['gflop_per_s']
+  rate = lambda gflop, seconds: f'{gflop / seconds:.1f}' if seconds > 0 else 'n/a'
+  lost = lambda gflop, seconds: f'{seconds - gflop / peak:.3f}' if peak else 'n/a'
+  lines = ['', '## 11. 3D encoder-decoder per layer (paper step shapes, batch 2, '
+           'forward + backward)', '',
+           '"lost" = the time beyond what the layer\'s conv FLOPs take at the conv3d '
+           'GFLOP/s of section 1 (batch norm, ReLU and slower kernels).', '',
+           '| layer | input | seconds | train GFLOP | GFLOP/s | lost (s) |',
+           '|---|---|---:|---:|---:|---:|']
+  layers = _get(run, 'layers')
+  if not layers or 'error' in layers:
+    return lines + [f'| all | {_time(layers)} | | | | |']
+  total_seconds = total_gflop = 0.0
+  for row in layers['rows']:
+    seconds, gflop = row['seconds'], row['train_gflop']
+    total_seconds, total_gflop = total_seconds + seconds, total_gflop + gflop
+    lines.append(f'| {row["layer"]} | {row["input"]} | {seconds:.3f} | {gflop:.1f} | '
+                 f'{rate(gflop, seconds)} | {lost(gflop, seconds)} |')
+  lines.append(f'| sum | | {total_seconds:.3f} | {total_gflop:.1f} | '
+               f'{rate(total_gflop, total_seconds)} | {lost(total_gflop, total_seconds)} |')
+  lines += ['', '## 12. TF\'s stride-2 kernels at the largest stride-2 layers', '',
+            '| kernel | seconds | GFLOP | GFLOP/s |', '|---|---:|---:|---:|']
+  kernels = _get(run, 'stride2_kernels')
+  if not kernels or 'error' in kernels:
+    return lines + [f'| all | {_time(kernels)} | | |']
+  for name, row in kernels.items():
+    if isinstance(row, dict):
+      lines.append(f'| {name} | {row["seconds"]:.3f} | {row["gflop"]:.1f} | '
+                   f'{rate(row["gflop"], row["seconds"])} |')
+  return lines
 
 
 _MODULE_FLOPS = {'separation (U-Net)': 'separation',

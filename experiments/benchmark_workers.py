@@ -10,10 +10,10 @@ import statistics
 import tempfile
 import time
 
-import cv2
 import numpy as np
 import tensorflow as tf
 
+from experiments import bench_data
 from mixstereo_tf import baselines
 from mixstereo_tf import inference
 from mixstereo_tf import mixtures
@@ -25,10 +25,7 @@ from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sample
 from mixstereo_tf.evaluation import metrics
-from mixstereo_tf.models import stereo
-from mixstereo_tf.ops import conv3d
 from mixstereo_tf.ops import cost_volume
-from mixstereo_tf.ops import warp
 from mixstereo_tf.training import step as step_lib
 
 _DEMO_FLAGS = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'demo.flags')
@@ -113,7 +110,7 @@ def train(config: str, jit: bool, steps: int, implementation: str = 'auto') -> d
   return result
 
 
-def _gradient_fn(forward, sources):
+def gradient_fn(forward, sources):
   """tf.function: forward() and the gradient of its sum w.r.t. `sources`."""
 
   @tf.function
@@ -151,20 +148,20 @@ def modules(config: str, repeats: int = 1) -> dict:
     return objective.total_loss(named, batch, objective.LossConfig(), 'joint')['loss']
 
   parts = {
-      'separation (U-Net)': _gradient_fn(
+      'separation (U-Net)': gradient_fn(
           lambda: model.separation(mixture, training=True),
           model.separation.trainable_variables),
-      'feature tower (2D, 4 images)': _gradient_fn(
+      'feature tower (2D, 4 images)': gradient_fn(
           lambda: net.feature_tower(pair, training=True),
           [v for v in net.trainable_variables if '3d' not in v.path]),
-      'cost volume (concat)': _gradient_fn(
+      'cost volume (concat)': gradient_fn(
           lambda: cost_volume.concat_cost_volume(left_features, right_features, levels // 2),
           [left_features, right_features]),
-      '3D encoder-decoder': _gradient_fn(
+      '3D encoder-decoder': gradient_fn(
           lambda: net.filter_volume(volume, training=True),
           [volume] + [v for v in net.trainable_variables if '3d' in v.path]),
-      'soft-argmin': _gradient_fn(lambda: cost_volume.soft_argmin(cost), [cost]),
-      'losses incl. warp': _gradient_fn(loss_forward, output_list),
+      'soft-argmin': gradient_fn(lambda: cost_volume.soft_argmin(cost), [cost]),
+      'losses incl. warp': gradient_fn(loss_forward, output_list),
   }
   return {name: timed(fn, repeats, warmup=False) for name, fn in parts.items()}
 
@@ -231,44 +228,15 @@ def matmul_peak(repeats: int = 3) -> dict:
   return result
 
 
-def _write_kitti_folder(root: str, count: int) -> str:
-  """`count` random-texture 375x1242 PNG pairs in the KITTI raw layout; returns the list."""
-  rng = np.random.default_rng(0)
-  lines = []
-  for i in range(count):
-    for camera in ('image_02', 'image_03'):
-      folder = os.path.join(root, 'date', 'drive_sync', camera, 'data')
-      os.makedirs(folder, exist_ok=True)
-      texture = rng.integers(0, 256, (94, 311, 3), dtype=np.uint8)
-      cv2.imwrite(os.path.join(folder, f'{i:010d}.png'),
-                  cv2.resize(texture, (1242, 375), interpolation=cv2.INTER_LINEAR))
-    path = f'date/drive_sync/image_0%d/data/{i:010d}.png'
-    lines.append(f'{path % 2} {path % 3}')
-  list_path = os.path.join(root, 'files.txt')
-  with open(list_path, 'w') as f:
-    f.write('\n'.join(lines) + '\n')
-  return list_path
-
-
-def _pairs_per_second(dataset, count: int) -> float:
-  iterator = iter(dataset)
-  for _ in range(5):
-    next(iterator)
-  start = time.perf_counter()
-  for _ in range(count):
-    next(iterator)
-  return count / (time.perf_counter() - start)
-
-
 def input_pipeline(count: int = 60) -> dict:
   """Pairs/s of train_dataset at 256x512 crops from two sources."""
   config = pipeline.PipelineConfig(crop_height=256, crop_width=512)
   samples = sample.sample_records('train', num_scenes=count + 5, height=256, width=512)
-  result = {'sample 256x512': _pairs_per_second(pipeline.train_dataset(samples, config),
-                                                count)}
+  result = {'sample 256x512': bench_data.pairs_per_second(
+      pipeline.train_dataset(samples, config), count)}
   with tempfile.TemporaryDirectory() as root:
-    samples = kitti.read_split_list(_write_kitti_folder(root, 20), root).samples
-    result['KITTI PNG 375x1242'] = _pairs_per_second(
+    samples = kitti.read_split_list(bench_data.write_kitti_folder(root, 20), root).samples
+    result['KITTI PNG 375x1242'] = bench_data.pairs_per_second(
         pipeline.train_dataset(samples, config), count)
   return result
 
@@ -292,61 +260,6 @@ def saved_model_inference(export_dir: str, height: int, width: int, repeats: int
                                                         dtype=np.uint8))
   result = timed(lambda: _block(unmix(image=image)), repeats, warmup=False)
   result['frames_per_s'] = 1.0 / result['median']
-  return result
-
-
-def gather_sample_horizontal(image: tf.Tensor, offset: tf.Tensor) -> tf.Tensor:
-  """Reference for warp.sample_horizontal: flat-index gathers on [B*H*W, C] rows."""
-  batch, height, width, channels = tf.unstack(tf.shape(image))
-  x = tf.range(width, dtype=image.dtype)[None, None, :] + offset[..., 0]
-  x = tf.clip_by_value(x, 0.0, tf.cast(width - 1, image.dtype))
-  x0 = tf.floor(x)
-  weight = (x - x0)[..., None]
-  row_start = tf.reshape(tf.range(batch * height) * width, [batch, height, 1])
-  i0 = tf.cast(x0, tf.int32)
-  i1 = tf.minimum(i0 + 1, width - 1)
-  flat = tf.reshape(image, [-1, channels])
-  v0 = tf.gather(flat, row_start + i0)
-  v1 = tf.gather(flat, row_start + i1)
-  return (1.0 - weight) * v0 + weight * v1
-
-
-def warp_ops(repeats: int = 10) -> dict:
-  """sample_horizontal vs the gather reference, forward+backward on [2, 256, 512, 3]."""
-  rng = tf.random.Generator.from_seed(1)
-  image = rng.uniform([2, 256, 512, 3], -1.0, 1.0)
-  offset = rng.uniform([2, 256, 512, 1], -60.0, 4.0)
-  difference = float(tf.reduce_max(tf.abs(warp.sample_horizontal(image, offset) -
-                                          gather_sample_horizontal(image, offset))))
-  result = {'max_abs_difference': difference}
-  for name, fn in (('warp.sample_horizontal', warp.sample_horizontal),
-                   ('gather reference', gather_sample_horizontal)):
-    result[name] = timed(_gradient_fn(lambda fn=fn: fn(image, offset), [image, offset]),
-                         repeats)
-  return result
-
-
-def conv3d_implementation(implementation: str, repeats: int = 2) -> dict:
-  """Stereo module fwd+bwd (128x256 input, 96 levels) and single stride-2 layers."""
-  net = stereo.StereoNet(conv3d_implementation=implementation)
-  rng = tf.random.Generator.from_seed(2)
-  left, right = (rng.uniform([1, 128, 256, 3], -1.0, 1.0) for _ in range(2))
-  net(left[:, :32, :32], right[:, :32, :32])
-  result = {'stereo module 128x256 fwd+bwd': timed(_gradient_fn(
-      lambda: net(left, right, training=True), net.trainable_variables), repeats,
-                                                   warmup=False)}
-  x = rng.normal([2, 48, 128, 256, 64])
-  kernel = tf.Variable(rng.normal([3, 3, 3, 64, 64]) * 0.05)
-  forward = tf.function(lambda: conv3d.conv3d_stride2(x, kernel, implementation))
-  result['stride-2 conv 2x48x128x256x64 -> 64 fwd'] = timed(lambda: forward().numpy(),
-                                                            repeats)
-  result['stride-2 conv 2x48x128x256x64 -> 64 fwd+bwd'] = timed(_gradient_fn(
-      lambda: conv3d.conv3d_stride2(x, kernel, implementation), [x, kernel]), repeats)
-  y = rng.normal([2, 24, 64, 128, 64])
-  transposed = tf.Variable(rng.normal([3, 3, 3, 32, 64]) * 0.05)
-  result['transposed 2x24x64x128x64 -> 32 fwd+bwd'] = timed(_gradient_fn(
-      lambda: conv3d.conv3d_transpose_stride2(y, transposed, implementation), [y, transposed]),
-      repeats)
   return result
 
 
@@ -375,14 +288,15 @@ def classical(height: int = 375, width: int = 1242) -> dict:
 
 WORKERS = {'train': train, 'modules': modules, 'flops': flops, 'conv3d_peak': conv3d_peak,
            'matmul_peak': matmul_peak, 'pipeline': input_pipeline, 'export': export,
-           'inference': saved_model_inference, 'warp': warp_ops,
-           'conv3d_impl': conv3d_implementation, 'forward': forward, 'classical': classical}
+           'inference': saved_model_inference, 'forward': forward, 'classical': classical}
 
 
 def run(name: str, args: dict) -> dict:
   """Runs worker `name` with keyword `args`; adds the process' peak memory."""
-  if name not in WORKERS:
-    raise ValueError(f'--worker must be one of {sorted(WORKERS)}, got {name!r}.')
-  result = WORKERS[name](**args)
+  from experiments import benchmark_ops  # pylint: disable=g-import-not-at-top (cycle)
+  every = dict(WORKERS, **benchmark_ops.WORKERS)
+  if name not in every:
+    raise ValueError(f'--worker must be one of {sorted(every)}, got {name!r}.')
+  result = every[name](**args)
   result['peak_gib'] = peak_gib()
   return result

@@ -68,7 +68,7 @@ def test_stereo_list_names_by_stem_without_calib(tmp_path):
 
 def test_malformed_line_names_list_and_line(tmp_path):
   list_path = _list(tmp_path, f'{_entry("0000000001")}\nonly_one_field.jpg\n')
-  with pytest.raises(ValueError, match=rf"files\.txt:2: expected 'left right'.*only_one"):
+  with pytest.raises(ValueError, match=r"files\.txt:2: expected 'left right'.*only_one"):
     kitti.read_split_list(list_path, str(tmp_path), check_files=False)
 
 

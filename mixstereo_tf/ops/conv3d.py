@@ -112,8 +112,6 @@ def _phase_taps(size: int):
 def conv3d_transpose_stride2(x: tf.Tensor, kernel: tf.Tensor,
                              implementation: str = 'auto') -> tf.Tensor:
   """3D transposed conv, stride 2, 'SAME': [B, D, H, W, C_in] -> [B, 2D, 2H, 2W, C_out]."""
-  batch, depth, height, width = tf.unstack(tf.shape(x)[:4])
-  size, out_channels, in_channels = kernel.shape[0], kernel.shape[3], kernel.shape[4]
   if resolve_implementation(implementation) == 'native':
     batch, depth, height, width = tf.unstack(tf.shape(x)[:4])
     output_shape = tf.stack([batch, 2 * depth, 2 * height, 2 * width, kernel.shape[3]])
