@@ -25,6 +25,7 @@ from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sample
 from mixstereo_tf.evaluation import metrics
+from mixstereo_tf.ops import conv3d
 from mixstereo_tf.ops import cost_volume
 from mixstereo_tf.training import step as step_lib
 
@@ -97,6 +98,8 @@ def train_batch(crop, max_disparity: int):
 
 def train(config: str, jit: bool, steps: int, implementation: str = 'auto') -> dict:
   """Joint TrainStep (forward, paper objective, backward, RMSProp update)."""
+  if implementation == 'auto':  # As the training loop resolves it.
+    implementation = conv3d.auto_implementation('CPU', jit)
   model_config, crop = configuration(config, implementation)
   model = models.build_model(model_config)
   batch = train_batch(crop, model_config.max_disparity)

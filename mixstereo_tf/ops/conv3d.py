@@ -13,7 +13,8 @@ forms of the same maths:
 Both are `tf.custom_gradient`s, so no activation larger than the layer's own input and
 output is kept for the backward pass. 'auto' is 'native': on this project's CPU benchmark
 (TF 2.21, oneDNN; experiments/BENCHMARKS.md section 8) it was faster for every stride-2
-layer of the paper configuration, as it is on GPUs. Both take the same kernels, so
+layer of the paper configuration, as it is on GPUs; the training loop makes it 'dense'
+under XLA on a CPU (`auto_implementation`). Both take the same kernels, so
 checkpoints do not depend on the choice.
 
 Shapes: inputs [B, D, H, W, C]; kernels as Keras stores them: conv [k, k, k, C_in, C_out],
@@ -27,6 +28,16 @@ IMPLEMENTATIONS = ('auto', 'native', 'dense')
 _STRIDES = [1, 2, 2, 2, 1]
 # Widest input of the phase-form kernel gradient (experiments/BENCHMARKS.md, section 8).
 _PHASE_MAX_CHANNELS = 16
+
+
+def auto_implementation(device_type: str, jit_compile: bool) -> str:
+  """What 'auto' should mean for a train step on `device_type` ('CPU', 'GPU', ...).
+
+  'dense' under XLA on a CPU: XLA's CPU code for the strided ops' gradients made the
+  paper-configuration step more than 5x slower than 'dense' (experiments/BENCHMARKS.md);
+  'native' everywhere else.
+  """
+  return 'dense' if jit_compile and device_type.upper() == 'CPU' else 'native'
 
 
 def resolve_implementation(implementation: str) -> str:

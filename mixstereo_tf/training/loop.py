@@ -20,6 +20,7 @@ import tensorflow as tf
 
 from mixstereo_tf import models
 from mixstereo_tf import objective
+from mixstereo_tf.ops import conv3d
 from mixstereo_tf.training import config as config_lib
 from mixstereo_tf.training import step as step_lib
 from mixstereo_tf.training import summaries
@@ -169,12 +170,16 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
                                  **(extra_configs or {})))
   device_type = _device_type(strategy)
   jit = step_lib.resolve_jit_compile(config.jit_compile, device_type)
+  if model_config.conv3d_implementation == 'auto':
+    model_config = dataclasses.replace(
+        model_config, conv3d_implementation=conv3d.auto_implementation(device_type, jit))
   _set_precision(config.mixed_precision, device_type)
   tf.keras.utils.set_random_seed(config.seed)
   dataset = dataset_fn()
   _check_batch(dataset, strategy)
-  logging.info('Strategy %s with %d replica(s) on %s; jit_compile=%s; mode=%s.',
-               config.strategy, strategy.num_replicas_in_sync, device_type, jit, config.mode)
+  logging.info('Strategy %s with %d replica(s) on %s; jit_compile=%s; conv3d %s; mode=%s.',
+               config.strategy, strategy.num_replicas_in_sync, device_type, jit,
+               model_config.conv3d_implementation, config.mode)
 
   with strategy.scope():
     model = models.build_model(model_config)
