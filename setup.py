@@ -11,7 +11,12 @@ setuptools.setup(
     long_description_content_type='text/markdown',
     license='Apache-2.0',
     python_requires='>=3.9',
-    packages=setuptools.find_packages(include=['mixstereo_tf', 'mixstereo_tf.*']),
+    # The repository's top-level data_lists/ (the KITTI split lists) is installed as package
+    # data mixstereo_tf/data_lists/, where mixstereo_tf.data.split_lists finds it.
+    packages=setuptools.find_packages(include=['mixstereo_tf', 'mixstereo_tf.*']) + [
+        'mixstereo_tf.data_lists'],
+    package_dir={'mixstereo_tf.data_lists': 'data_lists'},
+    package_data={'mixstereo_tf.data_lists': ['README.md', 'kitti/*.txt']},
     include_package_data=True,
     # baselines/sgm.py uses np.bitwise_count (numpy >= 2.0). The TF, OpenCV, scikit-image and
     # SciPy bounds are their first releases built for numpy 2; older wheels need numpy < 2.
@@ -22,11 +27,25 @@ setuptools.setup(
         'scikit-image>=0.24',
         # baselines/diplopia.py solves its layer system with scipy.sparse.
         'scipy>=1.13',
+        # baselines/matcher.py's census-SGM kernels. Against the NumPy baselines/sgm.py on
+        # one red-cyan anaglyph, 2 cores (experiments/benchmark.py --sections=matcher; CPU-s,
+        # peak memory above the process' resident memory before the call): 1242x375 [0, 127] 0.48 vs 3.64 CPU-s, 0.14 vs
+        # 0.50 GiB; 1280x720 [-58, 58] 1.08 vs 7.05 CPU-s (0.41 with a video prior), 0.30
+        # vs 0.91 GiB; 4000x3000 [-181, 181] 15.6 CPU-s, 1.2 GiB, where NumPy's cost volumes
+        # alone would take 17 GB. Compiled once (~10 CPU-s), then loaded from numba's disk
+        # cache (~0.5 CPU-s per process).
+        'numba>=0.60',
         'absl-py>=1.0',
         # tf.summary's writers live in tensorboard, which recent TF no longer pulls in.
         'tensorboard>=2.18',
     ],
-    extras_require={'test': ['pytest>=7']},
+    extras_require={
+        # imageio-ffmpeg ships a static FFmpeg binary (with the stereo3d filter): the
+        # independent anaglyph encoder of tests/detection_test.py and the real-world
+        # evaluation (evaluation/ffmpeg_encoder.py). PyAV's wheels lack stereo3d.
+        'test': ['pytest>=7', 'imageio-ffmpeg>=0.5'],
+        'eval': ['imageio-ffmpeg>=0.5'],
+    },
     entry_points={
         'console_scripts': [
             'mixstereo-train=mixstereo_tf.train:run',

@@ -3,7 +3,7 @@ r"""Input pipeline throughput: pairs per second at 256x512 crops, in one run.
   python experiments/bench_data.py [--num_pairs=200 --kitti_files=40]
 
 Sources: the embedded `sample` source (scenes rendered on the fly at the size of
---sample_height/--sample_width), and a folder of KITTI-sized (375x1242) PNG pairs this
+--scene_height/--scene_width), and a folder of KITTI-sized (375x1242) PNG pairs this
 script writes, read through a split list exactly as `--dataset=kitti_raw` does. Not a
 test: this machine is shared and noisy; compare the two rows of one run.
 """
@@ -17,15 +17,17 @@ from absl import flags
 import cv2
 import numpy as np
 
+from mixstereo_tf import models
+from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.data import kitti
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import sample
 
 flags.DEFINE_integer('num_pairs', 200, 'Pairs timed per source (after 10 warm-up pairs).')
 flags.DEFINE_integer('kitti_files', 40, 'Distinct KITTI-sized pairs written to disk.')
-flags.DEFINE_integer('sample_height', 288, 'Height of `sample` scenes (>= the crop).')
-flags.DEFINE_integer('sample_width', 576, 'Width of `sample` scenes (>= the crop).')
-flags.DEFINE_string('mixture', 'anaglyph', 'Mixture synthesised by the pipeline.')
+flags.DEFINE_integer('scene_height', 288, 'Height of `sample` scenes (>= the crop).')
+flags.DEFINE_integer('scene_width', 576, 'Width of `sample` scenes (>= the crop).')
+cli_flags.define_mixture()
 FLAGS = flags.FLAGS
 
 
@@ -61,11 +63,13 @@ def pairs_per_second(dataset, count: int) -> float:
 
 def main(argv):
   del argv
-  config = pipeline.PipelineConfig(mixture=FLAGS.mixture, crop_height=256, crop_width=512)
+  config = pipeline.PipelineConfig(mixture=FLAGS.mixture or 'anaglyph', crop_height=256,
+                                   crop_width=512)
   rows = []
   samples = sample.sample_records('train', num_scenes=FLAGS.num_pairs + 10,
-                                  height=FLAGS.sample_height, width=FLAGS.sample_width)
-  rows.append((f'sample ({FLAGS.sample_height}x{FLAGS.sample_width} scenes rendered)',
+                                  height=FLAGS.scene_height, width=FLAGS.scene_width,
+                                  max_disparity=models.ModelConfig().max_disparity)
+  rows.append((f'sample ({FLAGS.scene_height}x{FLAGS.scene_width} scenes rendered)',
                pairs_per_second(pipeline.train_dataset(samples, config), FLAGS.num_pairs)))
   with tempfile.TemporaryDirectory() as root:
     list_path = write_kitti_folder(root, FLAGS.kitti_files)

@@ -9,8 +9,9 @@ Measurements: machine limits (conv3d, matmul), train steps (paper and demo confi
 XLA on / off), analytic FLOPs per step, a per-module split of forward+backward time, the
 input pipeline, SavedModel inference, the warp op against a gather-based reference, and the
 stride-2 3D conv implementations, the paper-scale forward pass, the classical baseline
-per 375x1242 frame, and where the 3D encoder-decoder's time goes (per layer and per
-stride-2 kernel). Times are medians of repeats after warm-up, with min/max.
+per 375x1242 frame, where the 3D encoder-decoder's time goes (per layer and per
+stride-2 kernel), and the numba census-SGM matcher (`baselines.matcher.match`) at 1242x375,
+1280x720 (also with a video prior) and 4000x3000, against the NumPy `sgm.match`. Times are medians of repeats after warm-up, with min/max.
 With --baseline_json (a --json_out of an earlier run) the table gets a 'before' column.
 Not a test: the machine is shared; the load average is recorded with the results.
 """
@@ -39,7 +40,8 @@ flags.DEFINE_integer('paper_steps', 1, 'Timed train steps at paper scale (after 
 flags.DEFINE_integer('demo_steps', 20, 'Timed train steps of the demo configuration.')
 flags.DEFINE_integer('timeout', 480, 'Seconds before a measurement subprocess is killed.')
 flags.DEFINE_list('sections', ['machine', 'train', 'modules', 'pipeline', 'inference',
-                               'warp', 'conv3d', 'forward', 'classical', 'layers'],
+                               'warp', 'conv3d', 'forward', 'classical', 'layers',
+                               'matcher'],
                   'Sections to run.')
 flags.DEFINE_string('worker', '', 'Internal: run one measurement and print its JSON.')
 flags.DEFINE_string('worker_args', '{}', 'Internal: JSON arguments of --worker.')
@@ -49,6 +51,8 @@ _RESULT = 'BENCHMARK_RESULT '
 INFERENCE_SIZES = ((375, 1242), (384, 384))
 # Tried in order when 375x1242 does not run, to find the largest size that does.
 FALLBACK_SIZES = ((320, 1024), (256, 832), (256, 512))
+# experiments/benchmark_matcher.CASES; the NumPy matcher runs on the first two only.
+MATCHER_CASES = ('1242x375', '1280x720', '4000x3000')
 
 
 def machine_description() -> dict:
@@ -139,15 +143,35 @@ def collect(steps_paper: int, steps_demo: int, timeout: int, sections) -> dict:
   if 'layers' in sections:
     results['layers'] = run_worker('layers', timeout)
     results['stride2_kernels'] = run_worker('stride2_kernels', timeout)
+  if 'matcher' in sections:
+    for case in MATCHER_CASES:
+      results[f'matcher/{case}'] = run_worker('matcher', timeout, case=case)
+    for case in MATCHER_CASES[:2]:
+      results[f'matcher/{case}/numpy'] = run_worker('matcher', timeout, case=case,
+                                                    method='numpy')
   return results
+
+
+def run_here(name: str, args: dict) -> dict:
+  """Runs measurement `name` in this process; adds the process' peak memory."""
+  # pylint: disable=g-import-not-at-top (TensorFlow only in the worker processes)
+  from experiments import benchmark_matcher
+  from experiments import benchmark_ops
+  from experiments import benchmark_workers
+  every = dict(benchmark_workers.WORKERS, **benchmark_ops.WORKERS,
+               **benchmark_matcher.WORKERS)
+  if name not in every:
+    raise ValueError(f'--worker must be one of {sorted(every)}, got {name!r}.')
+  result = every[name](**args)
+  result['peak_gib'] = benchmark_workers.peak_gib()
+  return result
 
 
 def main(argv):
   del argv
   if FLAGS.worker:
-    from experiments import benchmark_workers  # pylint: disable=g-import-not-at-top
-    result = benchmark_workers.run(FLAGS.worker, json.loads(FLAGS.worker_args))
-    print(_RESULT + json.dumps(result), flush=True)
+    print(_RESULT + json.dumps(run_here(FLAGS.worker, json.loads(FLAGS.worker_args))),
+          flush=True)
     return
   from experiments import benchmark_report  # pylint: disable=g-import-not-at-top
   command = 'python ' + ' '.join(shlex.quote(a) for a in

@@ -178,7 +178,49 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
                                  f'{r["size"]} frame')
     lines.append(f'| {name} ' + _cells(run, baseline, 'classical', cell))
   lines += _layer_sections(run)
+  lines += _matcher_section(run)
   return '\n'.join(lines) + '\n'
+
+
+def _matcher_section(run) -> list:
+  """Section 13 (this run only): `baselines.matcher.match` against the NumPy sgm.match."""
+  lines = ['', '## 13. Census-SGM matcher (red-cyan anaglyph of a held-out `sample` scene)',
+           '', 'numba = `baselines.matcher.match` (signed range, window-aligned pair); '
+           'NumPy = `baselines.sgm.match` on the unshifted pair over [0, max - min]. CPU = '
+           'user + sys of all threads; peak = VmHWM of the case\'s process, "before" = its '
+           'resident memory before the first timed call (imports incl. TensorFlow, inputs); '
+           'bad-1 on the left pixels visible in the right view; load = 1-minute load '
+           'average at the start.', '',
+           '| size | range | method | wall s (min / median) | CPU s (min) | peak (before) '
+           'GiB | bad-1 % | load |', '|---|---|---|---:|---:|---:|---:|---:|']
+  keys = sorted((k for k in run['results'] if k.startswith('matcher/')),
+                key=lambda k: (int(k.split('/')[1].split('x')[0]), k))
+  notes = []
+  for key in keys:
+    result = run['results'][key]
+    if 'error' in result:
+      lines.append(f'| {key.split("/")[1]} | | {key} | FAILED: {result["error"]} | | | | |')
+      continue
+    for search in ('full', 'prior'):
+      if search not in result:
+        continue
+      row = result[search]
+      method = result['method']
+      if method == 'numba' and search == 'prior':
+        method += f' with a prior (mean window {result["mean_window"]:.1f} px)'
+      elif method == 'numba' and result['coarse_factor'] > 1:
+        method += f' (coarse-to-fine x{result["coarse_factor"]})'
+      lines.append(f'| {result["size"]} | [{result["range"][0]}, {result["range"][1]}] | '
+                   f'{method} | {row["wall_min"]:.2f} / {row["wall_median"]:.2f} | '
+                   f'{row["cpu_min"]:.2f} | {result["peak_gib"]:.2f} '
+                   f'({result["rss_before_gib"]:.2f}) | '
+                   f'{100 * row["bad1"]:.1f} | {result["load"]:.1f} |')
+    if 'load_s' in result:
+      notes.append(f'{result["size"]} {result["load_s"]:.1f} s')
+  if notes:
+    lines += ['', 'numba kernels loaded from the on-disk cache (compiled when there is none) '
+              f'on a tiny pair first, per process: {", ".join(notes)}.']
+  return lines
 
 
 def _layer_sections(run) -> list:

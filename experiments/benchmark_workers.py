@@ -1,7 +1,8 @@
 """The measurements of experiments/benchmark.py; each runs alone in a fresh process.
 
-`run(name, args)` returns a JSON-able dict and always includes 'peak_gib', the process'
-peak resident memory (VmHWM). Times are seconds: the first call (tracing / compilation)
+`WORKERS` maps a name to a function returning a JSON-able dict; `experiments/benchmark.py`
+dispatches to it (and to `benchmark_ops.WORKERS`) and adds 'peak_gib', the process' peak
+resident memory (VmHWM). Times are seconds: the first call (tracing / compilation)
 apart, then the median, min and max of timed repeats after one warm-up call.
 """
 
@@ -18,13 +19,14 @@ from mixstereo_tf import baselines
 from mixstereo_tf import inference
 from mixstereo_tf import mixtures
 from mixstereo_tf import models
+from mixstereo_tf import image_range
 from mixstereo_tf import objective
+from mixstereo_tf import runs
 from mixstereo_tf import serving
 from mixstereo_tf.data import kitti
 from mixstereo_tf.data import pipeline
-from mixstereo_tf.data import records
 from mixstereo_tf.data import sample
-from mixstereo_tf.evaluation import metrics
+from mixstereo_tf.data import sources
 from mixstereo_tf.ops import conv3d
 from mixstereo_tf.ops import cost_volume
 from mixstereo_tf.training import step as step_lib
@@ -234,7 +236,8 @@ def matmul_peak(repeats: int = 3) -> dict:
 def input_pipeline(count: int = 60) -> dict:
   """Pairs/s of train_dataset at 256x512 crops from two sources."""
   config = pipeline.PipelineConfig(crop_height=256, crop_width=512)
-  samples = sample.sample_records('train', num_scenes=count + 5, height=256, width=512)
+  samples = sample.sample_records('train', num_scenes=count + 5, height=256, width=512,
+                                  max_disparity=models.ModelConfig().max_disparity)
   result = {'sample 256x512': bench_data.pairs_per_second(
       pipeline.train_dataset(samples, config), count)}
   with tempfile.TemporaryDirectory() as root:
@@ -248,9 +251,10 @@ def export(export_dir: str) -> dict:
   """Exports the paper-configuration model with random weights as a SavedModel."""
   model_config = models.ModelConfig()
   model = models.build_model(model_config)
-  run_info = inference.RunInfo('anaglyph', 256, 512, model_config)
+  run_info = runs.RunInfo('anaglyph', 256, 512, model_config)
   start = time.perf_counter()
-  serving.export_saved_model(model, run_info, export_dir)
+  serving.export_saved_model(inference.serving_function(model), model.variables, run_info,
+                             export_dir)
   return {'seconds': time.perf_counter() - start}
 
 
@@ -277,13 +281,14 @@ def forward(config: str = 'paper', repeats: int = 2) -> dict:
 
 def classical(height: int = 375, width: int = 1242) -> dict:
   """Seconds per frame of the training-free baseline (anaglyph, diplopia) on one scene."""
-  scene = sample.sample_records('heldout', num_scenes=1, height=height, width=width)[0]
-  views = records.load_sample(scene)
-  left, right = (tf.constant(views[k][None], tf.float32) / 127.5 - 1.0
+  scene = sample.sample_records('heldout', num_scenes=1, height=height, width=width,
+                                max_disparity=models.ModelConfig().max_disparity)[0]
+  views = sources.load_sample(scene)
+  left, right = (image_range.u8_to_signed(tf.constant(views[k][None]))
                  for k in ('left', 'right'))
   result = {'size': f'{height}x{width}'}
   for name in ('anaglyph', 'diplopia'):
-    mixture = metrics.to_uint8(mixtures.mix(name, left, right)[0].numpy())
+    mixture = image_range.signed_to_u8(mixtures.mix(name, left, right)[0].numpy())
     result[name] = timed(lambda m=mixture, n=name: baselines.unmix_classical(m, n), 1,
                          warmup=False)
   return result
@@ -293,13 +298,3 @@ WORKERS = {'train': train, 'modules': modules, 'flops': flops, 'conv3d_peak': co
            'matmul_peak': matmul_peak, 'pipeline': input_pipeline, 'export': export,
            'inference': saved_model_inference, 'forward': forward, 'classical': classical}
 
-
-def run(name: str, args: dict) -> dict:
-  """Runs worker `name` with keyword `args`; adds the process' peak memory."""
-  from experiments import benchmark_ops  # pylint: disable=g-import-not-at-top (cycle)
-  every = dict(WORKERS, **benchmark_ops.WORKERS)
-  if name not in every:
-    raise ValueError(f'--worker must be one of {sorted(every)}, got {name!r}.')
-  result = every[name](**args)
-  result['peak_gib'] = peak_gib()
-  return result

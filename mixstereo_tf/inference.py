@@ -1,147 +1,34 @@
-"""Inference on images of any size: loading a trained run and the `Unmixer`.
+"""Inference on images of any size: padding, the model's graphs and the `Unmixer`.
 
 The networks need inputs whose height and width are multiples of `ModelConfig.size_multiple`
 (32 for the paper's model). An image of any size is padded at the bottom and the right by
 edge replication, run, and the outputs are cropped back. Padding does not move the image
-content, so disparities keep their units (pixels of the input image); in the joint model
-they are computed from the separated views, so padding affects them only through the
-separation network's border context.
+content, so disparities keep their units (pixels of the input image).
+
+The `Unmixer` is the one predictor object every tool uses (unmix, evaluate, benchmarks);
+`build_unmixer` makes one from a `PredictorConfig` through a registry of methods:
+  * 'model': a trained network, from a run directory / checkpoint prefix (`runs`) or a
+    SavedModel (`serving`), run around each image's disparity range (`unmix_image`);
+  * 'classical': the training-free baseline (`baselines`);
+  * 'oracle': the stereo module of a trained run on the clean pair (the paper's diplopia
+    reference); it takes (left, right) instead of a mixture.
 """
 
 import dataclasses
-import json
-import os
-from typing import Callable, Dict, Optional, Tuple
+from typing import Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 import tensorflow as tf
-from tensorflow.core.protobuf import trackable_object_graph_pb2
 
+from mixstereo_tf import baselines
+from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
 from mixstereo_tf import models
-from mixstereo_tf.ops import colour_restore
+from mixstereo_tf import runs
+from mixstereo_tf import serving
+from mixstereo_tf import unmix_image
 
-CONFIG_FILE = 'config.json'
-
-
-@dataclasses.dataclass(frozen=True)
-class RunInfo:
-  """What a trained model expects: its mixture operator, training crop and architecture."""
-  mixture: str
-  crop_height: int
-  crop_width: int
-  model_config: models.ModelConfig
-
-  def to_dict(self) -> Dict[str, object]:
-    return {'mixture': self.mixture, 'crop_height': self.crop_height,
-            'crop_width': self.crop_width, 'model': self.model_config.to_dict()}
-
-  @classmethod
-  def from_dict(cls, values: Dict[str, object]) -> 'RunInfo':
-    return cls(str(values['mixture']), int(values['crop_height']), int(values['crop_width']),
-               models.ModelConfig.from_dict(values['model']))
-
-
-def read_run_info(config_path: str) -> RunInfo:
-  """Reads a training run's `config.json` (sections 'model' and 'pipeline').
-
-  Raises:
-    ValueError: the file is missing, not JSON, or lacks an entry; the message names it.
-  """
-  if not tf.io.gfile.exists(config_path):
-    raise ValueError(f'No {CONFIG_FILE} at {config_path}: not a training run directory.')
-  with tf.io.gfile.GFile(config_path) as f:
-    try:
-      config = json.load(f)
-    except json.JSONDecodeError as e:
-      raise ValueError(f'{config_path} is not valid JSON: {e}') from None
-  try:
-    pipeline = config['pipeline']
-    return RunInfo(mixture=str(pipeline['mixture']), crop_height=int(pipeline['crop_height']),
-                   crop_width=int(pipeline['crop_width']),
-                   model_config=models.ModelConfig.from_dict(config['model']))
-  except (KeyError, TypeError) as e:
-    raise ValueError(f'{config_path} lacks the entry {e} (expected sections "model" and '
-                     '"pipeline" with mixture, crop_height, crop_width).') from None
-
-
-def resolve_checkpoint(model_dir_or_checkpoint: str,
-                       checkpoint: Optional[str] = None) -> Tuple[str, str]:
-  """(run directory, checkpoint prefix) for a run directory or a checkpoint prefix.
-
-  `checkpoint`, when given, overrides the directory's latest checkpoint.
-
-  Raises:
-    ValueError: no checkpoint in the directory, or the named checkpoint does not exist.
-  """
-  if tf.io.gfile.isdir(model_dir_or_checkpoint):
-    model_dir = model_dir_or_checkpoint
-    checkpoint = checkpoint or tf.train.latest_checkpoint(model_dir)
-    if checkpoint is None:
-      raise ValueError(f'No checkpoint in {model_dir} (no "checkpoint" index file).')
-  else:
-    if checkpoint is not None:
-      raise ValueError(f'{model_dir_or_checkpoint} is not a directory; pass a run directory '
-                       'together with a checkpoint.')
-    checkpoint = model_dir_or_checkpoint
-    model_dir = os.path.dirname(checkpoint) or '.'
-  if not tf.io.gfile.exists(checkpoint + '.index'):
-    raise ValueError(f'Checkpoint not found: {checkpoint} (no {checkpoint}.index).')
-  return model_dir, checkpoint
-
-
-def _stored_variable_count(checkpoint: str, root_child: str) -> int:
-  """Variables the checkpoint's object graph reaches from the root's `root_child` node.
-
-  Counted on the graph, not on key names: a variable shared with the optimizer may be
-  stored under the optimizer's path.
-  """
-  graph = trackable_object_graph_pb2.TrackableObjectGraph()
-  graph.ParseFromString(tf.train.load_checkpoint(checkpoint).get_tensor(
-      '_CHECKPOINTABLE_OBJECT_GRAPH'))
-  start = [c.node_id for c in graph.nodes[0].children if c.local_name == root_child]
-  seen, stack = set(), list(start)
-  while stack:
-    node = stack.pop()
-    if node not in seen:
-      seen.add(node)
-      stack.extend(c.node_id for c in graph.nodes[node].children)
-  return sum(1 for n in seen
-             if any(a.name == 'VARIABLE_VALUE' for a in graph.nodes[n].attributes))
-
-
-def load_run(model_dir_or_checkpoint: str,
-             checkpoint: Optional[str] = None) -> Tuple[models.MixStereoNet, RunInfo]:
-  """Builds the model of a training run and restores its weights.
-
-  Args:
-    model_dir_or_checkpoint: a run directory (its latest checkpoint is used) or a checkpoint
-      prefix such as `runs/demo/ckpt-1000`; `config.json` is read from its folder.
-    checkpoint: optional checkpoint prefix overriding the directory's latest.
-
-  Returns:
-    (model, run_info).
-
-  Raises:
-    ValueError: missing config.json / checkpoint, or weights that do not fit the model.
-  """
-  model_dir, checkpoint = resolve_checkpoint(model_dir_or_checkpoint, checkpoint)
-  run_info = read_run_info(os.path.join(model_dir, CONFIG_FILE))
-  model = models.build_model(run_info.model_config)  # Creates the variables.
-  status = tf.train.Checkpoint(model=model).read(checkpoint)
-  try:
-    status.assert_existing_objects_matched()
-  except AssertionError as e:
-    raise ValueError(f'Checkpoint {checkpoint} does not hold this model\'s weights: '
-                     f'{str(e)[:300]}') from None
-  status.expect_partial()  # The optimizer's slots are not needed.
-  # The check above only covers objects the checkpoint graph reaches from the model; a
-  # checkpoint written while layers were untracked (Keras 3 list attributes) lacks some.
-  stored = _stored_variable_count(checkpoint, 'model')
-  if stored < len(model.variables):
-    raise ValueError(f'Checkpoint {checkpoint} holds {stored} of the model\'s '
-                     f'{len(model.variables)} weights; it cannot restore this model.')
-  return model, run_info
+Outputs = Dict[str, np.ndarray]
 
 
 def pad_to_multiple(image: tf.Tensor, multiple: int) -> tf.Tensor:
@@ -174,24 +61,25 @@ def crop_to(image: tf.Tensor, height, width) -> tf.Tensor:
   return image[..., :height, :width, :]
 
 
-def make_unmix_fn(model: tf.keras.Model,
-                  multiple: int) -> Callable[[tf.Tensor], Dict[str, tf.Tensor]]:
-  """The uint8-in, uint8/pixels-out function shared by `Unmixer` and the SavedModel.
+def _padded_input(image: tf.Tensor, multiple: int) -> tf.Tensor:
+  """uint8 [H, W, 3] -> padded [1, H', W', 3] network input in [-1, 1]."""
+  return image_range.u8_to_signed(pad_to_multiple(image, multiple))[tf.newaxis]
+
+
+def serving_function(model: models.MixStereoNet) -> Callable[[tf.Tensor], Dict[str, tf.Tensor]]:
+  """The uint8-in graph of a joint model, shared by the `Unmixer` and the SavedModel.
 
   Returns:
     fn(image uint8 [H, W, 3]) -> {'left', 'right': uint8 [H, W, 3], 'disparity',
     'disparity_right': float32 [H, W] pixels (left- and right-referenced)}.
   """
+  multiple = model.size_multiple
 
   def unmix(image: tf.Tensor) -> Dict[str, tf.Tensor]:
     height, width = tf.shape(image)[0], tf.shape(image)[1]
-    mixture = tf.cast(pad_to_multiple(image, multiple), tf.float32) / 127.5 - 1.0
-    outputs = model(mixture[tf.newaxis], training=False)
-    result = {}
-    for key in ('left', 'right'):
-      view = crop_to(outputs[key][0], height, width)
-      result[key] = tf.cast(tf.round(tf.clip_by_value((view + 1.0) * 127.5, 0.0, 255.0)),
-                            tf.uint8)
+    outputs = model(_padded_input(image, multiple), training=False)
+    result = {key: image_range.signed_to_u8(crop_to(outputs[key][0], height, width))
+              for key in ('left', 'right')}
     for key, name in (('disparity_left', 'disparity'), ('disparity_right', 'disparity_right')):
       result[name] = tf.cast(crop_to(outputs[key][0], height, width)[..., 0], tf.float32)
     return result
@@ -199,76 +87,206 @@ def make_unmix_fn(model: tf.keras.Model,
   return unmix
 
 
-def _restore_colour(image: np.ndarray, outputs: Dict[str, np.ndarray],
-                    spec: mixtures.MixtureSpec) -> Dict[str, np.ndarray]:
-  """Paper section 4.2: channels the mixture kept, warped by the estimated disparities."""
-  as_float = lambda u8: tf.cast(u8, tf.float32) / 127.5 - 1.0
-  restored = colour_restore.restore_views(
-      as_float(image), outputs['disparity_left'][..., None],
-      outputs['disparity_right'][..., None], spec, fallback_left=as_float(outputs['left']),
-      fallback_right=as_float(outputs['right']))
-  return {key: tf.cast(tf.round(tf.clip_by_value((restored[key] + 1.0) * 127.5, 0.0, 255.0)),
-                       tf.uint8).numpy() for key in ('left', 'right')}
+def pair_function(model: models.MixStereoNet) -> Callable[[np.ndarray, np.ndarray], Outputs]:
+  """The stereo module of a joint model on a clean uint8 pair (the 'oracle' method).
 
-
-class Unmixer:
-  """Separates a mixture image of any size into two views and their disparities.
-
-  Backed by a Keras model (`from_model`) or an exported SavedModel (`from_saved_model`);
-  both run the same padded uint8 graph (`make_unmix_fn`).
+  Both views are padded like mixtures; returns {'disparity_left', 'disparity_right'}
+  ([H, W] float32 pixels).
   """
+  multiple = model.size_multiple
 
-  def __init__(self, unmix_fn: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: RunInfo,
-               restore_colour: Optional[bool] = None):
-    """Args: unmix_fn as made by `make_unmix_fn`; run_info of the model; restore_colour:
-    rebuild the views' exact channels from the mixture (default: for channel anaglyphs)."""
-    self._unmix_fn = unmix_fn
-    self.run_info = run_info
-    self.spec = mixtures.get_mixture(run_info.mixture)
-    self.restore_colour = (self.spec.is_channel_anaglyph if restore_colour is None
-                           else bool(restore_colour))
+  @tf.function(input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)] * 2)
+  def disparities(left, right):
+    height, width = tf.shape(left)[0], tf.shape(left)[1]
+    out = model.compute_disparity(_padded_input(left, multiple),
+                                  _padded_input(right, multiple), training=False)
+    return {key: crop_to(tf.cast(out[key][0], tf.float32), height, width)[..., 0]
+            for key in ('disparity_left', 'disparity_right')}
 
-  @classmethod
-  def from_model(cls, model: models.MixStereoNet, run_info: RunInfo,
-                 restore_colour: Optional[bool] = None) -> 'Unmixer':
-    fn = tf.function(make_unmix_fn(model, run_info.model_config.size_multiple),
-                     input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)])
-    return cls(fn, run_info, restore_colour)
+  return lambda left, right: {key: value.numpy() for key, value in
+                              disparities(tf.constant(left), tf.constant(right)).items()}
 
-  @classmethod
-  def from_saved_model(cls, export_dir: str, restore_colour: Optional[bool] = None
-                       ) -> 'Unmixer':
-    """Loads a SavedModel written by `serving.export_saved_model`."""
-    from mixstereo_tf import serving  # pylint: disable=g-import-not-at-top (cycle)
-    loaded, run_info = serving.load_saved_model(export_dir)
+
+def as_rgb(image) -> np.ndarray:
+  """A uint8 mixture as [H, W, 3]; gray [H, W] / [H, W, 1] is replicated to RGB."""
+  image = np.asarray(image)
+  if image.dtype != np.uint8:
+    raise ValueError(f'Unmixer expects a uint8 image, got {image.dtype}.')
+  if image.ndim == 2:
+    image = image[:, :, None]
+  if image.ndim != 3 or image.shape[2] not in (1, 3):
+    raise ValueError(f'Unmixer expects [H, W, 3] or gray [H, W], got {image.shape}.')
+  return np.repeat(image, 3, axis=2) if image.shape[2] == 1 else image
+
+
+@dataclasses.dataclass(frozen=True)
+class PredictorConfig:
+  """Which unmixer to build (the tools' predictor flags).
+
+  Attributes:
+    method: a name of METHODS.
+    checkpoint: run directory or checkpoint prefix ('model', 'oracle').
+    saved_model: SavedModel directory ('model'); exclusive with checkpoint.
+    mixture: the inputs' mixture operator; 'auto': detected per image (anaglyphs); None:
+      the model's own (required for 'classical'). A model refuses encodings it was not
+      trained on.
+    restore_colour: restore both views from the encoding and the disparities with the
+      network's views as the prior (paper 4.2; None: on for anaglyphs); 'model' only.
+    disparity_range: (min, max) signed pixels of the input; None: estimated per image.
+    max_network_pixels: a model's input is reduced to at most this many pixels.
+  """
+  method: str = 'model'
+  checkpoint: Optional[str] = None
+  saved_model: Optional[str] = None
+  mixture: Optional[str] = None
+  restore_colour: Optional[bool] = None
+  disparity_range: Optional[Tuple[int, int]] = None
+  max_network_pixels: Optional[int] = 2_000_000
+
+
+@dataclasses.dataclass(frozen=True)
+class Unmixer:
+  """A predictor: `unmixer(mixture_u8)`, or `unmixer(left_u8, right_u8)` when takes_pair.
+
+  Called on a uint8 mixture [H, W, 3] it returns {'left', 'right': uint8 [H, W, 3],
+  'disparity_left', 'disparity_right': float32 [H, W] signed pixels, 'info': what was done
+  (`unmix_image`)}; an 'oracle' returns the disparities of the clean pair.
+
+  Attributes:
+    fn: the function behind the call.
+    method: the METHODS name that built it.
+    mixture: the mixture its inputs are made with ('auto': detected per image).
+    max_disparity: the largest disparity of its default range, pixels (display range).
+    restore_colour: whether it restores the views from the encoding (paper 4.2).
+    takes_pair: True for 'oracle' (inputs are the clean views).
+  """
+  fn: Callable[..., Outputs]
+  method: str
+  mixture: str
+  max_disparity: float
+  restore_colour: bool = False
+  takes_pair: bool = False
+
+  def __call__(self, *images: np.ndarray) -> Outputs:
+    return self.fn(*images)
+
+
+_BUILDERS: Dict[str, Callable[[PredictorConfig], Unmixer]] = {}
+
+
+def _register(method: str):
+  def add(builder):
+    _BUILDERS[method] = builder
+    return builder
+  return add
+
+
+def _load_graph(config: PredictorConfig):
+  """(uint8 graph, RunInfo) of a checkpoint or a SavedModel."""
+  if bool(config.saved_model) == bool(config.checkpoint):
+    raise ValueError('Give exactly one of PredictorConfig.saved_model and '
+                     'PredictorConfig.checkpoint.')
+  if config.saved_model:
+    loaded, run_info = serving.load_saved_model(config.saved_model)
     signature = loaded.signatures['serving_default']
-    unmixer = cls(lambda image: signature(image=image), run_info, restore_colour)
-    unmixer._loaded = loaded  # Keeps the variables alive while the signature is used.
-    return unmixer
+    graph = lambda image: signature(image=image)
+    graph.loaded = loaded  # Keeps the variables alive while the signature is used.
+    return graph, run_info
+  model, run_info = runs.load_run(config.checkpoint)
+  return tf.function(serving_function(model),
+                     input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)]), run_info
 
-  def __call__(self, image: np.ndarray) -> Dict[str, np.ndarray]:
-    """Unmixes one mixture image.
 
-    Args:
-      image: uint8 [H, W, 3] RGB (or [H, W] / [H, W, 1] gray, replicated to RGB), any size.
+def _check_mixture(config: PredictorConfig, trained: Sequence[str]) -> str:
+  """The mixture asked for (default: the model's first); refuses one it was not trained on."""
+  requested = config.mixture or trained[0]
+  if requested != unmix_image.AUTO and requested not in trained:
+    raise ValueError(f'PredictorConfig.mixture={requested} but the model was trained on '
+                     f'{", ".join(repr(m) for m in trained)} mixtures '
+                     f'({config.saved_model or config.checkpoint or "this model"}).')
+  return requested
 
-    Returns:
-      'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32 [H, W]
-      pixels, positive (left pixel x matches right x - d_L; right x matches left x + d_R).
-    """
-    image = np.asarray(image)
-    if image.dtype != np.uint8:
-      raise ValueError(f'Unmixer expects a uint8 image, got {image.dtype}.')
-    if image.ndim == 2:
-      image = image[:, :, None]
-    if image.ndim != 3 or image.shape[2] not in (1, 3):
-      raise ValueError(f'Unmixer expects [H, W, 3] or gray [H, W], got {image.shape}.')
-    if image.shape[2] == 1:
-      image = np.repeat(image, 3, axis=2)
-    raw = self._unmix_fn(tf.constant(image))
-    outputs = {'left': raw['left'].numpy(), 'right': raw['right'].numpy(),
-               'disparity_left': raw['disparity'].numpy(),
-               'disparity_right': raw['disparity_right'].numpy()}
-    if self.restore_colour:
-      outputs.update(_restore_colour(image, outputs, self.spec))
-    return outputs
+
+@_register('model')
+def _model(config: PredictorConfig) -> Unmixer:
+  if config.checkpoint and not config.saved_model:  # Checked before the model is built.
+    _check_mixture(config, runs.read_run_info(
+        runs.resolve_checkpoint(config.checkpoint)[0]).mixtures)
+  graph, run_info = _load_graph(config)
+  return model_unmixer(graph, run_info, config)
+
+
+def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: runs.RunInfo,
+                  config: PredictorConfig = PredictorConfig()) -> Unmixer:
+  """The 'model' Unmixer around a uint8 serving graph (`serving_function`) of a run."""
+  trained = run_info.mixtures
+  requested = _check_mixture(config, trained)
+  levels = run_info.model_config.max_disparity
+  restore = config.restore_colour
+  if restore is None:
+    restore = any(mixtures.get_mixture(m).is_anaglyph for m in trained)
+
+  def solve(image, name, search):
+    return unmix_image.model_unmix(graph, image, name, search, levels,
+                                   config.max_network_pixels, bool(restore))
+
+  fn = lambda image: unmix_image.run(as_rgb(image), requested, trained,
+                                     config.disparity_range, (0, levels - 1), 'model', solve)
+  return Unmixer(fn, 'model', requested, levels, bool(restore))
+
+
+@_register('classical')
+def _classical(config: PredictorConfig) -> Unmixer:
+  if config.saved_model or config.checkpoint:
+    raise ValueError("PredictorConfig.method='classical' takes neither "
+                     'PredictorConfig.saved_model nor PredictorConfig.checkpoint.')
+  if config.mixture is None:
+    raise ValueError("PredictorConfig.method='classical' needs PredictorConfig.mixture (a "
+                     "name or 'auto').")
+  supported = baselines.SUPPORTED_MIXTURES
+  if config.mixture not in supported + (unmix_image.AUTO,):
+    raise ValueError(f"PredictorConfig.method='classical' does not support "
+                     f'PredictorConfig.mixture={config.mixture}; supported: '
+                     f'{", ".join(supported)}.')
+  default = (1, baselines.max_disparity('diplopia'))
+  fn = lambda image: unmix_image.run(as_rgb(image), config.mixture, supported,
+                                     config.disparity_range, default, 'classical',
+                                     unmix_image.classical_unmix)
+  display = baselines.max_disparity(config.mixture if config.mixture in supported
+                                    else 'anaglyph')
+  return Unmixer(fn, 'classical', config.mixture, display, restore_colour=(
+      config.mixture == unmix_image.AUTO or mixtures.get_mixture(config.mixture).is_anaglyph))
+
+
+@_register('oracle')
+def _oracle(config: PredictorConfig) -> Unmixer:
+  if not config.checkpoint or config.saved_model:
+    raise ValueError("PredictorConfig.method='oracle' needs PredictorConfig.checkpoint (a "
+                     'stereo_only training run) and takes no PredictorConfig.saved_model.')
+  model, run_info = runs.load_run(config.checkpoint)
+  return Unmixer(pair_function(model), 'oracle', config.mixture or run_info.mixtures[0],
+                 run_info.model_config.max_disparity, takes_pair=True)
+
+
+METHODS = tuple(_BUILDERS)
+
+
+def build_unmixer(config: PredictorConfig) -> Unmixer:
+  """The Unmixer `config` asks for.
+
+  Raises:
+    ValueError: unknown method or mixture, or arguments the method does not take; the
+      message names the PredictorConfig fields.
+  """
+  if config.method not in _BUILDERS:
+    raise ValueError(f'Unknown PredictorConfig.method={config.method!r}; valid: '
+                     f'{", ".join(METHODS)}.')
+  if config.mixture not in (None, unmix_image.AUTO):
+    mixtures.get_mixture(config.mixture)  # ValueError listing the valid names.
+  if config.method != 'model' and config.restore_colour is not None:
+    raise ValueError("PredictorConfig.restore_colour applies to method 'model' only.")
+  if config.disparity_range is not None and not (
+      config.disparity_range[0] < config.disparity_range[1]):
+    raise ValueError(f'PredictorConfig.disparity_range needs MIN < MAX, got '
+                     f'{config.disparity_range}.')
+  return _BUILDERS[config.method](config)

@@ -14,8 +14,8 @@ from typing import Dict, Iterator, List, Optional, Sequence, Tuple, Union
 import cv2
 import numpy as np
 
+from mixstereo_tf import colormap
 from mixstereo_tf.data import image_io
-from mixstereo_tf.training import summaries
 
 LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
@@ -23,27 +23,6 @@ IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.t
 VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv')
 # Frame rate written when a video does not report one.
 DEFAULT_FPS = 25.0
-
-
-def colorize_disparity(disparity: np.ndarray, max_disparity: float) -> np.ndarray:
-  """Colour-maps disparity with a FIXED range, so colours are comparable between frames.
-
-  Uses the TensorBoard summaries' dark-to-bright ramp (`training.summaries`): 0 px (far) is
-  black-purple, `max_disparity` px and above (near) pale yellow, linear in between.
-
-  Args:
-    disparity: [H, W] (or [H, W, 1]) pixels.
-    max_disparity: disparity shown with the brightest colour; keep it constant for a run.
-
-  Returns:
-    uint8 RGB [H, W, 3].
-  """
-  if not max_disparity > 0:
-    raise ValueError(f'max_disparity must be positive, got {max_disparity!r}.')
-  disparity = np.nan_to_num(np.asarray(disparity, np.float32).reshape(
-      np.shape(disparity)[:2]), nan=0.0)
-  colour = summaries.colorize_disparity(disparity[None, :, :, None], float(max_disparity))
-  return colour[0].numpy()
 
 
 def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
@@ -104,29 +83,61 @@ def layout_images(left: np.ndarray, right: np.ndarray, layout: str) -> List[Tupl
   return [(layout, composed)]
 
 
+PNG16_LIMIT = 65535.0 / 256.0  # The largest disparity a KITTI-style uint16 PNG holds.
+
+
+def display_range(disparity: np.ndarray,
+                  max_display_disparity: Optional[float] = None) -> Tuple[float, float]:
+  """The colour map's (low, high): (0, max_display_disparity) when given, else the range
+  the disparity map actually covers (its 0.5 and 99.5 percentiles, at least 1 px wide)."""
+  if max_display_disparity:
+    return 0.0, float(max_display_disparity)
+  finite = np.asarray(disparity, np.float32)
+  finite = finite[np.isfinite(finite)]
+  if not finite.size:
+    return 0.0, 1.0
+  low, high = (float(v) for v in np.percentile(finite, [0.5, 99.5]))
+  return low, max(high, low + 1.0)
+
+
 def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: str,
-                        layout: str, max_disparity: float) -> List[str]:
-  """Writes one image's results (mixstereo_tf/unmixing.py); returns their paths.
+                        layout: str, max_display_disparity: Optional[float] = None
+                        ) -> Dict[str, object]:
+  """Writes one image's results (mixstereo_tf/unmix_files.py).
 
   Args:
-    outputs: {'left', 'right': uint8 [H, W, 3], 'disparity_left': [H, W] pixels}.
+    outputs: {'left', 'right': uint8 [H, W, 3], 'disparity_left': [H, W] signed pixels}.
     output_dir: existing folder.
     name: the file-name prefix.
     layout: one of LAYOUTS.
-    max_disparity: the colour map's fixed range.
+    max_display_disparity: a fixed colour-map range 0..this; None: the range found.
+
+  Returns:
+    {'files': the paths written, 'display_range': the colour map's (low, high),
+    'disparity16': why no uint16 PNG was written, when none was (it holds 0..255.996 px:
+    negative or larger disparities are not representable; the .npy holds them).}
   """
   paths = []
   for suffix, image in layout_images(outputs['left'], outputs['right'], layout):
     paths.append(os.path.join(output_dir, f'{name}_{suffix}.png'))
     write_image(paths[-1], image)
   disparity = np.asarray(outputs['disparity_left'], np.float32)
+  low, high = display_range(disparity, max_display_disparity)
   paths.append(os.path.join(output_dir, f'{name}_disparity.png'))
-  write_image(paths[-1], colorize_disparity(disparity, max_disparity))
-  paths.append(os.path.join(output_dir, f'{name}_disparity16.png'))
-  write_disparity_png16(paths[-1], disparity)
+  write_image(paths[-1], colormap.colorize(disparity, high, low))
+  written = {'display_range': [round(low, 3), round(high, 3)]}
+  smallest, largest = float(np.nanmin(disparity)), float(np.nanmax(disparity))
+  if smallest >= 0.0 and largest <= PNG16_LIMIT:
+    paths.append(os.path.join(output_dir, f'{name}_disparity16.png'))
+    write_disparity_png16(paths[-1], disparity)
+  else:
+    written['disparity16'] = (f'not written: the disparities span {smallest:.1f}..'
+                              f'{largest:.1f} px, outside the 0..{PNG16_LIMIT:.3f} px a '
+                              'KITTI-style uint16 PNG holds; see the .npy')
   paths.append(os.path.join(output_dir, f'{name}_disparity.npy'))
   np.save(paths[-1], disparity)
-  return paths
+  written['files'] = [os.path.basename(p) for p in paths]
+  return written
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,81 +3,117 @@ r"""Trains the joint separation + stereo network (or an ablation) from stereo pa
   python -m mixstereo_tf.train --flagfile=experiments/demo.flags --model_dir=runs/demo
 
 Re-running with the same --model_dir resumes from its newest checkpoint. SIGINT/SIGTERM
-save a checkpoint and exit with 128 + the signal number.
+save a checkpoint and exit with 128 + the signal number. Every default comes from the
+config dataclasses (models.ModelConfig, objective.LossConfig, data.pipeline.PipelineConfig,
+data.sources.DataConfig, training.config.TrainConfig): the paper's configuration.
 """
 
-import math
+from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
+
+import math  # pylint: disable=g-bad-import-order
 import sys
 
 from absl import app
 from absl import flags
 from absl import logging
 
-from mixstereo_tf import mixtures
 from mixstereo_tf import models
 from mixstereo_tf import objective
+from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import sources
 from mixstereo_tf.training import config as config_lib
 from mixstereo_tf.training import loop
+from mixstereo_tf.training import optimizers
 
 FLAGS = flags.FLAGS
+_DATA = cli_flags.defaults(sources.DataConfig)
+_PIPE = cli_flags.defaults(pipeline.PipelineConfig)
+_TRAIN = cli_flags.defaults(config_lib.TrainConfig)
+_MODEL = cli_flags.defaults(models.ModelConfig)
+_LOSS = cli_flags.defaults(objective.LossConfig)
 
+cli_flags.define_mixture()
+cli_flags.define_data()
+cli_flags.define_max_disparity()
 flags.DEFINE_string('model_dir', None, 'Checkpoints, summaries and saved flags go here.',
                     required=True)
-flags.DEFINE_enum('mixture', 'anaglyph', mixtures.MIXTURE_NAMES, 'Composition operator f.')
-flags.DEFINE_enum('dataset', 'sample', sources.DATASETS, 'Training data source.')
-flags.DEFINE_string('data_dir', None, 'Dataset root (not needed for `sample`).')
-flags.DEFINE_string('train_list', None, 'Split list of `left right` lines (kitti_raw).')
-flags.DEFINE_boolean('skip_bad_pairs', False, 'Log and skip unreadable pairs.')
-flags.DEFINE_list('middlebury_scale', [], 'Ground-truth disparity scale per Middlebury scene '
-                  '(--dataset=middlebury) as scene:scale items, e.g. tsukuba:16,venus:8.')
-flags.DEFINE_integer('crop_height', 256, 'Training crop height (paper: 256 KITTI, 384 '
-                     'Middlebury); a multiple of 32.')
-flags.DEFINE_integer('crop_width', 512, 'Training crop width (paper: 512 KITTI, 384 '
-                     'Middlebury); a multiple of 32.')
-flags.DEFINE_integer('batch_size', 1, 'Global batch size (paper: 1).')
-flags.DEFINE_float('learning_rate', 1e-4, 'RMSProp learning rate (paper: 1e-4).')
+flags.DEFINE_enum('dataset', _DATA['dataset'], sources.DATASETS, 'Training data source.')
+flags.DEFINE_string('train_list', _DATA['split_list'], 'Split list of `left right` lines '
+                    '(kitti_raw).')
+flags.DEFINE_boolean('skip_bad_pairs', _DATA['skip_bad_pairs'], 'Log and skip unreadable pairs.')
+flags.DEFINE_boolean('allow_evaluation_scenes', _DATA['allow_evaluation_scenes'],
+                     "Train on the paper's evaluation scenes (Middlebury Tsukuba, Venus, "
+                     'Sawtooth, Map, Cones, Teddy, Aloe, Motorcycle; the KITTI 2015 training '
+                     'frames), which are refused otherwise.')
+flags.DEFINE_integer('crop_height', _PIPE['crop_height'], 'Training crop height (paper: 256 '
+                     'KITTI, 384 Middlebury); a multiple of the size multiple (32).')
+flags.DEFINE_integer('crop_width', _PIPE['crop_width'], 'Training crop width (paper: 512 KITTI, '
+                     '384 Middlebury); a multiple of the size multiple (32).')
+flags.DEFINE_integer('batch_size', _PIPE['batch_size'], 'Global batch size (paper: 1).')
+flags.DEFINE_float('learning_rate', _TRAIN['learning_rate'], 'RMSProp learning rate (paper: '
+                   '1e-4).')
+flags.DEFINE_enum('optimizer', _TRAIN['optimizer'], tuple(optimizers.OPTIMIZERS),
+                  "rmsprop_tf1: the paper's TF1 RMSProp (accumulator from one, epsilon "
+                  "1e-10); rmsprop_keras: Keras 3's RMSprop.")
 flags.DEFINE_integer('num_steps', None, 'Total optimizer steps.')
 flags.DEFINE_float('num_epochs', None, 'Epochs over the training list (instead of '
                    '--num_steps).')
-flags.DEFINE_enum('mode', 'joint', objective.MODES, 'What to train.')
-flags.DEFINE_string('init_checkpoint', None, 'Start from these weights (fine-tuning): a '
-                    'checkpoint prefix or a run directory (its newest checkpoint).')
-flags.DEFINE_enum('jit_compile', 'auto', config_lib.JIT_CHOICES,
+flags.DEFINE_enum('mode', _TRAIN['mode'], objective.MODES, 'What to train.')
+flags.DEFINE_string('init_checkpoint', _TRAIN['init_checkpoint'], 'Start from these weights '
+                    '(fine-tuning): a checkpoint prefix or a run directory.')
+flags.DEFINE_enum('jit_compile', _TRAIN['jit_compile'], config_lib.JIT_CHOICES,
                   'XLA for the forward/backward pass; auto = on GPU, off on CPU.')
-flags.DEFINE_enum('strategy', 'default', config_lib.STRATEGIES, 'tf.distribute strategy.')
-flags.DEFINE_boolean('mixed_precision', False, 'float16 (GPU) / bfloat16 (CPU) compute.')
-flags.DEFINE_integer('seed', 0, 'Seed of initialisation and the input pipeline.')
-flags.DEFINE_integer('checkpoint_every', 1000, 'Steps between checkpoints.')
-flags.DEFINE_integer('summary_every', 100, 'Steps between scalar summaries.')
-flags.DEFINE_integer('image_summary_every', 1000, 'Steps between image summaries.')
-flags.DEFINE_integer('log_every', 10, 'Steps between progress lines.')
-flags.DEFINE_boolean('augment', True, 'Photometric augmentation (monodepth).')
-flags.DEFINE_boolean('flip', True, 'Random flip-and-swap of the views.')
+flags.DEFINE_enum('strategy', _TRAIN['strategy'], config_lib.STRATEGIES,
+                  'tf.distribute strategy.')
+flags.DEFINE_boolean('mixed_precision', _TRAIN['mixed_precision'],
+                     'float16 (GPU) / bfloat16 (CPU) compute.')
+flags.DEFINE_integer('seed', _TRAIN['seed'], 'Seed of initialisation and the input pipeline.')
+flags.DEFINE_integer('checkpoint_every', _TRAIN['checkpoint_every'], 'Steps between checkpoints.')
+flags.DEFINE_integer('summary_every', _TRAIN['summary_every'], 'Steps between scalar summaries.')
+flags.DEFINE_integer('image_summary_every', _TRAIN['image_summary_every'],
+                     'Steps between image summaries.')
+flags.DEFINE_integer('log_every', _TRAIN['log_every'], 'Steps between progress lines.')
+flags.DEFINE_boolean('augment', _PIPE['augment'], 'Photometric augmentation (monodepth).')
+flags.DEFINE_boolean('flip', _PIPE['flip'], 'Random flip-and-swap of the views.')
 # Architecture; the defaults are the paper's (17.1M parameters).
-flags.DEFINE_integer('max_disparity', 96, 'Disparity levels at full resolution (paper: 96).')
-flags.DEFINE_list('unet_widths', ['32', '64', '128', '256', '512', '512'],
+flags.DEFINE_list('unet_widths', [str(w) for w in _MODEL['separation_widths']],
                   'U-Net widths, full resolution first; one stride-2 level per extra entry.')
-flags.DEFINE_integer('stereo_features', 32, 'Width of the 2D feature tower (GC-Net: 32).')
-flags.DEFINE_integer('num_res_blocks', 8, 'Residual blocks of the 2D tower (GC-Net: 8).')
-flags.DEFINE_list('volume_features', ['64', '64', '64', '128'],
+flags.DEFINE_integer('stereo_features', _MODEL['stereo_features'],
+                     'Width of the 2D feature tower (GC-Net: 32).')
+flags.DEFINE_integer('num_res_blocks', _MODEL['stereo_residual_blocks'],
+                     'Residual blocks of the 2D tower (GC-Net: 8).')
+flags.DEFINE_list('volume_features', [str(w) for w in _MODEL['stereo_3d_widths']],
                   'Widths of the 3D encoder levels (their number sets the depth); the '
                   'first 3D convolutions have --stereo_features.')
 # Loss weights; the defaults are the paper's.
-flags.DEFINE_float('alpha_c', 1.0, 'Content (L1) weight.')
-flags.DEFINE_float('alpha_p', 0.2, 'Image prior (TV) weight.')
-flags.DEFINE_float('omega_w', 1.0, 'Warp appearance weight.')
-flags.DEFINE_float('omega_s', 0.05, 'Disparity smoothness weight.')
-flags.DEFINE_float('lambda_ssim', 0.85, 'SSIM share of the appearance loss.')
-flags.DEFINE_float('lambda_l1', 0.15, 'L1 share of the appearance loss.')
-flags.DEFINE_enum('smoothness_scale', 'width', ('width', 'pixels'),
+flags.DEFINE_float('alpha_c', _LOSS['alpha_c'], 'Content (L1) weight.')
+flags.DEFINE_float('alpha_p', _LOSS['alpha_p'], 'Image prior (TV) weight.')
+flags.DEFINE_float('omega_w', _LOSS['omega_w'], 'Warp appearance weight.')
+flags.DEFINE_float('omega_s', _LOSS['omega_s'], 'Disparity smoothness weight.')
+flags.DEFINE_float('lambda_ssim', _LOSS['lambda_ssim'], 'SSIM share of the appearance loss.')
+flags.DEFINE_float('lambda_l1', _LOSS['lambda_l1'], 'L1 share of the appearance loss.')
+flags.DEFINE_enum('smoothness_scale', _LOSS['smoothness_scale'], objective.SMOOTHNESS_SCALES,
                   'Disparity units the smoothness term sees.')
+flags.DEFINE_float('omega_gt', _LOSS['omega_gt'], 'Weight of an L1 loss on ground-truth '
+                   'disparity where the data has it (not in the paper: 0).')
+flags.DEFINE_boolean('census_cost', _MODEL['census_cost'], 'Give the 3D network the census '
+                     "matching cost of its views (the classical matcher's cost; not in the "
+                     'paper).')
 # The embedded `sample` source.
-flags.DEFINE_integer('sample_scenes', 2000, 'Procedural training scenes of `sample`.')
+flags.DEFINE_integer('sample_scenes', _DATA['sample_scenes'],
+                     'Procedural training scenes of `sample`.')
 flags.DEFINE_integer('sample_height', None, 'Height of `sample` scenes (default: '
                      '--crop_height).')
 flags.DEFINE_integer('sample_width', None, 'Width of `sample` scenes (default: --crop_width).')
+flags.DEFINE_string('texture_dir', _DATA['texture_dir'], 'A folder of photographs texturing '
+                    'the `sample` training scenes (default: scikit-image pictures).')
+flags.DEFINE_boolean('realistic_scenes', _DATA['realistic_scenes'], '`sample` training '
+                     'scenes with ground planes, thin poles and more layers.')
+flags.DEFINE_boolean('degrade', _PIPE['degrade'], 'Degrade each mixture like a real file '
+                     '(noise, blur, JPEG, vignetting, channel imbalance; not in the paper).')
+
+_RENAMED = {'DataConfig.split_list': 'train_list'}
 
 
 def _ints(values, name):
@@ -91,27 +127,42 @@ def _ints(values, name):
 def build_configs():
   """Builds the frozen configs from the parsed flags (the only place FLAGS is read)."""
   data_config = sources.DataConfig(
-      dataset=FLAGS.dataset, data_dir=FLAGS.data_dir, train_list=FLAGS.train_list,
+      dataset=FLAGS.dataset, data_dir=FLAGS.data_dir, split_list=FLAGS.train_list,
       skip_bad_pairs=FLAGS.skip_bad_pairs, sample_scenes=FLAGS.sample_scenes,
       # `sample` scenes default to the crop size so that crops are not mostly padding.
       sample_height=FLAGS.sample_height or FLAGS.crop_height,
       sample_width=FLAGS.sample_width or FLAGS.crop_width,
-      max_disparity=FLAGS.max_disparity,
-      middlebury_scales=sources.parse_scene_scales(FLAGS.middlebury_scale))
+      max_disparity=FLAGS.max_disparity, middlebury_scales=cli_flags.middlebury_scales(),
+      allow_evaluation_scenes=FLAGS.allow_evaluation_scenes, texture_dir=FLAGS.texture_dir,
+      realistic_scenes=FLAGS.realistic_scenes)
   pipeline_config = pipeline.PipelineConfig(
-      mixture=FLAGS.mixture, crop_height=FLAGS.crop_height, crop_width=FLAGS.crop_width,
-      batch_size=FLAGS.batch_size, augment=FLAGS.augment, flip=FLAGS.flip, seed=FLAGS.seed,
-      skip_bad_pairs=FLAGS.skip_bad_pairs)
+      mixture=FLAGS.mixture or _PIPE['mixture'], crop_height=FLAGS.crop_height,
+      crop_width=FLAGS.crop_width, batch_size=FLAGS.batch_size, augment=FLAGS.augment,
+      flip=FLAGS.flip, seed=FLAGS.seed, skip_bad_pairs=FLAGS.skip_bad_pairs,
+      degrade=FLAGS.degrade)
   model_config = models.ModelConfig(
       separation_widths=_ints(FLAGS.unet_widths, 'unet_widths'),
       stereo_features=FLAGS.stereo_features, stereo_residual_blocks=FLAGS.num_res_blocks,
       stereo_3d_widths=_ints(FLAGS.volume_features, 'volume_features'),
-      max_disparity=FLAGS.max_disparity)
+      max_disparity=FLAGS.max_disparity, census_cost=FLAGS.census_cost,
+      # Monocular depth (I = I_L): the input is the left view (paper section 3.1).
+      input_is_left=pipeline_config.mixture == 'monocular')
   loss_config = objective.LossConfig(
       alpha_c=FLAGS.alpha_c, alpha_p=FLAGS.alpha_p, omega_w=FLAGS.omega_w,
       omega_s=FLAGS.omega_s, lambda_ssim=FLAGS.lambda_ssim, lambda_l1=FLAGS.lambda_l1,
-      smoothness_scale=FLAGS.smoothness_scale)
+      smoothness_scale=FLAGS.smoothness_scale, omega_gt=FLAGS.omega_gt)
   return data_config, pipeline_config, model_config, loss_config
+
+
+def _train_config(num_steps: int) -> config_lib.TrainConfig:
+  return config_lib.TrainConfig(
+      model_dir=FLAGS.model_dir, mode=FLAGS.mode, learning_rate=FLAGS.learning_rate,
+      optimizer=FLAGS.optimizer,
+      num_steps=num_steps, jit_compile=FLAGS.jit_compile, strategy=FLAGS.strategy,
+      mixed_precision=FLAGS.mixed_precision, init_checkpoint=FLAGS.init_checkpoint,
+      checkpoint_every=FLAGS.checkpoint_every, summary_every=FLAGS.summary_every,
+      image_summary_every=FLAGS.image_summary_every, log_every=FLAGS.log_every,
+      seed=FLAGS.seed)
 
 
 def main(argv):
@@ -124,18 +175,12 @@ def main(argv):
       if getattr(FLAGS, name) % model_config.size_multiple:
         raise ValueError(f'--{name}={getattr(FLAGS, name)} must be a multiple of '
                          f'{model_config.size_multiple} for this architecture.')
-    samples = sources.load_samples(data_config, split='train')
+    samples = sources.list_samples(data_config, split='train')
     num_steps = FLAGS.num_steps or math.ceil(
         FLAGS.num_epochs * len(samples) / FLAGS.batch_size)
-    train_config = config_lib.TrainConfig(
-        model_dir=FLAGS.model_dir, mode=FLAGS.mode, learning_rate=FLAGS.learning_rate,
-        num_steps=num_steps, jit_compile=FLAGS.jit_compile, strategy=FLAGS.strategy,
-        mixed_precision=FLAGS.mixed_precision, init_checkpoint=FLAGS.init_checkpoint,
-        checkpoint_every=FLAGS.checkpoint_every, summary_every=FLAGS.summary_every,
-        image_summary_every=FLAGS.image_summary_every, log_every=FLAGS.log_every,
-        seed=FLAGS.seed)
+    train_config = _train_config(num_steps)
   except ValueError as e:
-    raise app.UsageError(str(e)) from None
+    raise cli_flags.usage_error(e, _RENAMED) from None
   logging.info('Training on %d pairs from %s for %d steps.', len(samples), FLAGS.dataset,
                num_steps)
   try:

@@ -12,11 +12,15 @@ import tensorflow as tf
 
 from mixstereo_tf import inference
 from mixstereo_tf import models
+from mixstereo_tf import runs
 from mixstereo_tf import serving
 from mixstereo_tf.data import sample
 from mixstereo_tf.evaluation import report
+from mixstereo_tf.evaluation import results
 from mixstereo_tf.evaluation import runner
 from tests import runner_test
+
+EvalConfig = results.EvalConfig
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Size multiple 4, disparity range 8: a forward pass on 32 x 64 takes milliseconds.
@@ -30,7 +34,7 @@ def _oracle_result(config):
 
 def test_middlebury_table_has_the_papers_rows_for_matching_scenes(tmp_path):
   root = runner_test.make_middlebury(tmp_path / 'mb')
-  result = _oracle_result(runner.EvalConfig('middlebury', 'anaglyph', root))
+  result = _oracle_result(EvalConfig('middlebury', 'anaglyph', root))
   text = report.format_report(result)
   lines = text.splitlines()
   assert 'this run (model)' in text and '2 of 2 images' in lines[0]
@@ -45,13 +49,13 @@ def test_middlebury_table_has_the_papers_rows_for_matching_scenes(tmp_path):
   mean = next(i for i, l in enumerate(lines) if l.startswith('mean'))
   assert '5.93%' in lines[mean + 1] and '26.82%' in lines[mean + 2]
   # The paper has no diplopia Middlebury numbers: only our rows.
-  diplopia = _oracle_result(runner.EvalConfig('middlebury', 'diplopia', root))
-  assert 'paper' not in report.format_report(diplopia)
+  diplopia = _oracle_result(EvalConfig('middlebury', 'diplopia', root))
+  assert 'paper:' not in report.format_report(diplopia)  # Row labels 'paper: <method>'.
 
 
 def test_kitti_tables_partial_rule_and_paper_rows(tmp_path):
   root = runner_test.make_kitti2015(tmp_path / 'kitti')
-  config = runner.EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
+  config = EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
   result = _oracle_result(config)
   text = report.format_report(result)
   assert 'partial: 2 of 200 images' in text
@@ -59,10 +63,9 @@ def test_kitti_tables_partial_rule_and_paper_rows(tmp_path):
     assert number in text, number
   ours = next(l for l in text.splitlines() if l.startswith('this run'))
   assert ours.split()[3:6] == ['100.00', '100.00', '0.00%']
-  assert 'colour restoration on' in text  # The default for a channel anaglyph.
-  unrestored = dataclasses.replace(result, config=dataclasses.replace(config,
-                                                                      restore_colour=False))
-  assert 'colour restoration off' in report.format_report(unrestored)
+  assert 'colour restoration off' in text  # The test predictor restores nothing.
+  restored = dataclasses.replace(result, restore_colour=True)
+  assert 'colour restoration on' in report.format_report(restored)
   refused = dataclasses.replace(result, config=dataclasses.replace(config, allow_partial=False))
   with pytest.raises(ValueError, match='allow_partial'):
     report.format_report(refused)
@@ -74,16 +77,24 @@ def test_kitti_tables_partial_rule_and_paper_rows(tmp_path):
 
 def test_eigen_and_sample_tables(tmp_path):
   list_path = runner_test._write_eigen(str(tmp_path))  # pylint: disable=protected-access
-  config = runner.EvalConfig('eigen', 'monocular', str(tmp_path), eigen_list=list_path)
-  result = runner.evaluate(config, lambda m: {'left': m, 'right': m,
-                                              'disparity_left': m[..., 0] * 0.0 + 1.0})
+  config = EvalConfig('eigen', 'monocular', str(tmp_path), split_list=list_path)
+  result = runner.evaluate(config, runner_test.unmixer(lambda m: {
+      'left': m, 'right': m, 'disparity_left': m[..., 0] * 0.0 + 1.0}, 'monocular'))
   text = report.format_report(result)
+  lines = text.splitlines()
   assert 'abs_rel' in text and 'a3' in text and '1 of 1 images' in text
-  assert '0.126' in text and 'paper: Godard et al.' in text and '4.471' in text
-  # The calibration's focal length, 100 px: 1 px is 54 m for GT 10 m, abs_rel 4.4.
-  assert text.splitlines()[3].split()[3] == '4.400'
-  sample_result = _oracle_result(runner.EvalConfig('sample', 'anaglyph', max_disparity=8,
-                                                   sample_scenes=1))
+  # One table per cap, each with the paper's rows of that cap.
+  cap50 = next(i for i, l in enumerate(lines) if l.startswith('Eigen split depth, cap 50 m'))
+  cap80 = next(i for i, l in enumerate(lines) if l.startswith('Eigen split depth, cap 80 m'))
+  assert cap50 < cap80
+  assert '0.126' in '\n'.join(lines[cap50:cap80]) and '4.471' in '\n'.join(lines[cap50:cap80])
+  assert 'paper: Zhou et al.' in '\n'.join(lines[cap80:]) and '6.709' in '\n'.join(lines[cap80:])
+  assert 'paper: Zhou et al.' not in '\n'.join(lines[cap50:cap80])
+  # The calibration's focal length, 100 px: 1 px is 54 m for GT 10 m, clamped to the cap.
+  assert lines[cap50 + 3].split()[3] == '4.000'  # |50 - 10| / 10.
+  assert lines[cap80 + 3].split()[3] == '4.400'  # |54 - 10| / 10.
+  sample_result = _oracle_result(EvalConfig('sample', 'anaglyph', max_disparity=8,
+                                            heldout_scenes=1))
   lines = report.format_report(sample_result).splitlines()
   assert lines[3].startswith('synthetic_heldout_00000')
   assert lines[5].startswith('mean') and 'this run' in lines[5] and '0.00%' in lines[5]
@@ -92,7 +103,7 @@ def test_eigen_and_sample_tables(tmp_path):
 
 def test_write_csv_one_row_per_image(tmp_path):
   root = runner_test.make_kitti2015(tmp_path / 'kitti', frames=3)
-  result = _oracle_result(runner.EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True))
+  result = _oracle_result(EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True))
   path = str(tmp_path / 'rows.csv')
   report.write_csv(path, result.rows)
   with open(path, newline='', encoding='utf-8') as f:
@@ -127,6 +138,7 @@ def test_cli_kitti_partial_rule_csv_and_markdown(run_dir, tmp_path):
   refused = _cli('--protocol=kitti2015', f'--data_dir={root}', f'--checkpoint={run_dir}')
   assert refused.returncode != 0
   assert '2 of 200' in refused.stderr and '--allow_partial' in refused.stderr
+  assert 'EvalConfig' not in refused.stderr  # Config fields are named as flags.
   csv_path, md_path = tmp_path / 'rows.csv', tmp_path / 'table.md'
   done = _cli('--protocol=kitti2015', f'--data_dir={root}', f'--checkpoint={run_dir}',
               '--allow_partial', f'--output_csv={csv_path}', f'--output_markdown={md_path}')
@@ -158,10 +170,11 @@ def test_cli_middlebury_and_flag_errors(run_dir, tmp_path):
 
 def _sample_rows_in_process(run_dir, restore_colour):
   """The sample protocol's rows for the run, evaluated in this process (the reference)."""
-  model, info = inference.load_run(run_dir)
-  config = runner.EvalConfig('sample', info.mixture, sample_scenes=1,
-                             max_disparity=info.model_config.max_disparity)
-  return runner.evaluate(config, inference.Unmixer.from_model(model, info, restore_colour)).rows
+  unmixer = inference.build_unmixer(inference.PredictorConfig(
+      checkpoint=run_dir, restore_colour=restore_colour))
+  config = EvalConfig('sample', unmixer.mixture, heldout_scenes=1,
+                      max_disparity=int(unmixer.max_disparity))
+  return runner.evaluate(config, unmixer).rows
 
 
 def _assert_csv_matches(path, expected):
@@ -177,7 +190,7 @@ def _assert_csv_matches(path, expected):
 
 def test_cli_sample_protocol_on_a_checkpoint(run_dir, tmp_path):
   csv_path = tmp_path / 'rows.csv'
-  done = _cli('--protocol=sample', f'--checkpoint={run_dir}', '--sample_scenes=1',
+  done = _cli('--protocol=sample', f'--checkpoint={run_dir}', '--heldout_scenes=1',
               f'--output_csv={csv_path}')
   assert done.returncode == 0, done.stderr[-3000:]
   lines = done.stdout.splitlines()
@@ -192,10 +205,11 @@ def test_cli_sample_protocol_on_a_checkpoint(run_dir, tmp_path):
 
 
 def test_cli_sample_protocol_on_a_saved_model(run_dir, tmp_path):
-  model, info = inference.load_run(run_dir)
-  export_dir = serving.export_saved_model(model, info, str(tmp_path / 'export'))
+  model, info = runs.load_run(run_dir)
+  export_dir = serving.export_saved_model(inference.serving_function(model), model.variables,
+                                          info, str(tmp_path / 'export'))
   csv_path = tmp_path / 'rows.csv'
-  done = _cli('--protocol=sample', f'--saved_model={export_dir}', '--sample_scenes=1',
+  done = _cli('--protocol=sample', f'--saved_model={export_dir}', '--heldout_scenes=1',
               '--norestore_colour', f'--output_csv={csv_path}')
   assert done.returncode == 0, done.stderr[-3000:]
   assert done.stdout.startswith('Sample held-out set, anaglyph') and 'mean' in done.stdout

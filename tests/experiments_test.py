@@ -22,7 +22,8 @@ for path in sys.argv[1:]:
   out[path] = {'data': dataclasses.asdict(data), 'pipeline': dataclasses.asdict(pipe),
                'model': model.to_dict(), 'loss': dataclasses.asdict(loss),
                'num_steps': flags.FLAGS.num_steps, 'num_epochs': flags.FLAGS.num_epochs,
-               'mode': flags.FLAGS.mode, 'init_checkpoint': flags.FLAGS.init_checkpoint}
+               'mode': flags.FLAGS.mode, 'init_checkpoint': flags.FLAGS.init_checkpoint,
+               'optimizer': flags.FLAGS.optimizer}
 print(json.dumps(out))
 '''
 
@@ -51,6 +52,9 @@ def test_every_flagfile_builds_valid_configs():
     assert run['model']['separation_widths'] == [32, 64, 128, 256, 512, 512], name
     assert run['pipeline']['batch_size'] == 1, name
     assert run['loss']['alpha_p'] == 0.2 and run['loss']['omega_s'] == 0.05, name
+    # Issue 14's measured choices (experiments/results/fidelity.md).
+    assert run['optimizer'] == 'rmsprop_tf1', name
+    assert run['loss']['smoothness_scale'] == 'width', name
   assert parsed['kitti_anaglyph.flags']['pipeline']['crop_width'] == 512
   assert parsed['middlebury_anaglyph_finetune.flags']['pipeline']['crop_height'] == 384
   assert parsed['eigen_monocular.flags']['pipeline']['mixture'] == 'monocular'

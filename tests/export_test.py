@@ -11,6 +11,7 @@ import pytest
 
 from mixstereo_tf import inference
 from mixstereo_tf import models
+from mixstereo_tf import runs
 from mixstereo_tf import serving
 from tests import inference_test
 
@@ -53,14 +54,15 @@ def exported(tmp_path_factory):
   root = tmp_path_factory.mktemp('export')
   model, _ = inference_test.make_run_dir(str(root / 'run'), mixture='diplopia', seed=3)
   export_dir = str(root / 'saved')
-  result = _run([sys.executable, '-m', 'mixstereo_tf.export', f'--model_dir={root / "run"}',
+  result = _run([sys.executable, '-m', 'mixstereo_tf.export', f'--checkpoint={root / "run"}',
                  f'--export_dir={export_dir}'], cwd=REPO)
   assert result.returncode == 0, result.stderr[-3000:]
-  return model, inference.RunInfo('diplopia', 64, 128, inference_test.TINY), export_dir
+  return model, runs.RunInfo('diplopia', 64, 128, inference_test.TINY), export_dir, str(
+      root / 'run')
 
 
 def test_plain_tensorflow_loads_the_export_and_matches_keras(exported, tmp_path):
-  model, info, export_dir = exported
+  _, info, export_dir, run_dir = exported
   rng = np.random.RandomState(0)
   images = {f'{h}x{w}': rng.randint(0, 256, (h, w, 3)).astype(np.uint8) for h, w in SIZES}
   np.savez(tmp_path / 'in.npz', **images)
@@ -77,7 +79,8 @@ def test_plain_tensorflow_loads_the_export_and_matches_keras(exported, tmp_path)
   assert meta['size_multiple'] == 32
   assert models.ModelConfig.from_dict(json.loads(meta['model_config'])) == info.model_config
 
-  unmixer = inference.Unmixer.from_model(model, info, restore_colour=False)
+  unmixer = inference.build_unmixer(inference.PredictorConfig(checkpoint=run_dir,
+                                                              restore_colour=False))
   with np.load(tmp_path / 'out.npz') as served:
     for key, image in images.items():
       expected = unmixer(image)
@@ -95,28 +98,31 @@ def test_plain_tensorflow_loads_the_export_and_matches_keras(exported, tmp_path)
 
 
 def test_saved_model_unmixer_reads_the_metadata(exported):
-  model, info, export_dir = exported
-  unmixer = inference.Unmixer.from_saved_model(export_dir)
-  assert unmixer.run_info == info and not unmixer.restore_colour
+  _, info, export_dir, run_dir = exported
+  unmixer = inference.build_unmixer(inference.PredictorConfig(saved_model=export_dir))
+  assert (unmixer.mixture, unmixer.max_disparity) == ('diplopia', info.model_config.max_disparity)
+  assert not unmixer.restore_colour
   image = np.random.RandomState(2).randint(0, 256, (45, 70, 3)).astype(np.uint8)
-  expected = inference.Unmixer.from_model(model, info)(image)
+  expected = inference.build_unmixer(inference.PredictorConfig(checkpoint=run_dir))(image)
   got = unmixer(image)
   np.testing.assert_allclose(got['disparity_left'], expected['disparity_left'], atol=1e-4)
   assert np.abs(got['left'].astype(int) - expected['left']).max() <= 1
   with open(os.path.join(export_dir, 'assets.extra', serving.RUN_INFO_FILE)) as f:
-    assert inference.RunInfo.from_dict(json.load(f)) == info
+    assert json.load(f) == info.to_dict()
+  assert serving.load_saved_model(export_dir)[1] == info
 
 
 def test_export_errors(exported, tmp_path):
-  model, info, export_dir = exported
+  model, info, export_dir, _ = exported
   with pytest.raises(ValueError, match='already holds'):
-    serving.export_saved_model(model, info, export_dir)
+    serving.export_saved_model(inference.serving_function(model), model.variables, info,
+                               export_dir)
   with pytest.raises(ValueError, match='No SavedModel'):
     serving.load_saved_model(str(tmp_path))
 
 
 def test_the_checkpoint_weights_were_exported(exported):
-  model, _, export_dir = exported
+  model, _, export_dir, _ = exported
   loaded, _ = serving.load_saved_model(export_dir)
   assert len(loaded.model_variables) == len(model.variables)
   for saved, restored in zip(model.variables, loaded.model_variables):

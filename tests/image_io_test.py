@@ -9,6 +9,8 @@ import pytest
 
 from mixstereo_tf.data import image_io
 from mixstereo_tf.data import records
+from mixstereo_tf.data import sources
+from tests import data_helpers
 
 
 def _write(path, array):
@@ -103,10 +105,10 @@ def test_pfm_round_trip_keeps_inf_nan_and_row_order(tmp_path):
   gray = np.arange(12, dtype=np.float32).reshape(3, 4) - 2.5
   gray[0, 0], gray[2, 3] = np.inf, np.nan
   path = str(tmp_path / 'd.pfm')
-  image_io.write_pfm(path, gray)
+  data_helpers.write_pfm(path, gray)
   np.testing.assert_array_equal(image_io.read_pfm(path), gray)  # NaN == NaN here.
   color = np.random.default_rng(1).normal(size=(2, 5, 3)).astype(np.float32)
-  image_io.write_pfm(path, color)
+  data_helpers.write_pfm(path, color)
   np.testing.assert_array_equal(image_io.read_pfm(path), color)
 
 
@@ -141,7 +143,7 @@ def test_8_bit_and_pfm_disparity(tmp_path):
   np.testing.assert_allclose(disparity, [[5, 0, 1]])
   np.testing.assert_array_equal(valid, [[True, False, True]])
   pfm = str(tmp_path / 'disp0.pfm')
-  image_io.write_pfm(pfm, np.array([[2.5, np.inf, np.nan, 0.0]], np.float32))
+  data_helpers.write_pfm(pfm, np.array([[2.5, np.inf, np.nan, 0.0]], np.float32))
   disparity, valid = image_io.read_disparity(pfm)
   np.testing.assert_array_equal(disparity, [[2.5, 0, 0, 0]])
   np.testing.assert_array_equal(valid, [[True, False, False, False]])
@@ -181,7 +183,7 @@ def test_load_sample_keys_dtypes_and_masks(tmp_path):
       all_left=_write(tmp_path / 'all.png', all_mask),
       nonocc_left=_write(tmp_path / 'noc.png', nonocc),
       disc_left=_write(tmp_path / 'disc.png', disc), source='list.txt:3')
-  loaded = records.load_sample(sample)
+  loaded = sources.load_sample(sample)
   assert set(loaded) == set(records.LOADED_KEYS)
   for key, dtype in records.LOADED_KEYS.items():
     assert loaded[key].dtype == dtype, key
@@ -202,7 +204,7 @@ def test_load_sample_keys_dtypes_and_masks(tmp_path):
 def test_load_sample_without_gt_or_masks(tmp_path):
   left, right = _sample_files(tmp_path)
   pfm = str(tmp_path / 'd.pfm')
-  image_io.write_pfm(pfm, np.ones((8, 12), np.float32))
+  data_helpers.write_pfm(pfm, np.ones((8, 12), np.float32))
   loaded = image_io.load_file_sample(records.StereoSample('a', left, right))
   assert not loaded['valid_left'].any() and not loaded['nonocc_left'].any()
   assert not loaded['disc_left'].any()

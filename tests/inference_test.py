@@ -1,8 +1,6 @@
-"""Tests for mixstereo_tf.inference: run loading, padding, the Unmixer."""
+"""Tests for mixstereo_tf.inference: padding, the Unmixer and its registry of methods."""
 
-import json
 import os
-import shutil
 
 import numpy as np
 import pytest
@@ -10,8 +8,8 @@ import tensorflow as tf
 
 from mixstereo_tf import inference
 from mixstereo_tf import models
+from mixstereo_tf import runs
 from mixstereo_tf.data import pipeline
-from mixstereo_tf.training import config as train_config
 
 # Tiny architecture: forward passes take milliseconds; size multiple 32.
 TINY = models.ModelConfig(separation_widths=(4, 4, 4, 4, 4, 4), stereo_features=2,
@@ -24,7 +22,7 @@ def make_run_dir(path, mixture='anaglyph', seed=1):
   model = models.build_model(TINY)
   os.makedirs(path, exist_ok=True)
   with open(os.path.join(path, 'config.json'), 'w') as f:
-    f.write(train_config.to_json(
+    f.write(runs.to_json(
         model=TINY, pipeline=pipeline.PipelineConfig(mixture=mixture, crop_height=64,
                                                      crop_width=128)))
   checkpoint = tf.train.Checkpoint(model=model, optimizer=tf.keras.optimizers.RMSprop(1e-4))
@@ -51,44 +49,12 @@ def test_pad_to_multiple_replicates_edges_and_crop_inverts():
     inference.pad_to_multiple(image, 0)
 
 
-def test_load_run_restores_the_weights(run):
-  path, model, prefix = run
-  for source in (path, prefix):
-    loaded, info = inference.load_run(source)
-    assert info == inference.RunInfo('anaglyph', 64, 128, TINY)
-    for saved, restored in zip(model.variables, loaded.variables):
-      np.testing.assert_array_equal(saved.numpy(), restored.numpy())
-
-
-def test_load_run_errors(tmp_path, run):
-  path, model, prefix = run
-  with pytest.raises(ValueError, match='No checkpoint'):
-    inference.load_run(str(tmp_path))
-  with pytest.raises(ValueError, match='Checkpoint not found'):
-    inference.load_run(prefix + '-nope')
-  no_config = tmp_path / 'no_config'
-  shutil.copytree(path, no_config)
-  os.remove(no_config / 'config.json')
-  with pytest.raises(ValueError, match='config.json'):
-    inference.load_run(str(no_config))
-  broken = tmp_path / 'broken'
-  shutil.copytree(path, broken)
-  (broken / 'config.json').write_text(json.dumps({'model': TINY.to_dict()}))
-  with pytest.raises(ValueError, match='pipeline'):
-    inference.load_run(str(broken))
-  # A checkpoint with only the separation network's weights cannot restore the model.
-  partial = tmp_path / 'partial'
-  partial.mkdir()
-  shutil.copy(os.path.join(path, 'config.json'), partial)
-  part = tf.train.Checkpoint(model=tf.train.Checkpoint(separation=model.separation))
-  with pytest.raises(ValueError, match='weights'):
-    inference.load_run(part.write(str(partial / 'ckpt-1')))
-
-
 def test_unmixer_odd_size_equals_padded_model_output(run):
-  _, model, _ = run
-  info = inference.RunInfo('anaglyph', 64, 128, TINY)
-  unmixer = inference.Unmixer.from_model(model, info, restore_colour=False)
+  path, model, _ = run
+  # The range the network's levels cover: no shift, no scaling around it.
+  unmixer = inference.build_unmixer(inference.PredictorConfig(
+      checkpoint=path, restore_colour=False, disparity_range=(0, TINY.max_disparity - 1)))
+  assert (unmixer.method, unmixer.mixture, unmixer.max_disparity) == ('model', 'anaglyph', 4)
   image = np.random.RandomState(0).randint(0, 256, (97, 131, 3)).astype(np.uint8)
   out = unmixer(image)
   assert out['left'].shape == out['right'].shape == (97, 131, 3)
@@ -110,21 +76,74 @@ def test_unmixer_odd_size_equals_padded_model_output(run):
   np.testing.assert_array_equal(gray['left'], unmixer(np.repeat(image[:, :, :1], 3, 2))['left'])
 
 
-def test_unmixer_restores_the_anaglyph_channels(run):
-  _, model, _ = run
-  info = inference.RunInfo('anaglyph', 64, 128, TINY)
-  unmixer = inference.Unmixer.from_model(model, info)
+def test_unmixer_restores_the_anaglyph_channels(run, tmp_path):
+  path, _, _ = run
+  unmixer = inference.build_unmixer(inference.PredictorConfig(checkpoint=path))
   assert unmixer.restore_colour  # Default on for channel anaglyphs.
   image = np.random.RandomState(1).randint(0, 256, (40, 50, 3)).astype(np.uint8)
   out = unmixer(image)
-  raw = inference.Unmixer.from_model(model, info, restore_colour=False)(image)
+  raw = inference.build_unmixer(inference.PredictorConfig(checkpoint=path,
+                                                          restore_colour=False))(image)
   # Red-cyan: the left view's red and the right view's green and blue are the mixture's.
   np.testing.assert_array_equal(out['left'][..., 0], image[..., 0])
   np.testing.assert_array_equal(out['right'][..., 1:], image[..., 1:])
   assert not np.array_equal(raw['left'][..., 0], image[..., 0])
   np.testing.assert_array_equal(out['disparity_left'], raw['disparity_left'])
   # Diplopia keeps no channel: restoration is off by default.
-  assert not inference.Unmixer.from_model(
-      model, inference.RunInfo('diplopia', 64, 128, TINY)).restore_colour
+  diplopia_run = str(tmp_path / 'diplopia')
+  make_run_dir(diplopia_run, mixture='diplopia')
+  assert not inference.build_unmixer(
+      inference.PredictorConfig(checkpoint=diplopia_run)).restore_colour
   with pytest.raises(ValueError, match='uint8'):
     unmixer(image.astype(np.float32))
+
+
+def test_build_unmixer_checks_its_arguments(tmp_path):
+  build = lambda **kwargs: inference.build_unmixer(inference.PredictorConfig(**kwargs))
+  with pytest.raises(ValueError, match='exactly one of PredictorConfig.saved_model'):
+    build()
+  with pytest.raises(ValueError, match='exactly one'):
+    build(saved_model='a', checkpoint='b')
+  with pytest.raises(ValueError, match='takes neither'):
+    build(method='classical', saved_model='a', mixture='anaglyph')
+  with pytest.raises(ValueError, match='needs PredictorConfig.mixture'):
+    build(method='classical')
+  with pytest.raises(ValueError, match='monocular'):
+    build(method='classical', mixture='monocular')
+  with pytest.raises(ValueError, match='anaglyph'):
+    build(checkpoint='x', mixture='no_such_mixture')
+  with pytest.raises(ValueError, match="method 'model' only"):
+    build(method='classical', mixture='anaglyph', restore_colour=True)
+  with pytest.raises(ValueError, match='Unknown PredictorConfig.method'):
+    build(method='magic')
+  with pytest.raises(ValueError, match='needs PredictorConfig.checkpoint'):
+    build(method='oracle', saved_model='x')
+  run_dir = str(tmp_path / 'run')
+  make_run_dir(run_dir, mixture='diplopia')
+  with pytest.raises(ValueError, match="trained on 'diplopia'"):
+    build(checkpoint=run_dir, mixture='anaglyph')
+  unmixer = build(checkpoint=run_dir)
+  assert unmixer.mixture == 'diplopia' and unmixer.max_disparity == TINY.max_disparity
+  classical = build(method='classical', mixture='diplopia')
+  assert (classical.method, classical.mixture, classical.takes_pair) == (
+      'classical', 'diplopia', False)
+  oracle = build(method='oracle', checkpoint=run_dir, mixture='anaglyph')
+  assert oracle.takes_pair and oracle.mixture == 'anaglyph'
+
+
+def test_pair_function_pads_runs_the_stereo_module_and_crops():
+  tf.keras.utils.set_random_seed(0)
+  config = models.ModelConfig(separation_widths=(4, 4), stereo_features=4,
+                              stereo_residual_blocks=1, stereo_3d_widths=(4,),
+                              max_disparity=8)
+  model = models.build_model(config)
+  predict = inference.pair_function(model)
+  rng = np.random.RandomState(1)
+  left, right = (rng.randint(0, 256, (32, 64, 3)).astype(np.uint8) for _ in range(2))
+  out = predict(left, right)
+  direct = model.compute_disparity(tf.constant(left[None], tf.float32) / 127.5 - 1.0,
+                                   tf.constant(right[None], tf.float32) / 127.5 - 1.0)
+  np.testing.assert_allclose(out['disparity_left'], direct['disparity_left'][0, ..., 0],
+                             atol=1e-5)
+  cropped = predict(left[:30, :62], right[:30, :62])
+  assert cropped['disparity_left'].shape == cropped['disparity_right'].shape == (30, 62)

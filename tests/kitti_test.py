@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.data import kitti
-from mixstereo_tf.data import records
 from mixstereo_tf.data import sources
 
 _DRIVE = '2011_09_26/2011_09_26_drive_0002_sync'
@@ -48,7 +47,7 @@ def test_split_list_resolves_png_and_attaches_name_calib_source(tmp_path):
   assert sample.right == os.path.join(data_dir, _DRIVE, 'image_03', 'data', '0000000069.png')
   assert sample.calib == os.path.join(data_dir, '2011_09_26')
   assert sample.source == f'{list_path}:3'
-  assert records.load_sample(sample)['left'].shape == (8, 12, 3)
+  assert sources.load_sample(sample)['left'].shape == (8, 12, 3)
 
 
 def test_velodyne_path():
@@ -92,22 +91,22 @@ def test_skip_bad_pairs_counts_skips(tmp_path):
   assert 'files.txt:2' in split.skipped[0] and 'files.txt:4' in split.skipped[1]
 
 
-def test_load_samples_reports_skipped_pairs(tmp_path, caplog):
+def test_list_samples_reports_skipped_pairs(tmp_path, caplog):
   data_dir = str(tmp_path / 'raw')
   for frame in ('0000000001', '0000000004'):
     _raw_frame(data_dir, frame)
   list_path = _list(tmp_path, '\n'.join(['# header'] + [_entry(f'000000000{i}')
                                                          for i in (1, 2, 3, 4)]))
-  config = sources.DataConfig(dataset='kitti_raw', data_dir=data_dir, train_list=list_path,
+  config = sources.DataConfig(dataset='kitti_raw', data_dir=data_dir, split_list=list_path,
                               skip_bad_pairs=True)
   caplog.set_level(logging.WARNING)
-  samples = sources.load_samples(config)
+  samples = sources.list_samples(config)
   assert [s.name[-1] for s in samples] == ['1', '4']
   summary = [r.getMessage() for r in caplog.records if 'skipped 2 of 4 pairs' in r.getMessage()]
   assert len(summary) == 1 and summary[0].endswith('at lines 3, 4.'), caplog.text
   assert list_path in summary[0]
   caplog.clear()
-  sources.load_samples(dataclasses.replace(config, train_list=_list(tmp_path, _entry(
+  sources.list_samples(dataclasses.replace(config, split_list=_list(tmp_path, _entry(
       '0000000001'))))
   assert 'skipped' not in caplog.text
 
@@ -154,7 +153,7 @@ def test_kitti_stereo_samples(tmp_path, version, give_split_folder):
   samples = kitti.kitti_stereo_samples(str(data_dir), version=version)
   assert [s.name for s in samples] == ['000000_10', '000001_10']
   assert samples[0].disparity_scale == 256
-  loaded = records.load_sample(samples[0])
+  loaded = sources.load_sample(samples[0])
   assert loaded['left'][0, 0, 0] == 10 and loaded['right'][0, 0, 0] == 20
   np.testing.assert_array_equal(loaded['disparity_left'][0], [0, 0] + [4] * 10)
   np.testing.assert_array_equal(loaded['valid_left'][0], [False] * 2 + [True] * 10)
@@ -175,3 +174,14 @@ def test_kitti_stereo_without_gt_and_bad_input(tmp_path):
   os.remove(tmp_path / 'testing' / 'image_3' / '000000_10.png')
   with pytest.raises(ValueError, match='image_3/000000_10.png'):
     kitti.kitti_stereo_samples(str(tmp_path), split='testing')
+
+
+def test_training_refuses_the_kitti2015_training_frames(tmp_path):
+  from tests import runner_test  # pylint: disable=g-import-not-at-top
+  root = runner_test.make_kitti2015(tmp_path / 'kitti', frames=1)
+  config = sources.DataConfig(dataset='kitti2015', data_dir=root)
+  with pytest.raises(ValueError, match='KITTI 2015 training frames.*allow_evaluation_scenes'):
+    sources.list_samples(config, split='train')
+  assert len(sources.list_samples(config, split='heldout')) == 1
+  assert len(sources.list_samples(dataclasses.replace(config, allow_evaluation_scenes=True),
+                                  split='train')) == 1

@@ -9,6 +9,7 @@ import tensorflow as tf
 
 from mixstereo_tf import models
 from mixstereo_tf import objective
+from mixstereo_tf import runs
 from mixstereo_tf.training import config as config_lib
 from mixstereo_tf.training import loop
 from tests import training_helpers
@@ -83,7 +84,7 @@ def test_init_checkpoint_starts_a_new_run_from_given_weights(tmp_path):
 def test_init_checkpoint_may_name_a_run_directory(tmp_path):
   pretrained = _train(tmp_path / 'pretrain', 2)
   weights = _checkpoint_values(pretrained.last_checkpoint)
-  assert loop.resolve_checkpoint(str(tmp_path / 'pretrain')) == pretrained.last_checkpoint
+  assert runs.resolve_checkpoint(str(tmp_path / 'pretrain'))[1] == pretrained.last_checkpoint
   finetune = _train(tmp_path / 'finetune', 1, init_checkpoint=str(tmp_path / 'pretrain'),
                     mode='separation_only')
   after = _checkpoint_values(finetune.last_checkpoint)
@@ -93,10 +94,10 @@ def test_init_checkpoint_may_name_a_run_directory(tmp_path):
 
 def test_init_checkpoint_errors_name_the_path(tmp_path):
   (tmp_path / 'empty').mkdir()
-  with pytest.raises(ValueError, match='directory without a checkpoint'):
-    loop.resolve_checkpoint(str(tmp_path / 'empty'))
-  with pytest.raises(ValueError, match='no .index file'):
-    loop.resolve_checkpoint(str(tmp_path / 'missing' / 'ckpt-3'))
+  with pytest.raises(ValueError, match='No checkpoint in .*empty'):
+    _train(tmp_path / 'run', 1, init_checkpoint=str(tmp_path / 'empty'))
+  with pytest.raises(ValueError, match='missing/ckpt-3 is neither'):
+    _train(tmp_path / 'run2', 1, init_checkpoint=str(tmp_path / 'missing' / 'ckpt-3'))
 
 
 def test_a_crash_before_the_first_step_writes_no_checkpoint(tmp_path):

@@ -1,4 +1,4 @@
-"""Known-answer tests of the loss terms."""
+"""Known-answer tests of the loss terms (images on the [0, 1] scale)."""
 
 import numpy as np
 import pytest
@@ -12,7 +12,7 @@ _C2 = 0.03**2
 
 
 def _random(shape, seed=0, dtype=np.float32):
-  return np.random.default_rng(seed).uniform(-1, 1, shape).astype(dtype)
+  return np.random.default_rng(seed).uniform(0, 1, shape).astype(dtype)
 
 
 def test_ssim_of_identical_images_is_one():
@@ -25,10 +25,10 @@ def test_ssim_of_identical_images_is_one():
 def test_ssim_matches_skimage_on_the_interior():
   # float64 removes rounding from the comparison; the tolerance is for the algebra only.
   x = _random((1, 10, 12, 3), seed=1, dtype=np.float64)
-  y = np.clip(x + 0.3 * _random((1, 10, 12, 3), seed=2, dtype=np.float64), -1, 1)
+  y = np.clip(x + 0.3 * _random((1, 10, 12, 3), seed=2, dtype=np.float64) - 0.15, 0, 1)
   ours = losses.ssim(x, y).numpy()[0]
-  # Same statistics: 3x3 uniform window, population covariance, data range 1 on [0, 1].
-  _, full = structural_similarity((x[0] + 1) / 2, (y[0] + 1) / 2, win_size=3,
+  # Same statistics: 3x3 uniform window, population covariance, data range 1.
+  _, full = structural_similarity(x[0], y[0], win_size=3,
                                   gaussian_weights=False, use_sample_covariance=False,
                                   data_range=1.0, channel_axis=-1, full=True)
   np.testing.assert_allclose(ours, full[1:-1, 1:-1], atol=1e-10)
@@ -37,8 +37,8 @@ def test_ssim_matches_skimage_on_the_interior():
 
 def test_ssim_of_constant_images():
   a01, b01 = 0.8, 0.3
-  x = np.full((1, 4, 4, 1), 2 * a01 - 1, np.float64)
-  y = np.full((1, 4, 4, 1), 2 * b01 - 1, np.float64)
+  x = np.full((1, 4, 4, 1), a01, np.float64)
+  y = np.full((1, 4, 4, 1), b01, np.float64)
   expected = (2 * a01 * b01 + _C1) / (a01**2 + b01**2 + _C1)  # Zero variances.
   np.testing.assert_allclose(losses.ssim(x, y).numpy(), expected, rtol=1e-12)
 
@@ -50,10 +50,9 @@ def test_appearance_loss_of_identical_images_is_zero():
 
 def test_appearance_loss_of_constant_images():
   a01, b01 = 0.9, 0.2
-  x = np.full((1, 5, 6, 3), 2 * a01 - 1, np.float64)
-  y = np.full((1, 5, 6, 3), 2 * b01 - 1, np.float64)
+  x = np.full((1, 5, 6, 3), a01, np.float64)
+  y = np.full((1, 5, 6, 3), b01, np.float64)
   s = (2 * a01 * b01 + _C1) / (a01**2 + b01**2 + _C1)
-  # L1 on the [0, 1] scale: |0.9 - 0.2| = 0.7, not the [-1, 1] difference 1.4.
   expected = 0.85 * (1 - s) / 2 + 0.15 * abs(a01 - b01)
   np.testing.assert_allclose(float(losses.appearance_loss(x, y, 0.85, 0.15)), expected,
                              rtol=1e-12)
@@ -61,13 +60,13 @@ def test_appearance_loss_of_constant_images():
 
 
 def test_appearance_loss_of_anticorrelated_stripes():
-  stripes = np.tile(np.array([-1.0, 1.0]), 4).reshape(1, 1, 8, 1)
+  stripes = np.tile(np.array([0.0, 1.0]), 4).reshape(1, 1, 8, 1)
   x = np.tile(stripes, (1, 4, 1, 1))
-  # On [0, 1] every 3x3 window of x has mean 1/3 or 2/3, variance 2/9; -x has the
+  # Every 3x3 window of x has mean 1/3 or 2/3, variance 2/9; 1 - x has the
   # complementary mean and covariance -2/9 with x: SSIM < 0, so (1 - SSIM) / 2 > 0.5.
   s = ((2 * (1 / 3) * (2 / 3) + _C1) * (-4 / 9 + _C2) /
        (((1 / 3)**2 + (2 / 3)**2 + _C1) * (4 / 9 + _C2)))
-  np.testing.assert_allclose(float(losses.appearance_loss(x, -x, 1.0, 0.0)), (1 - s) / 2,
+  np.testing.assert_allclose(float(losses.appearance_loss(x, 1 - x, 1.0, 0.0)), (1 - s) / 2,
                              rtol=1e-12)
 
 
@@ -104,8 +103,8 @@ def test_smoothness_edge_weights_hand_computed():
   # A v-only disparity step under a v-only image edge: the v term alone, weighted.
   disparity = np.array([[1.0, 1.0], [4.0, 4.0]]).reshape(1, 2, 2, 1)
   image = np.zeros((1, 2, 2, 3))
-  image[:, 1, :, 0] = 1.0  # One channel steps by 1 in [-1, 1] = 0.5 on [0, 1].
-  # Mean over channels of |dv I| on [0, 1]: 0.5 / 3; dv d = 3 at both columns.
+  image[:, 1, :, 0] = 0.5  # One channel steps by 0.5.
+  # Mean over channels of |dv I|: 0.5 / 3; dv d = 3 at both columns.
   expected = 3.0 * np.exp(-0.5 / 3)
   np.testing.assert_allclose(float(losses.edge_aware_smoothness(disparity, image)),
                              expected, rtol=1e-12)

@@ -67,20 +67,6 @@ def test_png16_round_trip_kitti_convention(tmp_path):
   np.testing.assert_allclose(decoded[0], [0.0, 1.0, 10.5, 37.25])
 
 
-def test_colorize_disparity_fixed_range():
-  disparity = np.array([[0.0, 48.0, 96.0, 200.0]], np.float32)
-  colour = media.colorize_disparity(disparity, 96.0)
-  assert colour.shape == (1, 4, 3) and colour.dtype == np.uint8
-  np.testing.assert_array_equal(colour[0, 0], [0, 0, 4])  # Ramp start.
-  np.testing.assert_array_equal(colour[0, 2], [252, 255, 164])  # Ramp end.
-  np.testing.assert_array_equal(colour[0, 3], colour[0, 2])  # Clipped above the range.
-  # The same value gets the same colour whatever else is in the image.
-  alone = media.colorize_disparity(np.full((1, 1), 48.0, np.float32), 96.0)
-  np.testing.assert_array_equal(alone[0, 0], colour[0, 1])
-  with pytest.raises(ValueError):
-    media.colorize_disparity(disparity, 0.0)
-
-
 def _write_png(path, value, shape=(8, 10, 3)):
   cv2.imwrite(str(path), np.full(shape, value, np.uint8))
 

@@ -8,13 +8,6 @@ import pytest
 from mixstereo_tf.evaluation import metrics
 
 
-def test_to_uint8_rounds_and_clips():
-  values = np.array([-1.5, -1.0, 0.0, 1.0 / 255, 1.0, 2.0])
-  # (x + 1) * 127.5: -63.75, 0, 127.5, ~128.0, 255, 382.5.
-  np.testing.assert_array_equal(metrics.to_uint8(values), [0, 0, 128, 128, 255, 255])
-  assert metrics.to_uint8(values).dtype == np.uint8
-
-
 def test_psnr_of_known_mse():
   gt = np.zeros((4, 5, 3), np.uint8)
   pred = np.full((4, 5, 3), 10, np.uint8)  # MSE = 100 (no uint8 wrap-around).
@@ -175,3 +168,26 @@ def test_accumulators_ignore_nan():
   acc.add({'psnr': 20.0, 'd1_all': 0.1})
   assert acc.means() == {'psnr': 25.0, 'd1_all': 0.1}
   assert acc.counts() == {'psnr': 2, 'd1_all': 1}
+
+
+def test_depth_caps_differ_exactly_where_points_lie_beyond_50_m():
+  rng = np.random.default_rng(7)
+  height, width = 40, 60
+  near = rng.uniform(2.0, 39.0, (height, width))
+  pred = near * rng.uniform(0.8, 1.25, (height, width))  # Below 50 m too (the cap clamps).
+  # Every point nearer than 50 m: the two caps give identical metrics.
+  cap50 = metrics.depth_metrics(pred, near, max_depth=50.0, crop=None)
+  cap80 = metrics.depth_metrics(pred, near, max_depth=80.0, crop=None)
+  assert cap50 == cap80
+  # A band of points between 50 and 80 m: only the 80 m metrics see them, and the 50 m
+  # metrics equal those of the frame without them.
+  far = near.copy()
+  far[:5] = rng.uniform(55.0, 75.0, (5, width))
+  far_pred = pred.copy()
+  far_pred[:5] = far[:5] * 0.4  # Off by a factor 2.5: beyond every delta threshold.
+  with_far50 = metrics.depth_metrics(far_pred, far, max_depth=50.0, crop=None)
+  with_far80 = metrics.depth_metrics(far_pred, far, max_depth=80.0, crop=None)
+  without = metrics.depth_metrics(far_pred[5:], far[5:], max_depth=50.0, crop=None)
+  for name in metrics.DEPTH_METRIC_NAMES:
+    assert with_far50[name] == pytest.approx(without[name], rel=1e-12), name
+    assert with_far80[name] != pytest.approx(with_far50[name], rel=1e-6), name

@@ -1,16 +1,14 @@
 """Tests for mixstereo_tf.data.middlebury on tiny scene folders written into tmp_path."""
 
 import os
-import re
 
 import cv2
 import numpy as np
 import pytest
 
-from mixstereo_tf.data import image_io
 from mixstereo_tf.data import middlebury
-from mixstereo_tf.data import records
 from mixstereo_tf.data import sources
+from tests import data_helpers
 
 _SHAPE = (8, 12)
 
@@ -44,7 +42,7 @@ def _scene_2014(folder, disparity_name='disp0.pfm'):
   _views(folder, 'im0.png', 'im1.png')
   disparity = np.full(_SHAPE, 37.25, np.float32)
   disparity[0, 0] = np.inf
-  image_io.write_pfm(os.path.join(folder, disparity_name), disparity)
+  data_helpers.write_pfm(os.path.join(folder, disparity_name), disparity)
   mask = np.full(_SHAPE, 255, np.uint8)
   mask[1, :3] = [128, 0, 255]
   _write(folder, 'mask0nocc.png', mask)
@@ -71,7 +69,7 @@ def test_tsukuba_scale_and_official_masks(tmp_path):
   sample, = middlebury.middlebury_samples(str(tmp_path))
   assert sample.name == 'tsukuba' and sample.disparity_scale == 16
   assert sample.disc_left == os.path.join(folder, 'disc.png')
-  loaded = records.load_sample(sample)
+  loaded = sources.load_sample(sample)
   assert loaded['left'][0, 0, 0] == 10 and loaded['right'][0, 0, 0] == 20
   np.testing.assert_array_equal(loaded['disparity_left'][0], [0] + [5] * 11)
   np.testing.assert_array_equal(loaded['valid_left'][0], [False] + [True] * 11)
@@ -86,7 +84,7 @@ def test_tsukuba_scale_and_official_masks(tmp_path):
 def test_classic_scale_by_folder_name(tmp_path, scene, pixels):
   _classic(str(tmp_path / scene), stored=20)
   sample, = middlebury.middlebury_samples(str(tmp_path))
-  loaded = records.load_sample(sample)
+  loaded = sources.load_sample(sample)
   assert sample.name == scene
   np.testing.assert_allclose(loaded['disparity_left'], pixels)
   np.testing.assert_allclose(loaded['disparity_right'], pixels)
@@ -99,7 +97,7 @@ def test_classic_image_formats(tmp_path, ext):
   _classic(str(tmp_path / 'venus'), ext=ext)
   sample, = middlebury.middlebury_samples(str(tmp_path))
   assert sample.left.endswith('im2' + ext) and sample.right.endswith('im6' + ext)
-  loaded = records.load_sample(sample)
+  loaded = sources.load_sample(sample)
   assert loaded['left'].shape == _SHAPE + (3,)
   np.testing.assert_array_equal(loaded['left'][3, 4], [10, 10, 10])
   np.testing.assert_array_equal(loaded['right'][3, 4], [20, 20, 20])
@@ -117,23 +115,17 @@ def test_scale_overrides(tmp_path):
     middlebury.middlebury_samples(str(tmp_path), scale_overrides={'map': 0})
 
 
-def test_nested_2014_scene_and_calib(tmp_path):
+def test_nested_2014_scene(tmp_path):
   folder = str(tmp_path / '2014' / 'Motorcycle-perfect')
   _scene_2014(folder)
   os.makedirs(tmp_path / 'notes')  # Matches no layout: skipped.
   sample, = middlebury.middlebury_samples(str(tmp_path))
   assert sample.name == 'Motorcycle-perfect' and sample.disparity_scale == 1
   assert sample.calib == os.path.join(folder, 'calib.txt')
-  loaded = records.load_sample(sample)
+  loaded = sources.load_sample(sample)
   assert loaded['disparity_left'][0, 0] == 0 and not loaded['valid_left'][0, 0]
   assert loaded['disparity_left'][0, 1] == np.float32(37.25)
   np.testing.assert_array_equal(loaded['nonocc_left'][1, :4], [False, False, True, True])
-  calib = middlebury.parse_calib(sample.calib)
-  np.testing.assert_allclose(calib['cam1'], [[3979.911, 0, 1369.115], [0, 3979.911, 1019.507],
-                                             [0, 0, 1]])
-  assert calib['baseline'] == 193.001 and calib['doffs'] == 124.343
-  assert calib['width'] == 2964 and isinstance(calib['ndisp'], int)
-  assert calib['vmin'] == 23 and calib['vmax'] == 245 and calib['dyavg'] == -0.031
 
 
 def test_2014_scene_with_disp0gt(tmp_path):
@@ -141,34 +133,30 @@ def test_2014_scene_with_disp0gt(tmp_path):
   _scene_2014(folder, disparity_name='disp0GT.pfm')
   sample, = middlebury.middlebury_samples(str(tmp_path))
   assert sample.disparity_left == os.path.join(folder, 'disp0GT.pfm')
-  loaded = records.load_sample(sample)
+  loaded = sources.load_sample(sample)
   assert loaded['disparity_left'][2, 5] == np.float32(37.25) and not loaded['valid_left'][0, 0]
 
 
-def test_scale_flag_items_are_validated():
-  assert sources.parse_scene_scales(['tsukuba:16', ' Venus : 8.5']) == (('tsukuba', 16.0),
-                                                                       ('Venus', 8.5))
-  assert sources.parse_scene_scales([]) == ()
-  for item in ('tsukuba', 'tsukuba:abc', 'venus:0', 'venus:-2', ':8', 'venus:inf',
-               'venus:nan'):
-    with pytest.raises(ValueError, match=rf"--middlebury_scale: .*{re.escape(repr(item))}"):
-      sources.parse_scene_scales(['cones:4', item])
-  with pytest.raises(ValueError, match=r"--middlebury_scale: scene 'VENUS' is given twice"):
-    sources.parse_scene_scales(['venus:8', 'VENUS:4'])
-  with pytest.raises(ValueError, match='--middlebury_scale applies to --dataset=middlebury'):
-    sources.DataConfig(dataset='sample', middlebury_scales=(('venus', 8.0),))
-  with pytest.raises(ValueError, match=r"--middlebury_scale: .*'venus:-1'"):
-    sources.DataConfig(dataset='middlebury', data_dir='x', middlebury_scales=(('venus', -1),))
+def test_scale_overrides_are_validated():
+  with pytest.raises(ValueError, match="DataConfig.middlebury_scales apply to dataset "
+                                       "'middlebury' only"):
+    sources.DataConfig(dataset='sample', max_disparity=8, middlebury_scales=(('venus', 8.0),))
+  for pair in (('venus', -1.0), ('venus', 0.0), ('', 8.0), ('venus', float('inf'))):
+    with pytest.raises(ValueError, match='DataConfig.middlebury_scales: expected'):
+      sources.DataConfig(dataset='middlebury', data_dir='x', middlebury_scales=(pair,))
+  with pytest.raises(ValueError, match="scene 'VENUS' is given twice"):
+    sources.DataConfig(dataset='middlebury', data_dir='x',
+                       middlebury_scales=(('venus', 8.0), ('VENUS', 4.0)))
 
 
 def test_scale_override_reaches_the_loaded_sample(tmp_path):
   _classic(str(tmp_path / 'Cones'), stored=20)
   _classic(str(tmp_path / 'map'), stored=20)
   config = sources.DataConfig(dataset='middlebury', data_dir=str(tmp_path),
-                              middlebury_scales=sources.parse_scene_scales(['cones:10']))
-  samples = {s.name: s for s in sources.load_samples(config)}
+                              middlebury_scales=(('cones', 10.0),))
+  samples = {s.name: s for s in sources.list_samples(config, split='heldout')}
   assert samples['Cones'].disparity_scale == 10 and samples['map'].disparity_scale == 8
-  np.testing.assert_allclose(records.load_sample(samples['Cones'])['disparity_left'], 2.0)
+  np.testing.assert_allclose(sources.load_sample(samples['Cones'])['disparity_left'], 2.0)
 
 
 def test_data_dir_is_one_scene(tmp_path):
@@ -193,14 +181,18 @@ def test_no_scene_lists_layouts(tmp_path):
     middlebury.middlebury_samples(str(tmp_path / 'missing'))
 
 
-def test_parse_calib_bad_lines(tmp_path):
-  path = tmp_path / 'calib.txt'
-  path.write_text('doffs=1.5\n\nbaseline 193\n')
-  with pytest.raises(ValueError, match=r"calib\.txt:3: expected 'key=value'"):
-    middlebury.parse_calib(str(path))
-  path.write_text('cam0=[1 0 2; 0 1 3]\n')
-  with pytest.raises(ValueError, match=r'calib\.txt:1: expected a 3x3'):
-    middlebury.parse_calib(str(path))
-  path.write_text('ndisp=abc\n')
-  with pytest.raises(ValueError, match=r'calib\.txt:1'):
-    middlebury.parse_calib(str(path))
+def test_training_refuses_the_papers_evaluation_scenes(tmp_path):
+  for name in ('Teddy', 'venus', 'Motorcycle-perfect', 'Art'):
+    _classic(str(tmp_path / name))
+  config = sources.DataConfig(dataset='middlebury', data_dir=str(tmp_path))
+  with pytest.raises(ValueError, match=r'Middlebury scenes Motorcycle-perfect, Teddy, venus.*'
+                                       r'DataConfig.allow_evaluation_scenes'):
+    sources.list_samples(config, split='train')
+  # Evaluation reads them, and an explicit override lets training read them too.
+  assert len(sources.list_samples(config, split='heldout')) == 4
+  allowed = sources.DataConfig(dataset='middlebury', data_dir=str(tmp_path),
+                               allow_evaluation_scenes=True)
+  assert len(sources.list_samples(allowed, split='train')) == 4
+  assert [middlebury.is_evaluation_scene(n) for n in (
+      'Aloe', 'cones', '2001/Tsukuba', 'MotorcycleE-imperfect', 'Art', 'Adirondack')] == [
+          True, True, True, True, False, False]

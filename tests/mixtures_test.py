@@ -30,7 +30,21 @@ _EXPECTED01 = {
                       np.array(mixtures.DUBOIS_RIGHT) @ _R01, 0, 1),
     'green_magenta': [_R01[0], _L01[1], _R01[2]],
     'amber_blue': [_L01[0], _L01[1], _R01[2]],
+    'green_magenta_gray': [_y(_R01), _y(_L01), _y(_R01)],
+    'green_magenta_half': [_R01[0], _y(_L01), _R01[2]],
+    'amber_blue_gray': [_y(_L01), _y(_L01), _y(_R01)],
+    'amber_blue_half': [_L01[0], _L01[1], _y(_R01)],
 }
+# FFmpeg's Dubois matrices (vf_stereo3d.c integers / 65536): the first row of each, left | right.
+_FFMPEG_DUBOIS_ROW0 = {
+    'dubois_ffmpeg': ((29884, 32768, 11534), (-2818, -5767, -131)),
+    'green_magenta_dubois': ((-4063, -10354, -2556), (34669, 46203, 1573)),
+    'amber_blue_dubois': ((69599, -13435, 19595), (-1048, -8061, -1114)),
+}
+for _name, (_left_row, _right_row) in _FFMPEG_DUBOIS_ROW0.items():
+  _spec = mixtures.get_mixture(_name)
+  _EXPECTED01[_name] = np.clip(np.array(_spec.left_matrix) @ _L01 +
+                               np.array(_spec.right_matrix) @ _R01, 0, 1)
 
 
 # {view channel: mixture channel} kept exactly, per view (0 = R, 1 = G, 2 = B).
@@ -44,6 +58,13 @@ _SURVIVING = {
     'dubois': ({}, {}),
     'green_magenta': ({1: 1}, {0: 0, 2: 2}),
     'amber_blue': ({0: 0, 1: 1}, {2: 2}),
+    'dubois_ffmpeg': ({}, {}),
+    'green_magenta_gray': ({}, {}),
+    'green_magenta_half': ({}, {0: 0, 2: 2}),
+    'green_magenta_dubois': ({}, {}),
+    'amber_blue_gray': ({}, {}),
+    'amber_blue_half': ({0: 0, 1: 1}, {}),
+    'amber_blue_dubois': ({}, {}),
 }
 
 
@@ -107,3 +128,25 @@ def test_unknown_name_lists_valid_ones():
 def test_unbatched_images_work():
   left, right = _image(_L01)[0], _image(_R01)[0]
   assert mixtures.mix('anaglyph', left, right).shape == (4, 6, 3)
+
+
+def test_ffmpeg_dubois_matrices_are_the_published_integers():
+  for name, (left_row, right_row) in _FFMPEG_DUBOIS_ROW0.items():
+    spec = mixtures.get_mixture(name)
+    np.testing.assert_allclose(np.array(spec.left_matrix[0]) * 65536, left_row, atol=1e-9)
+    np.testing.assert_allclose(np.array(spec.right_matrix[0]) * 65536, right_row, atol=1e-9)
+    assert spec.clip
+
+
+@pytest.mark.parametrize('name, eyes', [
+    ('anaglyph', ((0,), (1, 2))), ('gray', ((0,), (1, 2))), ('dubois', ((0,), (1, 2))),
+    ('dubois_ffmpeg', ((0,), (1, 2))), ('green_magenta', ((1,), (0, 2))),
+    ('green_magenta_dubois', ((1,), (0, 2))), ('amber_blue', ((0, 1), (2,))),
+    ('amber_blue_dubois', ((0, 1), (2,))), ('amber_blue_half', ((0, 1), (2,)))])
+def test_eye_channels(name, eyes):
+  assert mixtures.get_mixture(name).eye_channels == eyes
+
+
+def test_anaglyph_names_exclude_the_papers_other_operators():
+  assert 'diplopia' not in mixtures.ANAGLYPH_NAMES and 'monocular' not in mixtures.ANAGLYPH_NAMES
+  assert len(mixtures.ANAGLYPH_NAMES) == len(mixtures.MIXTURE_NAMES) - 2

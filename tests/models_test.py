@@ -63,6 +63,21 @@ def test_joint_outputs_shapes_and_ranges():
     assert values.min() >= 0.0 and values.max() <= TINY.max_disparity - 1
 
 
+def test_monocular_model_passes_the_input_through_as_the_left_view():
+  """Paper 3.1: for monocular depth "the left image has been provided as input"."""
+  model = models.build_model(dataclasses.replace(TINY, input_is_left=True))
+  mixture = _mixture(seed=3)
+  outputs = model(mixture, training=False)
+  np.testing.assert_array_equal(outputs['left'].numpy(), mixture.numpy())
+  # The stereo module sees the input and the separated right view.
+  separated = model.separate(mixture)
+  direct = model.compute_disparity(mixture, separated['right'])
+  np.testing.assert_allclose(outputs['disparity_left'].numpy(),
+                             direct['disparity_left'].numpy(), atol=1e-5)
+  np.testing.assert_array_equal(outputs['right'].numpy(), separated['right'].numpy())
+  assert not np.allclose(separated['left'].numpy(), mixture.numpy())
+
+
 def test_mirrored_pass_swaps_the_disparities():
   model = models.build_model(TINY)
   rng = np.random.default_rng(1)

@@ -48,23 +48,64 @@ def test_bad_config_raises(field, value):
 def test_separation_losses_of_perfect_predictions():
   left, right = _stereo_pair()
   config = objective.LossConfig()
-  out = objective.separation_losses(left, right, left, right, config)
+  out = objective.separation_losses({'left': left, 'right': right},
+                                    {'left': left, 'right': right}, config)
   assert float(out['separation/content_left']) == 0.0
   assert float(out['separation/content_right']) == 0.0
   tv_left = float(out['separation/tv_left'])
-  dx, dy = np.diff(left.numpy(), axis=2), np.diff(left.numpy(), axis=1)
+  unit = (left.numpy() + 1) / 2  # TV on the [0, 1] scale.
+  dx, dy = np.diff(unit, axis=2), np.diff(unit, axis=1)
   np.testing.assert_allclose(tv_left, np.abs(dx).mean() + np.abs(dy).mean(), rtol=1e-5)
   np.testing.assert_allclose(float(out['separation/total']),
                              0.2 * (tv_left + float(out['separation/tv_right'])), rtol=1e-6)
 
 
-def test_separation_content_is_weighted_l1():
+def test_separation_content_is_weighted_l1_on_the_unit_scale():
   left, right = _stereo_pair()
   config = objective.LossConfig(alpha_c=2.0, alpha_p=0.0)
-  out = objective.separation_losses(left + 0.25, right - 0.5, left, right, config)
-  np.testing.assert_allclose(float(out['separation/content_left']), 0.25, rtol=1e-5)
-  np.testing.assert_allclose(float(out['separation/content_right']), 0.5, rtol=1e-5)
-  np.testing.assert_allclose(float(out['separation/total']), 2.0 * 0.75, rtol=1e-5)
+  out = objective.separation_losses({'left': left + 0.25, 'right': right - 0.5},
+                                    {'left': left, 'right': right}, config)
+  # Offsets of 0.25 and 0.5 on [-1, 1] are 0.125 and 0.25 on [0, 1].
+  np.testing.assert_allclose(float(out['separation/content_left']), 0.125, rtol=1e-5)
+  np.testing.assert_allclose(float(out['separation/content_right']), 0.25, rtol=1e-5)
+  np.testing.assert_allclose(float(out['separation/total']), 2.0 * 0.375, rtol=1e-5)
+
+
+def test_every_term_sees_the_unit_scale():
+  """One convention: a view error of e on [-1, 1] is e / 2 in L_C and in L_D alike."""
+  shape = (1, 6, 8, 3)
+  truth = tf.fill(shape, -0.2)  # 0.4 on [0, 1].
+  off = tf.fill(shape, 0.2)  # 0.6 on [0, 1]: 0.2 above the truth on the unit scale.
+  config = objective.LossConfig(alpha_c=1.0, alpha_p=0.0, lambda_ssim=0.0, lambda_l1=1.0,
+                                omega_s=0.0)
+  separation = objective.separation_losses({'left': off, 'right': truth},
+                                           {'left': truth, 'right': truth}, config)
+  np.testing.assert_allclose(float(separation['separation/content_left']), 0.2, rtol=1e-5)
+  # Appearance: the left view vs the right one warped by d = 0, two constant images.
+  zero = tf.zeros(shape[:3] + (1,))
+  stereo = objective.stereo_losses(zero, zero, truth, off, config)
+  np.testing.assert_allclose(float(stereo['stereo/appearance_left']), 0.2, rtol=1e-5)
+  # TV: a vertical step of 1 on [-1, 1] (0.5 on [0, 1]) in one of three channels, 6 rows.
+  step = np.zeros(shape, np.float32)
+  step[:, 3:, :, 0] = 1.0
+  tv = objective.separation_losses({'left': tf.constant(step), 'right': truth},
+                                   {'left': truth, 'right': truth}, config)
+  np.testing.assert_allclose(float(tv['separation/tv_left']), 0.5 / 5 / 3, rtol=1e-5)
+  # Edge-aware weights: the same step as exp(-0.5 / 3) on the v gradient of the disparity.
+  ramp = tf.reshape(tf.range(6, dtype=tf.float32), [1, 6, 1, 1]) * tf.ones([1, 1, 8, 1])
+  pixels = objective.LossConfig(omega_s=1.0, smoothness_scale='pixels')
+  smooth = objective.stereo_losses(ramp, ramp, tf.constant(step), tf.constant(step), pixels)
+  expected = (4 + np.exp(-0.5 / 3)) / 5  # |dv d| = 1 on 5 rows, one of them at the edge.
+  np.testing.assert_allclose(float(smooth['stereo/smoothness_left']), expected, rtol=1e-5)
+
+
+def test_monocular_separation_counts_only_the_right_view():
+  left, right = _stereo_pair()
+  out = objective.total_loss({'left': left, 'right': right + 0.5}, {'left': left, 'right': right},
+                             objective.LossConfig(), 'separation_only',
+                             separated_views=('right',))
+  assert 'separation/content_left' not in out and 'separation/tv_left' not in out
+  np.testing.assert_allclose(float(out['separation/content_right']), 0.25, rtol=1e-5)
 
 
 def test_stereo_losses_vanish_for_the_true_disparity():
@@ -114,7 +155,7 @@ def test_total_loss_modes():
   joint = objective.total_loss(outputs, batch, config, 'joint')
   np.testing.assert_allclose(float(joint['loss']),
                              float(joint['separation/total'] + joint['stereo/total']))
-  np.testing.assert_allclose(float(joint['separation/content_left']), 0.1, rtol=1e-5)
+  np.testing.assert_allclose(float(joint['separation/content_left']), 0.05, rtol=1e-5)
   assert float(joint['separation/content_right']) == 0.0
 
   separation = objective.total_loss({'left': left + 0.1, 'right': right}, batch, config,

@@ -7,6 +7,7 @@ import tensorflow as tf
 from mixstereo_tf import mixtures
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import records
+from mixstereo_tf.data import sources
 from mixstereo_tf.data import synthetic
 
 _H, _W, _D = 16, 40, 3  # A fronto-parallel scene at a constant disparity of 3 px.
@@ -25,7 +26,7 @@ def _scene(seed):
 
 @pytest.fixture(name='samples')
 def _samples(monkeypatch):
-  monkeypatch.setattr(records, 'load_sample', lambda s: _scene(int(s.name)))
+  monkeypatch.setattr(sources, 'load_sample', lambda s: _scene(int(s.name)))
   return [records.StereoSample(name=str(i), left=f'l{i}', right=f'r{i}') for i in range(4)]
 
 
@@ -148,7 +149,7 @@ def test_crop_offsets_of_consecutive_elements_are_independent(monkeypatch):
   for key in ('disparity_left', 'disparity_right', 'valid_left', 'valid_right', 'nonocc_left',
               'disc_left'):
     scene[key] = np.zeros((40, 40), scene[key].dtype)
-  monkeypatch.setattr(records, 'load_sample', lambda s: scene)
+  monkeypatch.setattr(sources, 'load_sample', lambda s: scene)
   config = _config(crop_height=8, crop_width=8, batch_size=1, augment=False, flip=False)
   ds = pipeline.train_dataset([records.StereoSample('a', 'l', 'r')], config)
   corners = np.array([(e['left'][0, 0, 0, :2] + 1) / 2 * 255 for e in _take(ds, 200)])
@@ -200,35 +201,6 @@ def test_small_images_are_padded_to_the_crop(samples):
   assert batch['valid_left'][0, _H:].max() == 0.0  # Padded ground truth is unknown.
 
 
-def test_eval_dataset_is_full_size_in_order(samples):
-  elements = _take(pipeline.eval_dataset(samples, 'diplopia'), 4)
-  assert [e['name'][0].decode() for e in elements] == ['0', '1', '2', '3']
-  assert elements[0]['left'].shape == (1, _H, _W, 3)
-  expected = (_scene(0)['left'].astype(np.float32) / 255 * 2 - 1)
-  np.testing.assert_allclose(elements[0]['left'][0], expected, atol=1e-6)
-
-
-def test_eval_dataset_passes_ground_truth_through_unchanged(monkeypatch):
-  rng = np.random.default_rng(4)
-  scene = _scene(1)
-  for key in ('disparity_left', 'disparity_right'):
-    scene[key] = rng.uniform(0, 9, (_H, _W)).astype(np.float32)
-  for key in ('valid_left', 'valid_right', 'nonocc_left', 'disc_left'):
-    scene[key] = rng.uniform(size=(_H, _W)) < 0.5
-  monkeypatch.setattr(records, 'load_sample', lambda s: scene)
-  element, = _take(pipeline.eval_dataset([records.StereoSample('x', 'l', 'r')], 'anaglyph'), 1)
-  maps = ('disparity_left', 'disparity_right', 'valid_left', 'valid_right', 'nonocc_left',
-          'disc_left')
-  assert set(element) == {'mixture', 'left', 'right', 'name', *maps}
-  for key in maps:
-    np.testing.assert_array_equal(element[key][0, ..., 0], scene[key].astype(np.float32),
-                                  err_msg=key)
-  for key in ('left', 'right'):
-    np.testing.assert_allclose(element[key][0], scene[key] / 255 * 2 - 1, atol=1e-6)
-  np.testing.assert_allclose(
-      element['mixture'], mixtures.mix('anaglyph', element['left'], element['right']))
-
-
 def test_bad_config_and_empty_list():
   with pytest.raises(ValueError, match='crop_height'):
     pipeline.PipelineConfig(crop_height=0)
@@ -241,7 +213,7 @@ def test_bad_config_and_empty_list():
 def test_decode_error_names_the_sample(monkeypatch):
   def broken(sample):
     raise ValueError(f'{sample.source}: cannot decode {sample.left}')
-  monkeypatch.setattr(records, 'load_sample', broken)
+  monkeypatch.setattr(sources, 'load_sample', broken)
   samples = [records.StereoSample('a', 'bad.png', 'r.png', source='list.txt:7')]
   with pytest.raises(tf.errors.InvalidArgumentError, match='list.txt:7'):
     _take(pipeline.train_dataset(samples, _config(batch_size=1)), 1)
@@ -252,7 +224,7 @@ def test_skip_bad_pairs_drops_failing_pairs(monkeypatch):
     if sample.name == 'bad':
       raise ValueError('corrupt')
     return _scene(0)
-  monkeypatch.setattr(records, 'load_sample', sometimes)
+  monkeypatch.setattr(sources, 'load_sample', sometimes)
   samples = [records.StereoSample(n, n, n) for n in ('good', 'bad')]
   config = _config(batch_size=1, skip_bad_pairs=True)
   names = {e['name'][0].decode() for e in _take(pipeline.train_dataset(samples, config), 6)}

@@ -6,9 +6,14 @@ import cv2
 import numpy as np
 import pytest
 
-from mixstereo_tf.data import records
+from mixstereo_tf import inference
+from mixstereo_tf.data import sources
+from mixstereo_tf.data import split_lists
 from mixstereo_tf.evaluation import metrics
+from mixstereo_tf.evaluation import results
 from mixstereo_tf.evaluation import runner
+
+EvalConfig = results.EvalConfig
 
 HEIGHT, WIDTH = 32, 64
 
@@ -60,23 +65,29 @@ def make_middlebury(root, seed=0):
 def test_middlebury_scale_overrides_reach_the_loaded_ground_truth(tmp_path):
   root = make_middlebury(tmp_path / 'mb')
   default = {s.name: s for s in runner.list_samples(
-      runner.EvalConfig('middlebury', 'anaglyph', root))}
+      EvalConfig('middlebury', 'anaglyph', root))}
   halved = {s.name: s for s in runner.list_samples(
-      runner.EvalConfig('middlebury', 'anaglyph', root, middlebury_scales=(('Cones', 8.0),)))}
+      EvalConfig('middlebury', 'anaglyph', root, middlebury_scales=(('Cones', 8.0),)))}
   cones = [name for name in default if 'cones' in name.lower()][0]
   tsukuba = [name for name in default if 'tsukuba' in name.lower()][0]
   # Cones' layout scale is 4: overriding it with 8 halves every known disparity.
-  np.testing.assert_allclose(records.load_sample(halved[cones])['disparity_left'],
-                             records.load_sample(default[cones])['disparity_left'] / 2)
-  np.testing.assert_array_equal(records.load_sample(halved[tsukuba])['disparity_left'],
-                                records.load_sample(default[tsukuba])['disparity_left'])
-  with pytest.raises(ValueError, match='middlebury protocol only'):
-    runner.EvalConfig('kitti2015', 'anaglyph', root, middlebury_scales=(('Cones', 8.0),))
+  np.testing.assert_allclose(sources.load_sample(halved[cones])['disparity_left'],
+                             sources.load_sample(default[cones])['disparity_left'] / 2)
+  np.testing.assert_array_equal(sources.load_sample(halved[tsukuba])['disparity_left'],
+                                sources.load_sample(default[tsukuba])['disparity_left'])
+  with pytest.raises(ValueError, match="middlebury_scales apply to dataset 'middlebury' only"):
+    runner.list_samples(EvalConfig('kitti2015', 'anaglyph', root,
+                                   middlebury_scales=(('Cones', 8.0),)))
+
+
+def unmixer(fn, mixture='anaglyph', takes_pair=False, method='model'):
+  """An Unmixer around a test function."""
+  return inference.Unmixer(fn, method, mixture, 8.0, takes_pair=takes_pair)
 
 
 def oracle(config, offset=0.0):
-  """A predictor returning each pair's true views and its GT disparity + offset, in order."""
-  loaded = iter([records.load_sample(s) for s in runner.list_samples(config)])
+  """An Unmixer returning each pair's true views and its GT disparity + offset, in order."""
+  loaded = iter([sources.load_sample(s) for s in runner.list_samples(config)])
 
   def predict(mixture):
     data = next(loaded)
@@ -85,12 +96,12 @@ def oracle(config, offset=0.0):
             'disparity_left': data['disparity_left'] + offset,
             'disparity_right': data['disparity_right']}
 
-  return predict
+  return unmixer(predict, config.mixture)
 
 
 def test_kitti_oracle_is_perfect_and_shifted_disparities_hit_the_d1_rule(tmp_path):
   root = make_kitti2015(tmp_path / 'kitti')
-  config = runner.EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
+  config = EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
   result = runner.evaluate(config, oracle(config))
   assert [r['name'] for r in result.rows] == ['000000_10', '000001_10']
   assert result.coverage == 'partial: 2 of 200 images'
@@ -105,35 +116,35 @@ def test_kitti_oracle_is_perfect_and_shifted_disparities_hit_the_d1_rule(tmp_pat
 
 def test_mixture_is_the_quantised_anaglyph_and_the_trivial_baseline(tmp_path):
   root = make_kitti2015(tmp_path / 'kitti', frames=1)
-  config = runner.EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
-  data = records.load_sample(runner.list_samples(config)[0])
+  config = EvalConfig('kitti2015', 'anaglyph', root, allow_partial=True)
+  data = sources.load_sample(runner.list_samples(config)[0])
   mixture = runner.synthesise_mixture('anaglyph', data['left'], data['right'])
   expected = np.concatenate([data['left'][..., :1], data['right'][..., 1:]], axis=-1)
   np.testing.assert_array_equal(mixture, expected)  # Lossless for 8-bit views.
   row = runner.evaluate(config, oracle(config)).rows[0]
   assert row['mixture_psnr_left'] == pytest.approx(metrics.psnr(expected, data['left']))
   assert row['mixture_psnr_left'] < 40.0
-  mono = runner.EvalConfig('kitti2015', 'monocular', root, allow_partial=True)
+  mono = EvalConfig('kitti2015', 'monocular', root, allow_partial=True)
   assert runner.evaluate(mono, oracle(mono)).rows[0]['mixture_psnr_left'] == 100.0
 
 
 def test_kitti2015_partial_run_is_refused_before_any_prediction(tmp_path):
   root = make_kitti2015(tmp_path / 'kitti')
-  config = runner.EvalConfig('kitti2015', 'anaglyph', root)
+  config = EvalConfig('kitti2015', 'anaglyph', root)
 
   def never(mixture):
     raise AssertionError('predicted although the run is refused')
 
-  with pytest.raises(ValueError, match=r'2 of 200.*--allow_partial'):
-    runner.evaluate(config, never)
+  with pytest.raises(ValueError, match=r'2 of 200.*EvalConfig.allow_partial'):
+    runner.evaluate(config, unmixer(never))
   # max_images keeps the first pairs; allow_partial lets the short run through.
-  one = runner.EvalConfig('kitti2015', 'diplopia', root, allow_partial=True, max_images=1)
+  one = EvalConfig('kitti2015', 'diplopia', root, allow_partial=True, max_images=1)
   assert runner.evaluate(one, oracle(one)).coverage == 'partial: 1 of 200 images'
 
 
 def test_middlebury_bad1_known_answers(tmp_path):
   root = make_middlebury(tmp_path / 'mb')
-  config = runner.EvalConfig('middlebury', 'anaglyph', root)
+  config = EvalConfig('middlebury', 'anaglyph', root)
   assert [s.name for s in runner.list_samples(config)] == ['Cones', 'tsukuba']
   result = runner.evaluate(config, oracle(config))
   assert result.coverage == '2 of 2 images'
@@ -144,7 +155,7 @@ def test_middlebury_bad1_known_answers(tmp_path):
 
 
 def test_sample_protocol_oracle(tmp_path):
-  config = runner.EvalConfig('sample', 'diplopia', max_disparity=8, sample_scenes=1)
+  config = EvalConfig('sample', 'diplopia', max_disparity=8, heldout_scenes=1)
   result = runner.evaluate(config, oracle(config))
   assert result.count == 2 and result.rows[-1]['name'].startswith('motorcycle')
   assert result.averages['bad1'] == 0.0 and result.averages['bad3'] == 0.0
@@ -188,66 +199,73 @@ def _write_eigen(root, width=1242, focal=100.0, rect_size=''):
 def test_eigen_depth_from_velodyne_uses_the_calibration_focal_length(
     tmp_path, width, focal, rect_size, depth, abs_rel, a1):
   list_path = _write_eigen(str(tmp_path), width, focal, rect_size)
-  config = runner.EvalConfig('eigen', 'monocular', str(tmp_path), eigen_list=list_path)
+  config = EvalConfig('eigen', 'monocular', str(tmp_path), split_list=list_path)
   disparity = focal * 0.54 / depth
 
   def predict(mixture):
     return {'left': mixture, 'right': mixture,
             'disparity_left': np.full(mixture.shape[:2], disparity, np.float32)}
 
-  row = runner.evaluate(config, predict).rows[0]
+  row = runner.evaluate(config, unmixer(predict, 'monocular')).rows[0]
   assert row['width'] == width
-  assert row['abs_rel'] == pytest.approx(abs_rel, abs=1e-5)
-  assert row['a1'] == a1 and row['mixture_psnr_left'] == 100.0
+  for cap in (50, 80):  # All points are 10 m ahead: both caps agree.
+    assert row[f'abs_rel_cap{cap}'] == pytest.approx(abs_rel, abs=1e-5)
+    assert row[f'a1_cap{cap}'] == a1
+  assert row['mixture_psnr_left'] == 100.0
 
 
 def test_eigen_refuses_images_of_another_size_than_the_calibration(tmp_path):
   list_path = _write_eigen(str(tmp_path), 1226, 707.0912, '1242 375')
-  config = runner.EvalConfig('eigen', 'monocular', str(tmp_path), eigen_list=list_path)
+  config = EvalConfig('eigen', 'monocular', str(tmp_path), split_list=list_path)
   with pytest.raises(ValueError, match=r'calib_cam_to_cam.txt: S_rect_02 is 1242x375'):
-    runner.evaluate(config, lambda m: {'left': m, 'right': m,
-                                       'disparity_left': np.ones(m.shape[:2], np.float32)})
+    runner.evaluate(config, unmixer(lambda m: {
+        'left': m, 'right': m, 'disparity_left': np.ones(m.shape[:2], np.float32)}))
 
 
 def test_bad_configs_and_outputs_raise(tmp_path):
-  with pytest.raises(ValueError, match='protocol'):
-    runner.EvalConfig('kitti', 'anaglyph', 'x')
+  never = unmixer(lambda m: None)
+  with pytest.raises(ValueError, match='Unknown EvalConfig.protocol'):
+    runner.evaluate(EvalConfig('kitti', 'anaglyph', 'x'), never)
   with pytest.raises(ValueError, match='valid mixtures'):
-    runner.EvalConfig('middlebury', 'nope', 'x')
-  with pytest.raises(ValueError, match='data_dir'):
-    runner.EvalConfig('middlebury', 'anaglyph')
+    runner.evaluate(EvalConfig('middlebury', 'nope', 'x'), never)
+  with pytest.raises(ValueError, match='needs EvalConfig.data_dir'):
+    runner.evaluate(EvalConfig('middlebury', 'anaglyph'), never)
   with pytest.raises(ValueError, match='Split list not found'):
-    runner.list_samples(runner.EvalConfig('eigen', 'monocular', 'x', eigen_list='no.txt'))
+    runner.list_samples(EvalConfig('eigen', 'monocular', 'x', split_list='no.txt'))
+  with pytest.raises(ValueError, match='EvalConfig.max_images'):
+    EvalConfig('sample', 'anaglyph', max_images=0)
   root = make_middlebury(tmp_path / 'mb')
-  config = runner.EvalConfig('middlebury', 'anaglyph', root)
+  config = EvalConfig('middlebury', 'anaglyph', root)
   with pytest.raises(ValueError, match=r"Cones: predictor output 'disparity_left'"):
-    runner.evaluate(config, lambda m: {'left': m, 'right': m,
-                                       'disparity_left': np.zeros((2, 2))})
-  nan_prediction = runner.evaluate(config, lambda m: {
-      'left': m, 'right': m, 'disparity_left': np.full(m.shape[:2], np.nan, np.float32)})
+    runner.evaluate(config, unmixer(lambda m: {'left': m, 'right': m,
+                                               'disparity_left': np.zeros((2, 2))}))
+  nan_prediction = runner.evaluate(config, unmixer(lambda m: {
+      'left': m, 'right': m, 'disparity_left': np.full(m.shape[:2], np.nan, np.float32)}))
   assert nan_prediction.averages['bad1_all'] == 1.0  # NaN counts as bad, not as missing.
 
 
 def test_classical_baseline_runs_through_the_harness(tmp_path):
-  from mixstereo_tf import baselines  # pylint: disable=g-import-not-at-top
   root = make_middlebury(tmp_path / 'mb')
-  config = runner.EvalConfig('middlebury', 'anaglyph', root, method='classical',
-                             max_images=1)
-  row = runner.evaluate(config, lambda m: baselines.unmix_classical(m, 'anaglyph')).rows[0]
+  config = EvalConfig('middlebury', 'anaglyph', root, max_images=1)
+  classical = inference.build_unmixer(inference.PredictorConfig('classical',
+                                                                mixture='anaglyph'))
+  result = runner.evaluate(config, classical)
+  assert result.method == 'classical' and result.restore_colour
+  row = result.rows[0]
   assert 0.0 <= row['bad1_all'] <= 1.0 and row['psnr_left'] > 0.0
 
 
-def test_default_eigen_list_resolves_to_the_repository_copy():
-  path = runner.resolve_list_path(runner.DEFAULT_EIGEN_LIST)
+def test_default_eigen_list_is_the_shipped_copy():
+  path = split_lists.resolve('kitti/eigen_test_files.txt')
   with open(path, encoding='utf-8') as f:
     assert len([line for line in f if line.strip()]) == 697
+  assert runner.data_config(EvalConfig('eigen', 'monocular', 'x')).split_list == path
 
 
 def test_oracle_method_feeds_the_clean_pair(tmp_path):
   root = make_kitti2015(tmp_path / 'kitti')
-  config = runner.EvalConfig('kitti2015', 'diplopia', root, method='oracle',
-                             allow_partial=True)
-  truth = iter([records.load_sample(s) for s in runner.list_samples(config)])
+  config = EvalConfig('kitti2015', 'diplopia', root, allow_partial=True)
+  truth = iter([sources.load_sample(s) for s in runner.list_samples(config)])
 
   def pair_predictor(left, right):
     data = next(truth)
@@ -255,25 +273,7 @@ def test_oracle_method_feeds_the_clean_pair(tmp_path):
     np.testing.assert_array_equal(right, data['right'])
     return {'disparity_left': data['disparity_left']}
 
-  result = runner.evaluate(config, pair_predictor)
+  result = runner.evaluate(config, unmixer(pair_predictor, 'diplopia', takes_pair=True,
+                                           method='oracle'))
   assert result.averages['d1_all'] == 0.0 and 'psnr_left' not in result.averages
-  assert result.averages['mixture_psnr_left'] < 40.0
-
-
-def test_stereo_pair_predictor_pads_runs_the_stereo_module_and_crops():
-  import tensorflow as tf  # pylint: disable=g-import-not-at-top
-  from mixstereo_tf import models  # pylint: disable=g-import-not-at-top
-  tf.keras.utils.set_random_seed(0)
-  config = models.ModelConfig(separation_widths=(4, 4), stereo_features=4,
-                              stereo_residual_blocks=1, stereo_3d_widths=(4,),
-                              max_disparity=8)
-  model = models.build_model(config)
-  predict = runner.stereo_pair_predictor(model, config.size_multiple)
-  left, right = _views(np.random.RandomState(1), 32, 64)
-  out = predict(left, right)
-  direct = model.compute_disparity(tf.constant(left[None], tf.float32) / 127.5 - 1.0,
-                                   tf.constant(right[None], tf.float32) / 127.5 - 1.0)
-  np.testing.assert_allclose(out['disparity_left'], direct['disparity_left'][0, ..., 0],
-                             atol=1e-5)
-  cropped = predict(left[:30, :62], right[:30, :62])
-  assert cropped['disparity_left'].shape == cropped['disparity_right'].shape == (30, 62)
+  assert result.averages['mixture_psnr_left'] < 40.0 and result.method == 'oracle'

@@ -11,6 +11,7 @@ import skimage.data
 
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sample
+from mixstereo_tf.data import sources
 from mixstereo_tf.ops import warp
 
 _TINY = dict(height=32, width=64, max_disparity=16)
@@ -22,7 +23,7 @@ def test_train_records_are_unique_virtual_and_deterministic():
   assert len(train) == 5 and len({s.name for s in train}) == 5
   assert all(s.is_virtual and s.left != s.right for s in train)
   assert train == sample.sample_records('train', num_scenes=5, **_TINY)
-  assert len(sample.sample_records('train')) == sample.DEFAULT_TRAIN_SCENES
+  assert len(sample.sample_records('train', max_disparity=16)) == sample.DEFAULT_TRAIN_SCENES
 
 
 def test_heldout_has_fixed_scenes_then_motorcycle():
@@ -44,7 +45,7 @@ def test_seed_ranges_are_disjoint():
 def test_load_virtual_returns_loaded_keys_and_renders_deterministically():
   first, heldout = (sample.sample_records(split, num_scenes=1, **_TINY)[0]
                     for split in ('train', 'heldout'))
-  loaded = records.load_sample(first)  # Dispatches virtual URIs to sample.load_virtual.
+  loaded = sources.load_sample(first)  # Dispatches virtual URIs to sample.load_virtual.
   assert set(loaded) == set(records.LOADED_KEYS)
   for key, dtype in records.LOADED_KEYS.items():
     assert loaded[key].dtype == dtype, key
@@ -83,7 +84,7 @@ def test_motorcycle_factor_is_smallest_fitting_integer():
 def test_motorcycle_downscale_keeps_left_referenced_geometry():
   left, _, raw = skimage.data.stereo_motorcycle()
   record = sample.sample_records('heldout', **dict(_TINY, max_disparity=32))[-1]
-  loaded = records.load_sample(record)
+  loaded = sources.load_sample(record)
   assert record.name == 'motorcycle_div2' and loaded['left'].shape == (250, 370, 3)
   assert set(loaded) == set(records.LOADED_KEYS)
   assert not loaded['valid_right'].any() and not loaded['disparity_right'].any()

@@ -1,5 +1,7 @@
 """Tests of the custom train step: what each mode trains, XLA, device-dependent auto."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 import tensorflow as tf
@@ -64,6 +66,18 @@ def test_step_reports_every_loss_term_psnr_and_the_gradient_norm():
               'metrics/psnr_right'):
     assert key in scalars
   assert 0 < float(scalars['metrics/gradient_norm']) < np.inf
+
+
+def test_monocular_step_separates_only_the_right_view():
+  config = dataclasses.replace(training_helpers.MINI, input_is_left=True)
+  model = models.build_model(config)
+  trainer = step_lib.TrainStep(model, tf.keras.optimizers.RMSprop(1e-3),
+                               objective.LossConfig(), 'joint', tf.distribute.get_strategy(),
+                               jit_compile=False)
+  batch = training_helpers.stereo_batch(height=16, width=32, shift=2, mixture='monocular')
+  scalars, outputs = trainer(batch)
+  assert 'separation/content_right' in scalars and 'separation/content_left' not in scalars
+  np.testing.assert_array_equal(outputs['left'].numpy(), batch['mixture'].numpy())
 
 
 @pytest.mark.parametrize('setting, device, expected', [

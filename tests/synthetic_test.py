@@ -135,7 +135,7 @@ def test_bad_inputs_raise_clear_errors():
   with pytest.raises(ValueError, match='max_disparity'):
     synthetic.SceneConfig(max_disparity=1)
   with pytest.raises(ValueError, match='min_layers'):
-    synthetic.SceneConfig(min_layers=5, max_layers=3)
+    synthetic.SceneConfig(max_disparity=32, min_layers=5, max_layers=3)
   square = synthetic.Layer('rectangle', (5, 5, 2, 2, 0), (3, 0, 0), 0)
   with pytest.raises(ValueError, match='full'):
     synthetic.render_layers([square], [_constant(1)], 8, 8)

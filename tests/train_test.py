@@ -130,14 +130,15 @@ def test_a_few_dozen_steps_on_the_sample_source_lower_the_loss(tmp_path):
   tf.keras.utils.set_random_seed(0)
   initial = probe_loss()
   result = loop.train(
-      config_lib.TrainConfig(model_dir=str(tmp_path), num_steps=80, learning_rate=2e-3,
+      config_lib.TrainConfig(model_dir=str(tmp_path), num_steps=150, learning_rate=2e-3,
                              checkpoint_every=1000, summary_every=1000,
                              image_summary_every=1000, log_every=10),
       model_config, objective.LossConfig(),
       lambda: pipeline.train_dataset(samples, config))
   trained = probe_loss(result.last_checkpoint)
-  # The untrained U-Net outputs ~0 (L1 of about 0.5 per view); 80 RMSProp steps learn to
-  # copy the observed channels. Measured once: 0.99 -> 0.51; a 25% margin leaves room.
+  # The untrained U-Net outputs ~0 (L1 of about 0.25 per view on the [0, 1] loss scale);
+  # 150 steps of TF1 RMSProp (its accumulator starts at one: a warm-up of a few tens of
+  # steps) learn to copy the observed channels. Measured once: 0.598 -> 0.376 (x0.63).
   assert trained < 0.75 * initial, (initial, trained)
 
 

@@ -111,21 +111,6 @@ def test_collisions_keep_the_nearest_point():
     assert np.count_nonzero(depth) == 1
 
 
-def test_object_calibration_projection(tmp_path):
-  path = tmp_path / 'calib.txt'
-  p = f'{_FOCAL} 0 {_CX} 0 0 {_FOCAL} {_CY} 0 0 0 1 0'
-  path.write_text(f'P0: {p}\nP2: {p}\nR0_rect: 1 0 0 0 1 0 0 0 1\n'
-                  'Tr_velo_to_cam: 0 -1 0 0 0 0 -1 0 1 0 0 0.5\n')
-  projection = velodyne.object_velo_to_camera_projection(velodyne.read_object_calib(str(path)))
-  # Velodyne (10, -1, 0.5) -> camera (1, -0.5, 10.5).
-  np.testing.assert_allclose(projection @ [10.0, -1.0, 0.5, 1.0],
-                             [100 + 32 * 10.5, -50 + 16 * 10.5, 10.5])
-  depth = velodyne.project_velodyne_to_depth(np.array([[10.0, -1.0, 0.5, 0.0]]), projection,
-                                             _HEIGHT, _WIDTH)
-  # u = 100 / 10.5 + 32 = 41.52 -> 42 - 1; v = -50 / 10.5 + 16 = 11.24 -> 11 - 1.
-  assert depth[10, 41] == pytest.approx(10.5) and np.count_nonzero(depth) == 1
-
-
 def test_bad_shapes_raise():
   with pytest.raises(ValueError, match='points'):
     velodyne.project_velodyne_to_depth(np.zeros((3, 2)), np.zeros((3, 4)), 4, 4)

@@ -28,13 +28,13 @@ disparities are positive (the left camera is on the left) decides which layer is
 """
 
 import dataclasses
-from typing import Dict, Optional
+from typing import Dict, Optional, Tuple
 
 import cv2
 import numpy as np
 import scipy.sparse
 
-from mixstereo_tf.baselines import colour_transfer
+from mixstereo_tf import image_range
 from mixstereo_tf.baselines import sgm
 
 
@@ -220,25 +220,41 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
           'right': np.clip(right, 0, 1).astype(np.float32)}
 
 
-def unmix_diplopia(mixture, config: Optional[DiplopiaConfig] = None) -> Dict[str, np.ndarray]:
+def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
+                   config: Optional[DiplopiaConfig] = None) -> Dict[str, object]:
   """Separates a double image I = (L + R) / 2 into two views and disparities.
 
   Args:
     mixture: uint8 [H, W, 3] RGB, or float in [0, 1].
+    disparity_range: (min, max) pixels to search, min >= 1 (the average is symmetric in
+      the views, so disparities are positive by convention; lag 0 matches every image to
+      itself); None: the config's range.
     config: parameters (default `DiplopiaConfig()`).
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
-    [H, W], pixels, positive; 'global_shift': int, the power-cepstrum peak, pixels.
+    [H, W], pixels, positive; 'disparity_range': the (min, max) searched;
+    'global_shift': int, the power-cepstrum peak, pixels.
+
+  Raises:
+    ValueError: a range with min < 1 or min >= max.
   """
   config = config or DiplopiaConfig()
-  image = colour_transfer.to_unit_float(mixture)
+  if disparity_range is not None:
+    low, high = disparity_range
+    if not 1 <= low < high:
+      raise ValueError(f'A diplopia disparity range must satisfy 1 <= min < max (the views '
+                       f'of an average are ordered by positive disparity), got {low},{high}.')
+    config = dataclasses.replace(config, matching=dataclasses.replace(
+        config.matching, min_disparity=int(low), max_disparity=int(high)))
+  image = image_range.as_unit_float(mixture, 'mixture')
   gray = image.mean(axis=-1) * 255.0
   matched = sgm.match_volume(self_matching_volume(gray, config), config.matching)
   layers = separate_layers(image, matched['disparity_right'], config)
-  return {'left': colour_transfer.to_uint8(layers['left']),
-          'right': colour_transfer.to_uint8(layers['right']),
+  return {'left': image_range.unit_to_u8(layers['left']),
+          'right': image_range.unit_to_u8(layers['right']),
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
+          'disparity_range': (config.matching.min_disparity, config.matching.max_disparity),
           'global_shift': global_shift(gray, max(2, config.matching.min_disparity),
                                        config.matching.max_disparity)}

@@ -273,8 +273,25 @@ def match_volume(volume: np.ndarray, config: SgmConfig) -> dict:
   del volume
   d_left, d_right = select_disparities(total, config.min_disparity)
   del total
-  d_left, d_right = cv2.medianBlur(d_left, 3), cv2.medianBlur(d_right, 3)
-  ok_left, ok_right = lr_check(d_left, d_right, config.lr_threshold)
+  return postprocess(d_left, d_right, config.lr_threshold)
+
+
+def postprocess(disparity_left: np.ndarray, disparity_right: np.ndarray,
+                lr_threshold: float) -> dict:
+  """3x3 median of both maps, left-right check, background-favouring fill.
+
+  Args:
+    disparity_left, disparity_right: float32 [H, W] winner-take-all disparities, pixels
+      (any sign; a value that cannot pass the check, e.g. far outside the range, marks a
+      pixel without a match).
+    lr_threshold: pixels, as `lr_check`.
+
+  Returns:
+    As `match`.
+  """
+  d_left = cv2.medianBlur(np.ascontiguousarray(disparity_left, np.float32), 3)
+  d_right = cv2.medianBlur(np.ascontiguousarray(disparity_right, np.float32), 3)
+  ok_left, ok_right = lr_check(d_left, d_right, lr_threshold)
   return {'disparity_left': fill_holes(d_left, ok_left),
           'disparity_right': fill_holes(d_right, ok_right),
           'consistent_left': ok_left, 'consistent_right': ok_right}

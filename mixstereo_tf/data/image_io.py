@@ -108,20 +108,6 @@ def read_pfm(path: str) -> np.ndarray:
   return np.ascontiguousarray(np.flipud(array.reshape(shape)))
 
 
-def write_pfm(path: str, array: np.ndarray) -> None:
-  """Writes float32 `[H, W]` or `[H, W, 3]` (top row first) as a little-endian PFM."""
-  array = np.asarray(array, dtype=np.float32)
-  if array.ndim == 3 and array.shape[2] == 1:
-    array = array[:, :, 0]
-  if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
-    raise ValueError(f'write_pfm({path}): expected [H, W] or [H, W, 3], got {array.shape}')
-  magic = 'PF' if array.ndim == 3 else 'Pf'
-  header = f'{magic}\n{array.shape[1]} {array.shape[0]}\n-1.0\n'.encode('ascii')
-  with open(path, 'wb') as f:
-    f.write(header)
-    f.write(np.flipud(array).astype('<f4').tobytes())
-
-
 def _single_channel(array: np.ndarray, path: str) -> np.ndarray:
   """Returns a 2-D map; 3/4-channel files are accepted only when their colours are equal."""
   if array.ndim == 2:

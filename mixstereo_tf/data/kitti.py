@@ -92,8 +92,8 @@ def read_split_list(list_path: str, data_dir: str, skip_bad_pairs: bool = False,
   """Reads a `left right` split list into StereoSamples.
 
   Blank lines and lines starting with `#` are ignored. Samples get `source =
-  'list_path:line'`, a name from `sample_name`, and `calib` = the date folder of raw-drive
-  entries when it exists (for the Velodyne evaluation).
+  'list_path:line'`, a name from `sample_name`, and for raw-drive entries `calib` = the
+  date folder when it exists and `velodyne` = the frame's scan (for the Eigen evaluation).
 
   Args:
     list_path: the list file.
@@ -132,7 +132,8 @@ def read_split_list(list_path: str, data_dir: str, skip_bad_pairs: bool = False,
         continue
     samples.append(records.StereoSample(
         name=sample_name(fields[0]), left=left, right=right,
-        calib=_calib_folder(data_dir, fields[0], calib_cache), source=source))
+        calib=_calib_folder(data_dir, fields[0], calib_cache),
+        velodyne=velodyne_path(left) if _RAW_IMAGE.match(left) else None, source=source))
   if not samples:
     what = f' ({len(skipped)} skipped for missing files)' if skipped else ''
     raise ValueError(f"{list_path}: no pairs{what}; expected lines 'left right' with paths "

@@ -13,10 +13,7 @@ the `nonocc_left` / `all_left` / `disc_left` masks.
 """
 
 import os
-import re
 from typing import Dict, List, Mapping, Optional, Tuple
-
-import numpy as np
 
 from mixstereo_tf.data import records
 
@@ -25,6 +22,12 @@ from mixstereo_tf.data import records
 CLASSIC_SCALES = {'tsukuba': 16.0, 'venus': 8.0, 'sawtooth': 8.0, 'cones': 4.0, 'teddy': 4.0}
 DEFAULT_CLASSIC_SCALE = 8.0
 TSUKUBA_SCALE = 16.0
+
+# The scenes of the paper's tables (Middlebury 2001/2003, and 2006 Aloe), plus Motorcycle
+# (2014), the real pair of this project's held-out `sample` set: evaluation data that
+# training must not read (`is_evaluation_scene`).
+EVALUATION_SCENES = ('tsukuba', 'venus', 'sawtooth', 'map', 'cones', 'teddy', 'aloe',
+                     'motorcycle')
 
 LAYOUTS = ('2014/2021: im0.png + im1.png (+ disp0.pfm or disp0GT.pfm)',
            '2001 Tsukuba: scene1.row3.col3.ppm + scene1.row3.col4.ppm '
@@ -141,43 +144,8 @@ def middlebury_samples(data_dir: str, scale_overrides: Optional[Mapping[str, flo
   return samples
 
 
-def _parse_value(text: str):
-  text = text.strip()
-  if text.startswith('['):
-    if not text.endswith(']'):
-      raise ValueError('unterminated matrix')
-    rows = [row.split() for row in text[1:-1].split(';')]
-    return np.array(rows, dtype=np.float64)
-  if re.fullmatch(r'[-+]?\d+', text):
-    return int(text)
-  return float(text)
-
-
-def parse_calib(path: str) -> Dict[str, object]:
-  """Parses a Middlebury 2014/2021 `calib.txt`.
-
-  Lines are `key=value`; `cam0`/`cam1` (`[f 0 cx; 0 f cy; 0 0 1]`) become 3x3 float arrays,
-  integers (width, height, ndisp, isint, vmin, vmax) ints, and the rest (doffs, baseline in
-  mm, dyavg, dymax) floats.
-
-  Raises:
-    ValueError: missing file or malformed line, naming `path:line`.
-  """
-  if not os.path.isfile(path):
-    raise ValueError(f'Calibration file not found: {path}')
-  calib = {}
-  with open(path, encoding='utf-8') as f:
-    for number, line in enumerate(f, start=1):
-      if not line.strip():
-        continue
-      key, sep, value = line.partition('=')
-      try:
-        if not sep or not key.strip():
-          raise ValueError("expected 'key=value'")
-        parsed = _parse_value(value)
-        if key.strip().startswith('cam') and np.shape(parsed) != (3, 3):
-          raise ValueError('expected a 3x3 matrix')
-      except ValueError as e:
-        raise ValueError(f'{path}:{number}: {e}, got {line.strip()!r}') from None
-      calib[key.strip()] = parsed
-  return calib
+def is_evaluation_scene(name: str) -> bool:
+  """True for a folder of an EVALUATION_SCENES scene: 'Teddy', 'cones', 'Aloe',
+  'Motorcycle-perfect', 'MotorcycleE-imperfect', '2003/teddy' (case-insensitive)."""
+  base = name.replace('\\', '/').rsplit('/', 1)[-1].lower().split('-')[0]
+  return base in EVALUATION_SCENES or base.startswith('motorcycle')

@@ -2,14 +2,15 @@
 
 Training order (issue #2): list -> parallel decode -> random crop -> photometric
 augmentation (identical for both views) -> random flip-and-swap -> normalise to [-1, 1] ->
-mixture `f(left, right)` -> batch -> prefetch. Every random draw is a stateless op seeded by
+mixture `f(left, right)` (one of the configured encodings) -> optional degradation of the
+mixture (`degrade.py`) -> batch -> prefetch. Every random draw is a stateless op seeded by
 (seed, element index), so a seeded pipeline yields identical batches run after run.
 
 Elements are dicts with flat string keys (see docs/DESIGN.md): `mixture`, `left`, `right`
 ([H, W, 3] float32 in [-1, 1]), `disparity_left`, `disparity_right` ([H, W, 1] float32,
 pixels, 0 = unknown), `valid_left`, `valid_right`, `nonocc_left` ([H, W, 1] float32 0/1),
-`name` (string). Evaluation elements also carry `disc_left` ([H, W, 1] 0/1, the official
-Middlebury near-discontinuity mask, 0 where a dataset has none).
+`name` (string). The loaded `disc_left` mask is dropped: it has no right-view counterpart
+to swap on a flip (evaluation reads it through `sources.load_sample`).
 """
 
 import dataclasses
@@ -18,8 +19,11 @@ from typing import Dict, Sequence
 import numpy as np
 import tensorflow as tf
 
+from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
+from mixstereo_tf.data import degrade
 from mixstereo_tf.data import records
+from mixstereo_tf.data import sources
 
 _IMAGE_KEYS = ('left', 'right')
 _MAP_KEYS = ('disparity_left', 'disparity_right', 'valid_left', 'valid_right', 'nonocc_left')
@@ -28,6 +32,7 @@ _EVAL_ONLY_KEYS = ('disc_left',)
 # Stream numbers of `_seed`: one per random draw of an element, so no two draws of any two
 # elements share a stateless seed.
 _STREAM_CROP_TOP, _STREAM_AUGMENT, _STREAM_FLIP, _STREAM_CROP_LEFT = 1, 2, 3, 4
+_STREAM_ENCODING, _STREAM_DEGRADE = 5, 6
 
 
 @dataclasses.dataclass(frozen=True)
@@ -35,7 +40,9 @@ class PipelineConfig:
   """How pairs become training or evaluation elements.
 
   Attributes:
-    mixture: name of the composition operator (`mixstereo_tf.mixtures.MIXTURE_NAMES`).
+    mixture: name of the composition operator (`mixstereo_tf.mixtures.MIXTURE_NAMES`), or a
+      comma-separated list of them ('anaglyphs' = every anaglyph encoding): then each
+      element is mixed with one drawn uniformly (encoding mixing; not in the paper).
     crop_height: training crop height (paper: 256 KITTI, 384 Middlebury).
     crop_width: training crop width (paper: 512 KITTI, 384 Middlebury).
     batch_size: global batch size (paper: 1).
@@ -45,7 +52,9 @@ class PipelineConfig:
     shuffle_buffer: 0 shuffles the whole list each epoch.
     skip_bad_pairs: drop pairs that fail to decode while training instead of stopping;
       tf.data logs each dropped element's error but does not count them (list entries with
-      missing files are counted earlier, by `sources.load_samples`).
+      missing files are counted earlier, by `sources.list_samples`).
+    degrade: pass each mixture through `degrade.degrade` (noise, blur, JPEG, vignetting,
+      channel imbalance, as real files have them; not in the paper).
   """
   mixture: str = 'anaglyph'
   crop_height: int = 256
@@ -56,9 +65,13 @@ class PipelineConfig:
   seed: int = 0
   shuffle_buffer: int = 0
   skip_bad_pairs: bool = False
+  degrade: bool = False
 
   def __post_init__(self):
-    mixtures.get_mixture(self.mixture)  # Raises ValueError listing valid names.
+    try:
+      mixtures.parse_names(self.mixture)
+    except ValueError as e:
+      raise ValueError(f'PipelineConfig.mixture: {e}') from None
     for field in ('crop_height', 'crop_width', 'batch_size'):
       if getattr(self, field) <= 0:
         raise ValueError(f'PipelineConfig.{field} must be positive, got '
@@ -73,7 +86,7 @@ def _load_fn(samples: Sequence[records.StereoSample]):
   dtypes = [tf.as_dtype(records.LOADED_KEYS[k]) for k in keys]
 
   def load(index):
-    loaded = records.load_sample(samples[int(index)])
+    loaded = sources.load_sample(samples[int(index)])
     return [np.asarray(loaded[k], dtype=records.LOADED_KEYS[k]) for k in keys]
 
   def graph_load(index):
@@ -82,7 +95,7 @@ def _load_fn(samples: Sequence[records.StereoSample]):
     for key, tensor in zip(keys, tensors):
       if key in _IMAGE_KEYS:
         tensor.set_shape([None, None, 3])
-        out[key] = tf.cast(tensor, tf.float32) / 255.0
+        out[key] = image_range.u8_to_unit(tensor)
       else:
         tensor.set_shape([None, None])
         out[key] = tf.cast(tensor, tf.float32)[..., None]
@@ -180,19 +193,30 @@ def flip_and_swap(element: Dict[str, tf.Tensor]) -> Dict[str, tf.Tensor]:
   return out
 
 
-def _finish(element, mixture_name):
-  """Normalises to the network range and synthesises the mixture (paper: inputs in [-1, 1])."""
+def _finish(element, config: PipelineConfig, count):
+  """Normalises to the network range and synthesises the mixture (paper: inputs in [-1, 1]),
+  of one encoding drawn from the configured ones, degraded like a real file if asked."""
   out = dict(element)
   for key in _IMAGE_KEYS:
-    out[key] = element[key] * 2.0 - 1.0
-  out['mixture'] = mixtures.mix(mixture_name, out['left'], out['right'])
+    out[key] = image_range.unit_to_signed(element[key])
+  names = mixtures.parse_names(config.mixture)
+  if len(names) == 1:
+    out['mixture'] = mixtures.mix(names[0], out['left'], out['right'])
+  else:
+    index = tf.random.stateless_uniform([], _seed(config.seed, count, _STREAM_ENCODING), 0,
+                                        len(names), dtype=tf.int32)
+    out['mixture'] = mixtures.mix_one_of(names, index, out['left'], out['right'])
+  if config.degrade:
+    out['mixture'] = image_range.unit_to_signed(degrade.degrade(
+        image_range.signed_to_unit(out['mixture']),
+        _seed(config.seed, count, _STREAM_DEGRADE)))
   return out
 
 
 def _check_samples(samples):
   if not samples:
     raise ValueError('The dataset is empty: expected at least one stereo pair from the '
-                     'reader (check --data_dir and --train_list).')
+                     'reader (check DataConfig.data_dir and DataConfig.split_list).')
 
 
 def train_dataset(samples: Sequence[records.StereoSample],
@@ -225,7 +249,7 @@ def train_dataset(samples: Sequence[records.StereoSample],
       coin = tf.random.stateless_uniform([], _seed(config.seed, count, _STREAM_FLIP))
       element = tf.cond(coin < 0.5, lambda e=element: flip_and_swap(e),
                         lambda e=element: dict(e))
-    return _finish(element, config.mixture)
+    return _finish(element, config, count)
 
   ds = ds.map(prepare, num_parallel_calls=tf.data.AUTOTUNE, deterministic=True)
   if config.skip_bad_pairs:
@@ -233,16 +257,3 @@ def train_dataset(samples: Sequence[records.StereoSample],
   ds = ds.batch(config.batch_size, drop_remainder=True)
   return ds.prefetch(tf.data.AUTOTUNE)
 
-
-def eval_dataset(samples: Sequence[records.StereoSample], mixture: str) -> tf.data.Dataset:
-  """Full-size, unaugmented elements in list order, batch 1, with ground truth.
-
-  Ground-truth disparities and masks (including `disc_left`) are passed through unchanged.
-  """
-  _check_samples(samples)
-  mixtures.get_mixture(mixture)
-  load = _load_fn(list(samples))
-  ds = tf.data.Dataset.range(len(samples))
-  ds = ds.map(lambda i: _finish(load(i), mixture), num_parallel_calls=tf.data.AUTOTUNE,
-              deterministic=True)
-  return ds.batch(1).prefetch(tf.data.AUTOTUNE)

@@ -7,42 +7,44 @@ For each pair: <name>_left.png, _right.png, _mixture.png (RGB) and _disparity_le
 _disparity_right.png (grey, 255 = --max_disparity, black = unknown).
 """
 
-import os
+from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
+
+import os  # pylint: disable=g-bad-import-order
 
 from absl import app
 from absl import flags
 import cv2
 
-from mixstereo_tf import mixtures
+from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.data import sample
 
-_OUTPUT_DIR = flags.DEFINE_string('output_dir', None, 'Directory for the PNGs.', required=True)
-_MIXTURE = flags.DEFINE_enum('mixture', 'anaglyph', mixtures.MIXTURE_NAMES,
-                             'Composition operator of the mixture image.')
+cli_flags.define_output_dir()
+cli_flags.define_mixture()
+cli_flags.define_max_disparity()
+FLAGS = flags.FLAGS
 _NUM = flags.DEFINE_integer('num', 4, 'Number of pairs to write.', lower_bound=1)
 _SPLIT = flags.DEFINE_enum('split', 'train', sample.SPLITS,
                            'heldout also includes the Motorcycle pair (last).')
 _HEIGHT = flags.DEFINE_integer('height', None, 'Scene height (default: the source default).')
 _WIDTH = flags.DEFINE_integer('width', None, 'Scene width (default: the source default).')
-_MAX_DISPARITY = flags.DEFINE_integer('max_disparity', 96, 'Disparity range of the network.')
 
 
 def main(argv):
   del argv
-  samples = sample.sample_records(_SPLIT.value, height=_HEIGHT.value, width=_WIDTH.value,
-                                  max_disparity=_MAX_DISPARITY.value)
+  samples = sample.sample_records(_SPLIT.value, max_disparity=FLAGS.max_disparity,
+                                  height=_HEIGHT.value, width=_WIDTH.value)
   if _SPLIT.value == 'heldout':  # Show the real pair even when --num is small.
     samples = samples[:max(_NUM.value - 1, 0)] + samples[-1:]
-  os.makedirs(_OUTPUT_DIR.value, exist_ok=True)
+  os.makedirs(FLAGS.output_dir, exist_ok=True)
   for record in samples[:_NUM.value]:
-    images = sample.preview_images(record, _MIXTURE.value, _MAX_DISPARITY.value)
+    images = sample.preview_images(record, (FLAGS.mixture or 'anaglyph'), FLAGS.max_disparity)
     for key, image in images.items():
-      path = os.path.join(_OUTPUT_DIR.value, f'{record.name}_{key}.png')
+      path = os.path.join(FLAGS.output_dir, f'{record.name}_{key}.png')
       if image.ndim == 3:
         image = cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
       if not cv2.imwrite(path, image):
         raise ValueError(f'Could not write {path} (--output_dir).')
-    print(f'Wrote {record.name} to {_OUTPUT_DIR.value}')
+    print(f'Wrote {record.name} to {FLAGS.output_dir}')
 
 
 if __name__ == '__main__':

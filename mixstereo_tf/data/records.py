@@ -1,13 +1,14 @@
 """The stereo sample record every dataset reader returns, and its loader.
 
 A reader (KITTI, Middlebury, the embedded `sample` source) turns a dataset root or a split
-list into a list of `StereoSample`s; `load_sample` turns one into NumPy arrays. File-backed
-samples hold paths; samples of the embedded source hold virtual URIs (`synthetic://...`,
-`skimage://motorcycle`) that `mixstereo_tf.data.sample` renders on demand.
+list into a list of `StereoSample`s; `sources.load_sample` turns one into NumPy arrays with
+the keys of `LOADED_KEYS`. File-backed samples hold paths; samples of the embedded source
+hold virtual URIs (`synthetic://...`, `skimage://motorcycle`) that
+`mixstereo_tf.data.sample` renders on demand.
 """
 
 import dataclasses
-from typing import Dict, Mapping, Optional
+from typing import Mapping, Optional
 
 import numpy as np
 
@@ -29,7 +30,8 @@ class StereoSample:
     all_left: optional path of the 'all' evaluation mask for the left view (white = evaluated).
     disc_left: optional path of the near-discontinuity evaluation mask for the left view
       (Middlebury `disc.png`, white = evaluated).
-    calib: optional path of a calibration file.
+    calib: optional path of a calibration file (KITTI raw: the date folder).
+    velodyne: optional path of the frame's Velodyne scan (KITTI raw).
     source: where the sample was listed, as 'file:line' or the scene folder, for errors.
   """
   name: str
@@ -42,6 +44,7 @@ class StereoSample:
   all_left: Optional[str] = None
   disc_left: Optional[str] = None
   calib: Optional[str] = None
+  velodyne: Optional[str] = None
   source: str = ''
 
   @property
@@ -49,7 +52,7 @@ class StereoSample:
     return self.left.startswith(VIRTUAL_SCHEMES)
 
 
-# Keys and dtypes of `load_sample`'s result; the tf.data pipeline relies on them.
+# Keys and dtypes of `sources.load_sample`'s result; the tf.data pipeline relies on them.
 LOADED_KEYS: Mapping[str, type] = {
     'left': np.uint8,             # [H, W, 3] RGB
     'right': np.uint8,            # [H, W, 3] RGB
@@ -61,22 +64,3 @@ LOADED_KEYS: Mapping[str, type] = {
     'disc_left': np.bool_,        # [H, W] valid and near a discontinuity; False if unknown
 }
 
-
-def load_sample(sample: StereoSample) -> Dict[str, np.ndarray]:
-  """Loads a sample into NumPy arrays with exactly the keys of `LOADED_KEYS`.
-
-  Args:
-    sample: the record.
-
-  Returns:
-    Dict of arrays. Images are converted to 8-bit RGB whatever their file format.
-
-  Raises:
-    ValueError: a file is missing or unreadable, or the views differ in size; the message
-      names the file and `sample.source`.
-  """
-  if sample.is_virtual:
-    from mixstereo_tf.data import sample as sample_source  # pylint: disable=g-import-not-at-top
-    return sample_source.load_virtual(sample)
-  from mixstereo_tf.data import image_io  # pylint: disable=g-import-not-at-top
-  return image_io.load_file_sample(sample)

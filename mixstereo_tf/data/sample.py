@@ -16,13 +16,16 @@ its pixels are). Its right disparity is unknown (zeros, all False). No source ha
 near-discontinuity mask (`disc_left` all False).
 """
 
+import dataclasses
 import functools
+import os
 from typing import Dict, List, Optional
 import urllib.parse
 
 import numpy as np
 import tensorflow as tf
 
+from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
 from mixstereo_tf.data import records
 from mixstereo_tf.data import synthetic
@@ -53,9 +56,10 @@ def motorcycle_factor(max_disparity: int) -> int:
   return max(1, int(np.ceil(largest / (max_disparity - 1.0))))
 
 
-def sample_records(split: str = 'train', num_scenes: Optional[int] = None,
+def sample_records(split: str, *, max_disparity: int, num_scenes: Optional[int] = None,
                    height: Optional[int] = None, width: Optional[int] = None,
-                   max_disparity: int = 96) -> List[records.StereoSample]:
+                   texture_dir: Optional[str] = None, realistic: bool = False
+                   ) -> List[records.StereoSample]:
   """Lists the pairs of the embedded source.
 
   Args:
@@ -65,6 +69,10 @@ def sample_records(split: str = 'train', num_scenes: Optional[int] = None,
     height, width: scene size (default: `synthetic.SceneConfig`'s); the Motorcycle pair
       keeps its own size.
     max_disparity: the network's disparity range; all ground truth stays below it.
+    texture_dir: a folder of photographs to texture the scenes with (`synthetic.
+      load_texture_dir`; training only: held-out scenes keep their own textures) instead of
+      the split's scikit-image pictures.
+    realistic: scenes with the structures of real ones (`synthetic.SceneConfig.realistic`).
 
   Returns:
     Train: the scenes. Held-out: the scenes, then the Motorcycle pair.
@@ -78,10 +86,17 @@ def sample_records(split: str = 'train', num_scenes: Optional[int] = None,
     num_scenes = DEFAULT_TRAIN_SCENES if split == 'train' else HELDOUT_SCENES
   if not 0 < num_scenes <= HELDOUT_SEED_OFFSET:
     raise ValueError(f'num_scenes must be in [1, 2**31], got {num_scenes}.')
-  defaults = synthetic.SceneConfig()
-  config = synthetic.SceneConfig(height=height or defaults.height,
-                                 width=width or defaults.width, max_disparity=max_disparity)
+  defaults = synthetic.SceneConfig(max_disparity=max_disparity)
+  config = dataclasses.replace(defaults, height=height or defaults.height,
+                               width=width or defaults.width)
   query = f'h={config.height}&w={config.width}&d={config.max_disparity}'
+  if realistic:
+    query += '&r=1'
+  if texture_dir:
+    if split != 'train':
+      raise ValueError('A texture folder textures training scenes only: the held-out scenes '
+                       'keep textures no training scene uses.')
+    query += '&' + urllib.parse.urlencode({'tex': os.path.abspath(texture_dir)})
   samples = []
   for index in range(num_scenes):
     uri = f'synthetic://{split}/{index}?{query}'
@@ -101,7 +116,8 @@ def _parse(sample: records.StereoSample):
   """(scheme, netloc, path, {key: int}) of the sample's URI; ValueError names the record."""
   parts = urllib.parse.urlsplit(sample.left)
   try:
-    query = {k: int(v) for k, v in urllib.parse.parse_qsl(parts.query, strict_parsing=True)}
+    query = {k: v if k == 'tex' else int(v)
+             for k, v in urllib.parse.parse_qsl(parts.query, strict_parsing=True)}
   except ValueError as error:
     raise ValueError(f'Bad virtual URI {sample.left!r} ({sample.source}): {error}') from None
   return parts.scheme, parts.netloc, parts.path.strip('/'), query
@@ -114,11 +130,14 @@ def load_virtual(sample: records.StereoSample) -> Dict[str, np.ndarray]:
     ValueError: the URI is malformed (the message names it and `sample.source`).
   """
   scheme, netloc, path, query = _parse(sample)
-  if scheme == 'synthetic' and netloc in SPLITS and path.isdigit() and set(query) == {
-      'h', 'w', 'd'}:
+  if scheme == 'synthetic' and netloc in SPLITS and path.isdigit() and {
+      'h', 'w', 'd'} <= set(query) <= {'h', 'w', 'd', 'r', 'tex'}:
     config = synthetic.SceneConfig(height=query['h'], width=query['w'],
-                                   max_disparity=query['d'])
-    textures = synthetic.load_textures(netloc, config.texture_sigma)
+                                   max_disparity=query['d'], realistic=bool(query.get('r')))
+    if 'tex' in query:
+      textures = synthetic.load_texture_dir(query['tex'], config.texture_sigma)
+    else:
+      textures = synthetic.load_textures(netloc, config.texture_sigma)
     scene = synthetic.render_scene(scene_seed(netloc, int(path)), config, textures)
     full = np.ones(scene['nonocc_left'].shape, bool)
     scene.update(valid_left=full, valid_right=full.copy(), disc_left=np.zeros_like(full))
@@ -127,7 +146,7 @@ def load_virtual(sample: records.StereoSample) -> Dict[str, np.ndarray]:
   if scheme == 'skimage' and netloc == 'motorcycle' and set(query) == {'factor'}:
     return _load_motorcycle(query['factor'])
   raise ValueError(f'Unknown virtual URI {sample.left!r} ({sample.source}); expected '
-                   "'synthetic://train|heldout/<index>?h=..&w=..&d=..' or "
+                   "'synthetic://train|heldout/<index>?h=..&w=..&d=..[&r=1][&tex=..]' or "
                    "'skimage://motorcycle?factor=<k>'.")
 
 
@@ -201,11 +220,10 @@ def preview_images(sample: records.StereoSample, mixture: str,
                    max_disparity: float) -> Dict[str, np.ndarray]:
   """uint8 images to look at: left, right, mixture (RGB) and the two disparities (grey,
   255 = max_disparity, black = unknown)."""
-  loaded = records.load_sample(sample)
-  views = [tf.constant(loaded[k], tf.float32) / 127.5 - 1.0 for k in ('left', 'right')]
-  mixed = mixtures.mix(mixture, *views).numpy()
+  loaded = load_virtual(sample)
+  views = [image_range.u8_to_signed(tf.constant(loaded[k])) for k in ('left', 'right')]
   out = {'left': loaded['left'], 'right': loaded['right'],
-         'mixture': np.clip(np.rint((mixed + 1.0) * 127.5), 0, 255).astype(np.uint8)}
+         'mixture': image_range.signed_to_u8(mixtures.mix(mixture, *views)).numpy()}
   for key in ('disparity_left', 'disparity_right'):
     scaled = loaded[key] * (255.0 / max_disparity)
     out[key] = np.clip(np.rint(scaled), 0, 255).astype(np.uint8)

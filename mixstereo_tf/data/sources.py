@@ -1,18 +1,29 @@
-"""One entry point from a dataset name (the `--dataset` flag) to a list of StereoSamples."""
+"""The one entry point from a dataset to its stereo pairs: listing by split, and loading.
+
+`list_samples(DataConfig, split)` dispatches through a registry of datasets (`DATASETS`);
+`load_sample(StereoSample)` turns one record into arrays, whether it names files or a
+virtual URI of the embedded `sample` source. Training, evaluation and the benchmarks all
+reach datasets through these two functions.
+
+Splits: 'train' (what training reads) and 'heldout' (what evaluation reads). Only the
+embedded `sample` source has two different sets; the other datasets list the folder or
+the split list they are given for either split.
+"""
 
 import dataclasses
 import math
-from typing import List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 from absl import logging
+import numpy as np
 
+from mixstereo_tf.data import image_io
 from mixstereo_tf.data import kitti
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sample
 
-DATASETS = ('sample', 'kitti_raw', 'kitti2015', 'kitti2012', 'middlebury')
-SPLITS = ('train', 'eval')
+SPLITS = ('train', 'heldout')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -22,105 +33,147 @@ class DataConfig:
   Attributes:
     dataset: one of DATASETS.
     data_dir: the dataset root (not used by `sample`).
-    train_list: a split list of `left right` lines relative to data_dir (`kitti_raw`).
+    split_list: a list of `left right` lines relative to data_dir (`kitti_raw`).
     skip_bad_pairs: log and count pairs with missing files instead of failing.
-    middlebury_scales: (scene, GT scale) pairs replacing the Middlebury layout's disparity
-      scale of those scenes (`middlebury`; see `parse_scene_scales`).
     sample_scenes: number of procedural training scenes of the `sample` source.
+    heldout_scenes: number of procedural held-out scenes of `sample` (None: the source's
+      default); the Motorcycle pair is always added.
     sample_height: height of `sample` scenes (None: the source's default).
     sample_width: width of `sample` scenes (None: the source's default).
-    max_disparity: the network's disparity range; `sample` scenes stay inside it.
+    max_disparity: the network's disparity range; `sample` scenes stay inside it
+      (required for `sample`).
+    middlebury_scales: (scene, GT scale) pairs replacing the Middlebury layout's disparity
+      scale of those scenes (`middlebury`), scene names case-insensitive.
+    texture_dir: a folder of photographs texturing the `sample` training scenes (None: the
+      scikit-image pictures of the split).
+    realistic_scenes: `sample` training scenes with ground planes, thin poles and more
+      layers (`synthetic.SceneConfig.realistic`).
+    allow_evaluation_scenes: let the 'train' split read evaluation data: the Middlebury
+      scenes of the paper's tables (`middlebury.EVALUATION_SCENES`) and the KITTI 2015
+      training frames. Off: such a training set is refused.
   """
   dataset: str = 'sample'
   data_dir: Optional[str] = None
-  train_list: Optional[str] = None
+  split_list: Optional[str] = None
   skip_bad_pairs: bool = False
-  sample_scenes: int = 2000
+  sample_scenes: int = sample.DEFAULT_TRAIN_SCENES
+  heldout_scenes: Optional[int] = None
   sample_height: Optional[int] = None
   sample_width: Optional[int] = None
-  max_disparity: int = 96
+  max_disparity: Optional[int] = None
   middlebury_scales: Tuple[Tuple[str, float], ...] = ()
+  texture_dir: Optional[str] = None
+  realistic_scenes: bool = False
+  allow_evaluation_scenes: bool = False
 
   def __post_init__(self):
-    if self.dataset not in DATASETS:
-      raise ValueError(f'Unknown dataset {self.dataset!r}; valid: {", ".join(DATASETS)}.')
+    if self.dataset not in _LISTERS:
+      raise ValueError(f'Unknown DataConfig.dataset={self.dataset!r}; valid: '
+                       f'{", ".join(DATASETS)}.')
     if self.dataset != 'sample' and not self.data_dir:
-      raise ValueError(f'--data_dir is required for --dataset={self.dataset}.')
-    if self.dataset == 'kitti_raw' and not self.train_list:
-      raise ValueError('--train_list is required for --dataset=kitti_raw (e.g. '
+      raise ValueError(f'DataConfig.data_dir is required for dataset {self.dataset!r}.')
+    if self.dataset == 'sample' and self.max_disparity is None:
+      raise ValueError("DataConfig.max_disparity is required for dataset 'sample'.")
+    if self.dataset == 'kitti_raw' and not self.split_list:
+      raise ValueError("DataConfig.split_list is required for dataset 'kitti_raw' (e.g. "
                        'data_lists/kitti/kitti_train_files.txt).')
     if self.middlebury_scales and self.dataset != 'middlebury':
-      raise ValueError(f'--middlebury_scale applies to --dataset=middlebury only, got '
-                       f'--dataset={self.dataset}.')
-    _check_scene_scales(self.middlebury_scales, 'middlebury_scale',
-                        [f'{scene}:{scale:g}' for scene, scale in self.middlebury_scales])
+      raise ValueError(f"DataConfig.middlebury_scales apply to dataset 'middlebury' only, "
+                       f'got {self.dataset!r}.')
+    seen = set()
+    for scene, scale in self.middlebury_scales:
+      if not scene or not (math.isfinite(scale) and scale > 0):
+        raise ValueError('DataConfig.middlebury_scales: expected a non-empty scene and a '
+                         f'positive scale, got {scene}:{scale:g}.')
+      if scene.lower() in seen:
+        raise ValueError(f'DataConfig.middlebury_scales: scene {scene!r} is given twice.')
+      seen.add(scene.lower())
 
 
-def _check_scene_scales(pairs: Sequence[Tuple[str, float]], flag: str,
-                        items: Sequence[str]) -> None:
-  """ValueError naming `--flag` and the item (text of the pair) unless every scale is
-  positive and finite and every scene (case-insensitive) appears once."""
-  seen = set()
-  for (scene, scale), item in zip(pairs, items):
-    if not scene or not (math.isfinite(scale) and scale > 0):
-      raise ValueError(f'--{flag}: expected scene:scale with a non-empty scene and a positive '
-                       f'scale (e.g. tsukuba:16), got {item!r}.')
-    if scene.lower() in seen:
-      raise ValueError(f'--{flag}: scene {scene!r} is given twice ({item!r}).')
-    seen.add(scene.lower())
+def _sample(config: DataConfig, split: str) -> List[records.StereoSample]:
+  sizes = {k: v for k, v in (('height', config.sample_height),
+                             ('width', config.sample_width)) if v is not None}
+  if split == 'train':
+    return sample.sample_records('train', num_scenes=config.sample_scenes,
+                                 max_disparity=config.max_disparity,
+                                 texture_dir=config.texture_dir,
+                                 realistic=config.realistic_scenes, **sizes)
+  return sample.sample_records('heldout', num_scenes=config.heldout_scenes,
+                               max_disparity=config.max_disparity, **sizes)
 
 
-def parse_scene_scales(items: Sequence[str],
-                       flag: str = 'middlebury_scale') -> Tuple[Tuple[str, float], ...]:
-  """Parses `scene:scale` items (e.g. ['tsukuba:16', 'venus:8']) into (scene, scale) pairs.
-
-  Scene names are matched case-insensitively by the Middlebury reader.
-
-  Raises:
-    ValueError: an item is not `scene:scale` with a positive finite scale, or a scene is
-      given twice; the message names `--flag` and the item.
-  """
-  pairs = []
-  for item in items:
-    scene, _, value = item.rpartition(':')
-    try:
-      scale = float(value)
-    except ValueError:
-      raise ValueError(f'--{flag}: expected scene:scale with a number as scale (e.g. '
-                       f'tsukuba:16), got {item!r}.') from None
-    pairs.append((scene.strip(), scale))
-  _check_scene_scales(pairs, flag, items)
-  return tuple(pairs)
+def _kitti_raw(config: DataConfig, split: str) -> List[records.StereoSample]:
+  del split  # The split list is the split.
+  split_list = kitti.read_split_list(config.split_list, config.data_dir,
+                                     skip_bad_pairs=config.skip_bad_pairs)
+  if split_list.skipped:
+    total = len(split_list.samples) + len(split_list.skipped)
+    logging.warning('skip_bad_pairs: skipped %d of %d pairs of %s (missing files), at '
+                    'lines %s.', len(split_list.skipped), total, config.split_list,
+                    ', '.join(str(n) for n in split_list.skipped_lines))
+  return split_list.samples
 
 
-def load_samples(config: DataConfig, split: str = 'train') -> List[records.StereoSample]:
-  """Lists the pairs of a dataset; `split='eval'` selects held-out data where it differs.
+def _refuse_evaluation_data(config: DataConfig, what: str) -> None:
+  if not config.allow_evaluation_scenes:
+    raise ValueError(f'{what} in {config.data_dir} are the paper\'s evaluation data and '
+                     'would make its tables meaningless as training data; remove them, or '
+                     'set DataConfig.allow_evaluation_scenes to train on them anyway.')
+
+
+def _kitti_stereo(version: str) -> Callable[[DataConfig, str], List[records.StereoSample]]:
+
+  def lister(config: DataConfig, split: str) -> List[records.StereoSample]:
+    samples = kitti.kitti_stereo_samples(config.data_dir, version=version)
+    if split == 'train' and version == '2015':
+      _refuse_evaluation_data(config, f'The {len(samples)} KITTI 2015 training frames')
+    return samples
+
+  return lister
+
+
+def _middlebury(config: DataConfig, split: str) -> List[records.StereoSample]:
+  samples = middlebury.middlebury_samples(config.data_dir,
+                                          scale_overrides=dict(config.middlebury_scales))
+  evaluation = [s.name for s in samples if middlebury.is_evaluation_scene(s.name)]
+  if split == 'train' and evaluation:
+    _refuse_evaluation_data(config, f'The Middlebury scenes {", ".join(evaluation)}')
+  return samples
+
+
+_LISTERS: Dict[str, Callable[[DataConfig, str], List[records.StereoSample]]] = {
+    'sample': _sample,
+    'kitti_raw': _kitti_raw,
+    'kitti2015': _kitti_stereo('2015'),
+    'kitti2012': _kitti_stereo('2012'),
+    'middlebury': _middlebury,
+}
+DATASETS = tuple(_LISTERS)
+
+
+def list_samples(config: DataConfig, split: str = 'train') -> List[records.StereoSample]:
+  """Lists the pairs of a dataset's split (see the module docstring).
 
   With `config.skip_bad_pairs`, list entries whose files are missing are dropped and one
   warning reports how many, with their line numbers.
 
   Raises:
-    ValueError: nothing found, or a bad list entry (named by file and line).
+    ValueError: unknown split, nothing found, or a bad list entry (named by file and line).
   """
   if split not in SPLITS:
-    raise ValueError(f'Unknown split {split!r}; valid: {SPLITS}.')
-  if config.dataset == 'sample':
-    sizes = {k: v for k, v in (('height', config.sample_height),
-                               ('width', config.sample_width)) if v is not None}
-    if split == 'train':
-      return sample.sample_records('train', num_scenes=config.sample_scenes,
-                                   max_disparity=config.max_disparity, **sizes)
-    return sample.sample_records('heldout', max_disparity=config.max_disparity, **sizes)
-  if config.dataset == 'kitti_raw':
-    split_list = kitti.read_split_list(config.train_list, config.data_dir,
-                                       skip_bad_pairs=config.skip_bad_pairs)
-    if split_list.skipped:
-      total = len(split_list.samples) + len(split_list.skipped)
-      logging.warning('--skip_bad_pairs: skipped %d of %d pairs of %s (missing files), at '
-                      'lines %s.', len(split_list.skipped), total, config.train_list,
-                      ', '.join(str(n) for n in split_list.skipped_lines))
-    return split_list.samples
-  if config.dataset in ('kitti2015', 'kitti2012'):
-    return kitti.kitti_stereo_samples(config.data_dir, version=config.dataset[-4:])
-  return middlebury.middlebury_samples(config.data_dir,
-                                       scale_overrides=dict(config.middlebury_scales))
+    raise ValueError(f'Unknown split {split!r}; valid: {", ".join(SPLITS)}.')
+  return _LISTERS[config.dataset](config, split)
+
+
+def load_sample(record: records.StereoSample) -> Dict[str, np.ndarray]:
+  """Loads a record into NumPy arrays with exactly the keys of `records.LOADED_KEYS`.
+
+  Images are converted to 8-bit RGB whatever their file format.
+
+  Raises:
+    ValueError: a file is missing or unreadable, or the views differ in size; the message
+      names the file and `record.source`.
+  """
+  if record.is_virtual:
+    return sample.load_virtual(record)
+  return image_io.load_file_sample(record)

@@ -17,6 +17,7 @@ Pixel centres sit at integer coordinates.
 
 import dataclasses
 import functools
+import os
 from typing import Dict, List, Sequence, Tuple
 
 import cv2
@@ -36,25 +37,29 @@ class SceneConfig:
   """Size and depth range of a procedural scene.
 
   Attributes:
-    height: image height in pixels.
-    width: image width in pixels.
     max_disparity: the network's disparity range; every disparity stays in
       [min_disparity, near_fraction * max_disparity] (at most max_disparity - 1).
+    height: image height in pixels.
+    width: image width in pixels.
     min_disparity: the farthest disparity (pixels, > 0 so 0 can mean 'unknown').
     near_fraction: the nearest layers reach this fraction of max_disparity.
     min_layers: fewest layers, background plane included.
     max_layers: most layers, background plane included.
     texture_sigma: Gaussian blur (pixels) applied to the texture sources; keeps bilinear
       resampling close to exact so the two views agree to within ~1/255.
+    realistic: add the structures of real scenes (`random_layers`): a ground plane that
+      comes nearer towards the bottom (p = 0.6), thin poles (p = 0.5, 1-3 of them) and more
+      layers (4-9).
   """
+  max_disparity: int
   height: int = 128
   width: int = 256
-  max_disparity: int = 96
   min_disparity: float = 1.0
   near_fraction: float = 0.8
   min_layers: int = 3
   max_layers: int = 6
   texture_sigma: float = 1.0
+  realistic: bool = False
 
   def __post_init__(self):
     if self.height < 8 or self.width < 8:
@@ -157,6 +162,33 @@ def load_textures(split: str, sigma: float = 1.0) -> TextureAtlas:
   return TextureAtlas(images)
 
 
+@functools.lru_cache(maxsize=4)
+def load_texture_dir(folder: str, sigma: float = 1.0, long_side: int = 800) -> TextureAtlas:
+  """Every image of a folder of photographs (JPEG, PNG, ...) as textures, cached.
+
+  Each is read as RGB, reduced so its longer side is at most `long_side`, and blurred by
+  `sigma` like the built-in textures.
+
+  Raises:
+    ValueError: the folder holds no readable image.
+  """
+  names = sorted(n for n in os.listdir(folder) if os.path.splitext(n)[1].lower() in
+                 ('.jpg', '.jpeg', '.png', '.ppm', '.bmp', '.tif', '.tiff', '.webp'))
+  images = []
+  for name in names:
+    image = cv2.imread(os.path.join(folder, name), cv2.IMREAD_COLOR)
+    if image is None:
+      continue
+    scale = long_side / max(image.shape[:2])
+    if scale < 1:
+      image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    image = image[..., ::-1].astype(np.float32)
+    images.append(cv2.GaussianBlur(image, (0, 0), sigma) if sigma > 0 else image)
+  if not images:
+    raise ValueError(f'No readable image in the texture folder {folder}.')
+  return TextureAtlas(images)
+
+
 def _plane_for_box(rng, low, high, box, max_slope):
   """A plane whose value stays in [low, high] over box = (x0, x1, y0, y1)."""
   x0, x1, y0, y1 = box
@@ -187,12 +219,45 @@ def _random_shape(rng, height, width, extent):
   return kind, params, (cx - radius, cx + radius, cy - radius, cy + radius)
 
 
+def _textured(rng, shape, params, plane, num_textures) -> Layer:
+  texture_affine = (float(rng.uniform(0, 512)), float(rng.uniform(0, 512)),
+                    float(rng.uniform(0.6, 1.25)), float(rng.uniform(-np.pi, np.pi)))
+  return Layer(shape, params, plane, int(rng.integers(num_textures)), texture_affine,
+               tuple(float(g) for g in rng.uniform(0.6, 1.2, size=3)),
+               tuple(float(o) for o in rng.uniform(-30, 30, size=3)))
+
+
+def _real_structures(rng, config: SceneConfig, num_textures: int) -> List[Layer]:
+  """A ground plane and thin poles (SceneConfig.realistic), in left coordinates."""
+  h, w = config.height, config.width
+  extent, pad = w + config.near_limit, 0.1 * h
+  layers = []
+  if rng.uniform() < 0.6:
+    horizon = rng.uniform(0.35, 0.7) * h
+    far = rng.uniform(config.min_disparity, config.far_limit)
+    near = rng.uniform(0.5, 0.9) * config.near_limit
+    slope = (near - far) / (h - horizon)
+    params = (-pad, horizon, extent + pad, horizon, extent + pad, h + pad, -pad, h + pad)
+    layers.append(_textured(rng, 'polygon', params, (float(far - slope * horizon), 0.0,
+                                                     float(slope)), num_textures))
+  if rng.uniform() < 0.5:
+    for _ in range(int(rng.integers(1, 4))):
+      half_width, half_height = rng.uniform(0.7, 4.0), rng.uniform(0.2, 0.6) * h
+      params = (float(rng.uniform(0, extent)), float(rng.uniform(0, h)), float(half_width),
+                float(half_height), float(rng.uniform(-0.15, 0.15)))
+      d = rng.uniform(config.far_limit, config.near_limit)
+      layers.append(_textured(rng, 'rectangle', params, (float(d), 0.0, 0.0), num_textures))
+  return layers
+
+
 def random_layers(seed: int, config: SceneConfig, num_textures: int) -> List[Layer]:
   """The layers of scene `seed`, background plane first; deterministic in seed."""
   rng = np.random.default_rng(seed)
   h, w = config.height, config.width
   extent = w + config.near_limit  # Right-view pixels see left coordinates up to W + d.
-  count = int(rng.integers(config.min_layers, config.max_layers + 1))
+  low_count, high_count = (4, 9) if config.realistic else (config.min_layers,
+                                                           config.max_layers)
+  count = int(rng.integers(low_count, high_count + 1))
   layers = []
   for index in range(count):
     if index == 0:
@@ -202,11 +267,9 @@ def random_layers(seed: int, config: SceneConfig, num_textures: int) -> List[Lay
       shape, params, box = _random_shape(rng, h, w, extent)
       low, high = config.far_limit, config.near_limit
     plane = _plane_for_box(rng, low, high, box, max_slope=0.15)
-    texture_affine = (float(rng.uniform(0, 512)), float(rng.uniform(0, 512)),
-                      float(rng.uniform(0.6, 1.25)), float(rng.uniform(-np.pi, np.pi)))
-    layers.append(Layer(shape, params, plane, int(rng.integers(num_textures)), texture_affine,
-                        tuple(float(g) for g in rng.uniform(0.6, 1.2, size=3)),
-                        tuple(float(o) for o in rng.uniform(-30, 30, size=3))))
+    layers.append(_textured(rng, shape, params, plane, num_textures))
+    if index == 0 and config.realistic:
+      layers.extend(_real_structures(rng, config, num_textures))
   return layers
 
 

@@ -25,20 +25,12 @@ _CROPS = {
 }
 
 
-def to_uint8(image_m1_1) -> np.ndarray:
-  """Maps an image in [-1, 1] to uint8 with rounding: round((x + 1) * 127.5), clipped.
-
-  PSNR is measured on these quantised 8-bit views, like published result images.
-  """
-  image = np.asarray(image_m1_1, dtype=np.float64)
-  return np.clip(np.round((image + 1.0) * 127.5), 0, 255).astype(np.uint8)
-
-
 def psnr(pred_u8, gt_u8, mask=None, max_db: Optional[float] = 100.0) -> float:
   """Peak signal-to-noise ratio on the 8-bit scale, 10 log10(255² / MSE), in dB.
 
   Args:
-    pred_u8: [H, W, C] (or [H, W]) uint8, or float values on the [0, 255] scale.
+    pred_u8: [H, W, C] (or [H, W]) uint8 (`image_range.signed_to_u8` quantises network
+      views like published result images), or float values on the [0, 255] scale.
     gt_u8: same shape.
     mask: optional bool/0-1 [H, W]; the MSE averages over masked pixels and all channels.
     max_db: cap on the result. Identical images have infinite PSNR, which would dominate

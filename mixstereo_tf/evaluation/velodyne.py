@@ -1,11 +1,8 @@
 """Sparse ground-truth depth from KITTI Velodyne scans (Eigen split evaluation).
 
-A scan is projected into a rectified camera:
-  raw calibration (`calib_velo_to_cam.txt`, `calib_cam_to_cam.txt`):
-      P = P_rect_0c · R_rect_00 · [R | T]
-  object-benchmark calibration (`calib.txt` with P0..P3, R0_rect, Tr_velo_to_cam):
-      P = P_c · R0_rect · Tr_velo_to_cam
-with R_rect and [R | T] padded to 4x4. A point X (metres, velodyne frame: x forward, y left,
+A scan is projected into a rectified camera of the raw calibration (`calib_velo_to_cam.txt`,
+`calib_cam_to_cam.txt`): P = P_rect_0c · R_rect_00 · [R | T], with R_rect and [R | T]
+padded to 4x4. A point X (metres, velodyne frame: x forward, y left,
 z up) maps to (u·z, v·z, z) = P · [X, 1]; z is the depth along the camera axis.
 
 Rasterisation choices:
@@ -68,11 +65,6 @@ def read_calib_file(path: str) -> Dict[str, CalibValue]:
   return calib
 
 
-def read_object_calib(path: str) -> Dict[str, CalibValue]:
-  """Reads a KITTI object-benchmark `calib.txt` (P0..P3, R0_rect, Tr_velo_to_cam, ...)."""
-  return read_calib_file(path)
-
-
 def read_velodyne(path: str) -> np.ndarray:
   """Reads a Velodyne `.bin` scan: float32 [N, 4] (x, y, z in metres, reflectance)."""
   data = np.fromfile(path, dtype=np.float32)
@@ -112,14 +104,6 @@ def velo_to_camera_projection(cam_to_cam: Dict[str, CalibValue],
   rectify = _homogeneous(_matrix(cam_to_cam, 'R_rect_00', 3, 3))
   project = _matrix(cam_to_cam, f'P_rect_{camera:02d}', 3, 4)
   return project @ rectify @ _homogeneous(rigid)
-
-
-def object_velo_to_camera_projection(calib: Dict[str, CalibValue],
-                                     camera: int = 2) -> np.ndarray:
-  """[3, 4] projection P_c · R0_rect · Tr_velo_to_cam from an object-benchmark calib.txt."""
-  rectify = _homogeneous(_matrix(calib, 'R0_rect', 3, 3))
-  rigid = _homogeneous(_matrix(calib, 'Tr_velo_to_cam', 3, 4))
-  return _matrix(calib, f'P{camera}', 3, 4) @ rectify @ rigid
 
 
 def project_velodyne_to_depth(points: np.ndarray, projection: np.ndarray, height: int,

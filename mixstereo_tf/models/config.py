@@ -20,6 +20,13 @@ class ModelConfig:
     max_disparity: disparity levels at full resolution (paper: 96; 48 at 1/2 resolution).
     conv3d_implementation: how stride-2 3D (transposed) convs run, 'auto' | 'native' |
       'dense' (`ops/conv3d.py`); the same function and weights either way.
+    census_cost: give the 3D network a census matching cost of its two input views beside
+      the learned features (`ops/census.py`; one more volume channel): the hybrid in which
+      the network aggregates the classical matcher's cost. Not in the paper (False).
+    input_is_left: the mixture IS the left view (monocular, `I = I_L`): the input itself
+      is the model's left view and the stereo module's left input (paper section 3.1:
+      "only the right image will be needed as the left image has been provided as
+      input"); the separation network's left output is unused.
   """
   separation_widths: Tuple[int, ...] = (32, 64, 128, 256, 512, 512)
   stereo_features: int = 32
@@ -27,6 +34,8 @@ class ModelConfig:
   stereo_3d_widths: Tuple[int, ...] = (64, 64, 64, 128)
   max_disparity: int = 96
   conv3d_implementation: str = 'auto'
+  census_cost: bool = False
+  input_is_left: bool = False
 
   def __post_init__(self):
     object.__setattr__(self, 'separation_widths', tuple(int(w) for w in self.separation_widths))

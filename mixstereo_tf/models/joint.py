@@ -14,7 +14,8 @@ class MixStereoNet(tf.keras.Model):
 
   `call` returns {'left', 'right'} ([B, H, W, 3], [-1, 1]) and {'disparity_left',
   'disparity_right'} ([B, H, W, 1], pixels, positive; see StereoNet.call). The stereo
-  module sees the SEPARATED views, so its loss trains the U-Net too (end to end).
+  module sees the SEPARATED views, so its loss trains the U-Net too (end to end); with
+  `ModelConfig.input_is_left` (monocular) the left view is the input itself.
   """
 
   def __init__(self, model_config: config_lib.ModelConfig = config_lib.ModelConfig(),
@@ -29,7 +30,8 @@ class MixStereoNet(tf.keras.Model):
                                    model_config.stereo_residual_blocks,
                                    model_config.stereo_3d_widths,
                                    model_config.max_disparity,
-                                   model_config.conv3d_implementation, name='stereo')
+                                   model_config.conv3d_implementation,
+                                   census_cost=model_config.census_cost, name='stereo')
 
   @property
   def size_multiple(self) -> int:
@@ -46,6 +48,8 @@ class MixStereoNet(tf.keras.Model):
 
   def call(self, mixture: tf.Tensor, training: bool = False) -> Dict[str, tf.Tensor]:
     views = self.separate(mixture, training=training)
+    if self.model_config.input_is_left:  # Monocular: the input is the left view.
+      views = {'left': tf.cast(mixture, views['right'].dtype), 'right': views['right']}
     outputs = dict(views)
     outputs.update(self.compute_disparity(views['left'], views['right'], training=training))
     return outputs

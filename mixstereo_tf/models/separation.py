@@ -14,13 +14,15 @@ from typing import Dict, Sequence
 
 import tensorflow as tf
 
+from mixstereo_tf.models import config as config_lib
 from mixstereo_tf.models import layers_util
 
 
 class SeparationNet(tf.keras.Model):
   """U-Net F: mixture [B, H, W, 3] in [-1, 1] -> {'left', 'right'} in [-1, 1]."""
 
-  def __init__(self, widths: Sequence[int] = (32, 64, 128, 256, 512, 512), **kwargs):
+  def __init__(self, widths: Sequence[int] = config_lib.ModelConfig().separation_widths,
+               **kwargs):
     super().__init__(**kwargs)
     self.widths = tuple(int(w) for w in widths)
     conv = layers_util.conv2d

@@ -6,6 +6,7 @@ The paper builds on SsSMnet (Zhong et al. 2017) without its consistency check, i
   2-17   8 residual blocks of two 3x3 convs, F
   18     3x3 conv, F (no BN, no ReLU)
   cost   concatenation volume over D/2 levels at 1/2 resolution -> [D/2, H/2, W/2, 2F]
+         (+1 channel: the census cost of the half-resolution views, with census_cost)
   19-20  two 3x3x3 convs, F
   21-32  per level: 3x3x3 stride-2 conv (from the previous level's strided conv, as in
          GC-Net), two 3x3x3 convs; widths 64, 64, 64, 128
@@ -25,9 +26,14 @@ from typing import Dict, Sequence
 
 import tensorflow as tf
 
+from mixstereo_tf.models import config as config_lib
 from mixstereo_tf.models import layers_util
+from mixstereo_tf.ops import census
 from mixstereo_tf.ops import conv3d
 from mixstereo_tf.ops import cost_volume
+
+
+_PAPER = config_lib.ModelConfig()  # The defaults of the layers below are the paper's.
 
 
 class Strided3D(tf.keras.layers.Layer):
@@ -98,11 +104,15 @@ class ConvBnRelu(tf.keras.layers.Layer):
 class StereoNet(tf.keras.Model):
   """GC-Net-like stereo network: (left, right) -> {'disparity_left', 'disparity_right'}."""
 
-  def __init__(self, features: int = 32, residual_blocks: int = 8,
-               widths_3d: Sequence[int] = (64, 64, 64, 128), max_disparity: int = 96,
-               conv3d_implementation: str = 'auto', **kwargs):
+  def __init__(self, features: int = _PAPER.stereo_features,
+               residual_blocks: int = _PAPER.stereo_residual_blocks,
+               widths_3d: Sequence[int] = _PAPER.stereo_3d_widths,
+               max_disparity: int = _PAPER.max_disparity,
+               conv3d_implementation: str = _PAPER.conv3d_implementation,
+               census_cost: bool = _PAPER.census_cost, **kwargs):
     super().__init__(**kwargs)
     self.conv3d_implementation = conv3d_implementation
+    self.census_cost = bool(census_cost)
     impl = {'implementation': conv3d_implementation}
     self.features, self.residual_blocks = int(features), int(residual_blocks)
     self.widths_3d, self.max_disparity = tuple(int(w) for w in widths_3d), int(max_disparity)
@@ -165,6 +175,10 @@ class StereoNet(tf.keras.Model):
     left_features, right_features = tf.split(features, 2, axis=0)
     volume = cost_volume.concat_cost_volume(left_features, right_features,
                                             self.max_disparity // 2)
+    if self.census_cost:  # The hybrid: the classical census cost as one more channel.
+      half = lambda image: tf.nn.avg_pool2d(image, 2, 2, 'VALID')
+      census_volume = census.cost_volume(half(left), half(right), self.max_disparity // 2)
+      volume = tf.concat([volume, tf.cast(census_volume, volume.dtype)], axis=-1)
     return cost_volume.soft_argmin(self.filter_volume(volume, training))
 
   def call(self, left: tf.Tensor, right: tf.Tensor, training: bool = False
@@ -203,7 +217,8 @@ class StereoNet(tf.keras.Model):
     config = super().get_config()
     config.update(features=self.features, residual_blocks=self.residual_blocks,
                   widths_3d=list(self.widths_3d), max_disparity=self.max_disparity,
-                  conv3d_implementation=self.conv3d_implementation)
+                  conv3d_implementation=self.conv3d_implementation,
+                  census_cost=self.census_cost)
     return config
 
   @classmethod

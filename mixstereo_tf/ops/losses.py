@@ -1,10 +1,9 @@
 """Loss terms of the paper's objective (section 3): pure functions, weights as arguments.
 
-Images arrive in the network range [-1, 1] (docs/DESIGN.md). The terms whose constants
-come from monodepth, which works on [0, 1] images (SSIM's C1 and C2, the 0.85 / 0.15
-balance of the appearance loss, the scale of the edge-aware weights), map to [0, 1] first
-so those constants keep their meaning. The paper's own separation terms (content L1 and the
-TV prior) take their input as given.
+Every image argument is on the [0, 1] scale (docs/DESIGN.md, "Loss scales"): the constants
+that come from monodepth (SSIM's C1 and C2, the 0.85 / 0.15 balance of the appearance loss,
+the scale of the edge-aware weights) were set for it, and `objective.py` maps the network's
+[-1, 1] views to it once for every term, the separation terms included.
 
 Every scalar is a per-pixel mean: `1/N sum` in the paper, with each map (SSIM, L1, x and y
 gradients) averaged over its own elements, monodepth's convention.
@@ -15,11 +14,6 @@ import tensorflow as tf
 # SSIM stabilisers for a dynamic range of 1 (Wang et al. 2004: K1 = 0.01, K2 = 0.03).
 _SSIM_C1 = 0.01**2
 _SSIM_C2 = 0.03**2
-
-
-def _to_unit_range(image: tf.Tensor) -> tf.Tensor:
-  """[-1, 1] -> [0, 1]."""
-  return (image + 1.0) * 0.5
 
 
 def _check_rank4(tensor: tf.Tensor, name: str) -> None:
@@ -37,12 +31,12 @@ def ssim(x: tf.Tensor, y: tf.Tensor) -> tf.Tensor:
   """Structural similarity map with 3x3 mean-pooled statistics.
 
   Means, variances and the covariance are 3x3 box averages ('VALID' pooling, population
-  normalisation 1/9), computed on the images mapped from [-1, 1] to [0, 1] so that
-  C1 = 0.01^2 and C2 = 0.03^2 are the standard constants for a dynamic range of 1.
+  normalisation 1/9); C1 = 0.01^2 and C2 = 0.03^2 are the standard constants for a dynamic
+  range of 1.
 
   Args:
-    x: [B, H, W, C] image in [-1, 1].
-    y: [B, H, W, C] image in [-1, 1].
+    x: [B, H, W, C] image in [0, 1].
+    y: [B, H, W, C] image in [0, 1].
 
   Returns:
     [B, H - 2, W - 2, C] SSIM map, 1 where the windows are identical.
@@ -51,8 +45,6 @@ def ssim(x: tf.Tensor, y: tf.Tensor) -> tf.Tensor:
   y = tf.convert_to_tensor(y, dtype=x.dtype)
   _check_rank4(x, 'x')
   _check_rank4(y, 'y')
-  x = _to_unit_range(x)
-  y = _to_unit_range(y)
   pool = lambda t: tf.nn.avg_pool2d(t, ksize=3, strides=1, padding='VALID')
   mu_x = pool(x)
   mu_y = pool(y)
@@ -73,13 +65,12 @@ def appearance_loss(target: tf.Tensor, reconstruction: tf.Tensor, lambda_ssim: f
                     lambda_l1: float) -> tf.Tensor:
   """Paper eq. (6), appearance loss L_w, for one view.
 
-  L_w = lambda_ssim * mean(clip((1 - SSIM) / 2, 0, 1)) + lambda_l1 * mean(|I - I''|),
-  with the L1 term on the [0, 1] scale (half the [-1, 1] difference), the scale of the
-  SSIM term and of the images monodepth's weights 0.85 / 0.15 were chosen for.
+  L_w = lambda_ssim * mean(clip((1 - SSIM) / 2, 0, 1)) + lambda_l1 * mean(|I - I''|), on
+  the [0, 1] scale monodepth's weights 0.85 / 0.15 were chosen for.
 
   Args:
-    target: [B, H, W, C] true view in [-1, 1].
-    reconstruction: [B, H, W, C] view warped from the other one, in [-1, 1].
+    target: [B, H, W, C] true view in [0, 1].
+    reconstruction: [B, H, W, C] view warped from the other one, in [0, 1].
     lambda_ssim: weight of the SSIM term (paper lambda_1).
     lambda_l1: weight of the L1 term (paper lambda_2).
 
@@ -89,7 +80,7 @@ def appearance_loss(target: tf.Tensor, reconstruction: tf.Tensor, lambda_ssim: f
   target = tf.convert_to_tensor(target)
   reconstruction = tf.convert_to_tensor(reconstruction, dtype=target.dtype)
   ssim_term = tf.clip_by_value((1.0 - ssim(target, reconstruction)) * 0.5, 0.0, 1.0)
-  l1_term = 0.5 * tf.abs(target - reconstruction)
+  l1_term = tf.abs(target - reconstruction)
   return lambda_ssim * tf.reduce_mean(ssim_term) + lambda_l1 * tf.reduce_mean(l1_term)
 
 
@@ -97,7 +88,7 @@ def total_variation(image: tf.Tensor) -> tf.Tensor:
   """Paper eq. (4), image prior L_p = |grad F(I)|: anisotropic total variation.
 
   Normalised per pixel: mean(|d/du I|) + mean(|d/dv I|), each mean over its own map (all
-  channels), on the values as given.
+  channels).
 
   Args:
     image: [B, H, W, C].
@@ -115,12 +106,12 @@ def edge_aware_smoothness(disparity: tf.Tensor, image: tf.Tensor) -> tf.Tensor:
   """Paper eq. (7), disparity smoothness L_s, in both directions.
 
   L_s = mean(|d/du d| exp(-|d/du I|)) + mean(|d/dv d| exp(-|d/dv I|)), where |d/du I| is the
-  mean over colour channels of the absolute forward difference of the image on the
-  [0, 1] scale (monodepth's weights; unlike monodepth's code the v term is kept).
+  mean over colour channels of the absolute forward difference of the image (monodepth's
+  weights; unlike monodepth's code the v term is kept).
 
   Args:
     disparity: [B, H, W, 1], in whatever unit the caller chose (pixels or width fraction).
-    image: [B, H, W, C] the view the disparity is referenced to, in [-1, 1].
+    image: [B, H, W, C] the view the disparity is referenced to, in [0, 1].
 
   Returns:
     Scalar, 0 for a constant disparity.
@@ -132,7 +123,7 @@ def edge_aware_smoothness(disparity: tf.Tensor, image: tf.Tensor) -> tf.Tensor:
   if disparity.shape[-1] != 1:
     raise ValueError(f'disparity must have one channel, got shape {disparity.shape}.')
   d_du, d_dv = _gradients(disparity)
-  i_du, i_dv = _gradients(_to_unit_range(image))
+  i_du, i_dv = _gradients(image)
   weight_u = tf.exp(-tf.reduce_mean(tf.abs(i_du), axis=-1, keepdims=True))
   weight_v = tf.exp(-tf.reduce_mean(tf.abs(i_dv), axis=-1, keepdims=True))
   return (tf.reduce_mean(tf.abs(d_du) * weight_u) +

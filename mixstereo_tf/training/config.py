@@ -1,10 +1,10 @@
 """Frozen training configuration, built once from flags by `mixstereo_tf.train`."""
 
 import dataclasses
-import json
-from typing import Any, Dict, Optional
+from typing import Optional
 
 from mixstereo_tf import objective
+from mixstereo_tf.training import optimizers
 
 JIT_CHOICES = ('auto', 'true', 'false')
 STRATEGIES = ('default', 'mirrored', 'multi_worker')
@@ -19,6 +19,8 @@ class TrainConfig:
     mode: 'joint' (the paper), 'separation_only' (the ablation) or 'stereo_only' (the stereo
       module on clean pairs: the oracle).
     learning_rate: RMSProp learning rate (paper: 1e-4).
+    optimizer: 'rmsprop_tf1' (the paper's TF1 RMSProp: accumulator started at one, epsilon
+      1e-10) or 'rmsprop_keras' (Keras 3's RMSprop); see `training/optimizers.py`.
     num_steps: optimizer steps to reach (a resumed run continues to this total).
     jit_compile: 'auto' (XLA where the benchmark found it faster: GPU yes, CPU no), 'true'
       or 'false'.
@@ -37,6 +39,7 @@ class TrainConfig:
   model_dir: str
   mode: str = 'joint'
   learning_rate: float = 1e-4
+  optimizer: str = 'rmsprop_tf1'
   num_steps: int = 100000
   jit_compile: str = 'auto'
   strategy: str = 'default'
@@ -60,6 +63,9 @@ class TrainConfig:
     if self.strategy not in STRATEGIES:
       raise ValueError(f'TrainConfig.strategy must be one of {STRATEGIES}, '
                        f'got {self.strategy!r}.')
+    if self.optimizer not in optimizers.OPTIMIZERS:
+      raise ValueError(f'TrainConfig.optimizer must be one of {tuple(optimizers.OPTIMIZERS)}, '
+                       f'got {self.optimizer!r}.')
     if not self.learning_rate > 0:
       raise ValueError(f'TrainConfig.learning_rate must be positive, got {self.learning_rate}.')
     for field in ('num_steps', 'checkpoint_every', 'summary_every', 'image_summary_every',
@@ -67,10 +73,3 @@ class TrainConfig:
       if getattr(self, field) <= 0:
         raise ValueError(f'TrainConfig.{field} must be positive, got {getattr(self, field)}.')
 
-
-def to_json(**configs: Any) -> str:
-  """Serialises dataclass configs (name -> config) to JSON, written beside checkpoints."""
-  out: Dict[str, Any] = {}
-  for name, config in configs.items():
-    out[name] = dataclasses.asdict(config) if dataclasses.is_dataclass(config) else config
-  return json.dumps(out, indent=2, sort_keys=True, default=str)

@@ -20,8 +20,10 @@ import tensorflow as tf
 
 from mixstereo_tf import models
 from mixstereo_tf import objective
+from mixstereo_tf import runs
 from mixstereo_tf.ops import conv3d
 from mixstereo_tf.training import config as config_lib
+from mixstereo_tf.training import optimizers
 from mixstereo_tf.training import step as step_lib
 from mixstereo_tf.training import summaries
 
@@ -40,23 +42,6 @@ class TrainResult:
   final_loss: float
   steps_per_second: float
   num_replicas: int
-
-
-def resolve_checkpoint(path: str) -> str:
-  """A checkpoint prefix from a prefix or a run directory (its newest checkpoint).
-
-  Raises:
-    ValueError: the directory holds no checkpoint, or the prefix does not exist.
-  """
-  if tf.io.gfile.isdir(path):
-    latest = tf.train.latest_checkpoint(path)
-    if latest is None:
-      raise ValueError(f'init_checkpoint {path!r} is a directory without a checkpoint.')
-    return latest
-  if not tf.io.gfile.exists(path + '.index'):
-    raise ValueError(f'init_checkpoint {path!r} is neither a run directory nor a '
-                     'checkpoint prefix (no .index file).')
-  return path
 
 
 def make_strategy(name: str) -> tf.distribute.Strategy:
@@ -137,6 +122,146 @@ def _check_batch(dataset: tf.data.Dataset, strategy: tf.distribute.Strategy) -> 
   return batch
 
 
+@dataclasses.dataclass
+class _Session:
+  """Everything a run needs once set up: where it writes and what it trains."""
+  strategy: tf.distribute.Strategy
+  write_dir: str
+  chief: bool
+  model_config: models.ModelConfig
+  model: tf.keras.Model
+  optimizer: tf.keras.optimizers.Optimizer
+  trainer: step_lib.TrainStep
+  checkpoint: tf.train.Checkpoint
+  manager: tf.train.CheckpointManager
+
+
+def _prepare(config: config_lib.TrainConfig, model_config: models.ModelConfig,
+             flags_text: Optional[str], configs: dict
+             ) -> Tuple[tf.distribute.Strategy, bool, str, models.ModelConfig, bool]:
+  """Step 1: the strategy, the run directory's files and the device-dependent choices.
+
+  Returns (strategy, is_chief, write_dir, model_config with conv3d resolved, jit).
+  """
+  strategy = make_strategy(config.strategy)
+  chief, write_dir = _write_dir(strategy, config.model_dir)
+  if chief:
+    runs.write_run_files(config.model_dir, flags_text, **configs)
+  device_type = _device_type(strategy)
+  jit = step_lib.resolve_jit_compile(config.jit_compile, device_type)
+  if model_config.conv3d_implementation == 'auto':
+    model_config = dataclasses.replace(
+        model_config, conv3d_implementation=conv3d.auto_implementation(device_type, jit))
+  _set_precision(config.mixed_precision, device_type)
+  tf.keras.utils.set_random_seed(config.seed)
+  logging.info('Strategy %s with %d replica(s) on %s; jit_compile=%s; conv3d %s; mode=%s.',
+               config.strategy, strategy.num_replicas_in_sync, device_type, jit,
+               model_config.conv3d_implementation, config.mode)
+  return strategy, chief, write_dir, model_config, jit
+
+
+def _build(config: config_lib.TrainConfig, model_config: models.ModelConfig,
+           loss_config: objective.LossConfig, strategy: tf.distribute.Strategy, chief: bool,
+           write_dir: str, jit: bool) -> _Session:
+  """Step 2: model, optimizer (paper: RMSProp, 1e-4), train step and checkpoint manager."""
+  with strategy.scope():
+    model = models.build_model(model_config)
+    optimizer = optimizers.make_optimizer(config.optimizer, config.learning_rate)
+    if config.mixed_precision and _device_type(strategy) == 'GPU':
+      optimizer = tf.keras.mixed_precision.LossScaleOptimizer(optimizer)
+    trainer = step_lib.TrainStep(model, optimizer, loss_config, config.mode, strategy, jit)
+    optimizer.build(trainer.variables)
+    checkpoint = tf.train.Checkpoint(model=model, optimizer=optimizer)
+  manager = tf.train.CheckpointManager(checkpoint, write_dir,
+                                       max_to_keep=config.max_checkpoints)
+  return _Session(strategy, write_dir, chief, model_config, model, optimizer, trainer,
+                  checkpoint, manager)
+
+
+def _restore_or_initialise(session: _Session, config: config_lib.TrainConfig) -> int:
+  """Step 3: resume from the run's newest checkpoint, else read `init_checkpoint`'s
+  model weights (fine-tuning), else keep the fresh initialisation. Returns the step."""
+  latest = tf.train.latest_checkpoint(config.model_dir)  # Every worker resumes the chief's.
+  if latest:
+    session.checkpoint.restore(latest).assert_existing_objects_matched()
+    logging.info('Resumed from %s at step %d.', latest,
+                 int(session.optimizer.iterations.numpy()))
+  elif config.init_checkpoint:
+    _, init = runs.resolve_checkpoint(config.init_checkpoint)
+    tf.train.Checkpoint(model=session.model).read(init).expect_partial()
+    logging.info('Initialised the model from %s.', init)
+  return int(session.optimizer.iterations.numpy())
+
+
+def _due(step: int, every: int, last: int = -1) -> bool:
+  """The cadence of every periodic action: at multiples of `every`, and at `last`."""
+  return step % every == 0 or step == last
+
+
+def _check_finite(loss: float, gradient_norm: float, session: _Session, step: int) -> None:
+  if not (math.isfinite(loss) and (session.trainer.loss_scaled or
+                                   math.isfinite(gradient_norm))):
+    raise NonFiniteLossError(
+        f'Non-finite loss {loss} (gradient norm {gradient_norm}) at step {step}; '
+        f'stopping. The last good checkpoint is {session.manager.latest_checkpoint} '
+        '(not overwritten).')
+
+
+def _run_steps(session: _Session, config: config_lib.TrainConfig,
+               dataset: tf.data.Dataset, start_step: int) -> TrainResult:
+  """Step 4: the step loop with its summary, log and checkpoint cadences."""
+  writer = (tf.summary.create_file_writer(os.path.join(config.model_dir, 'train'))
+            if session.chief else tf.summary.create_noop_writer())
+  iterator = iter(session.strategy.experimental_distribute_dataset(dataset))
+  step, loss, rate = start_step, math.nan, 0.0
+  last_save = session.manager.latest_checkpoint
+  tick, tick_step = None, step
+  with _StopSignals() as signals, writer.as_default():
+    try:
+      while step < config.num_steps and signals.received is None:
+        batch = next(iterator)
+        scalars, outputs = session.trainer(batch)
+        step = int(session.optimizer.iterations.numpy())
+        loss = float(scalars['loss'])
+        _check_finite(loss, float(scalars['metrics/gradient_norm']), session, step)
+        if tick is None:  # The first step includes tracing and compilation.
+          tick, tick_step = time.perf_counter(), step
+        elif step > tick_step:
+          rate = (step - tick_step) / (time.perf_counter() - tick)
+        if _due(step, config.summary_every):
+          summaries.write_scalars({k: float(v) for k, v in scalars.items()}, step,
+                                  {'learning_rate': config.learning_rate,
+                                   'steps_per_second': rate})
+        if _due(step, config.image_summary_every):
+          local = session.strategy.experimental_local_results(batch)[0]
+          summaries.write_images(local, outputs, step, session.model_config.max_disparity)
+        if _due(step, config.log_every, config.num_steps):
+          eta = (config.num_steps - step) / rate if rate > 0 else math.nan
+          logging.info('step %d/%d  loss %.4f  %.3f steps/s  ETA %.0f s', step,
+                       config.num_steps, loss, rate, eta)
+        if _due(step, config.checkpoint_every):
+          last_save = session.manager.save(checkpoint_number=step)
+    except NonFiniteLossError:
+      raise
+    except BaseException:
+      # A crash in the data or the step: keep the weights of the last completed step, if
+      # this run completed one (before that, the newest checkpoint already holds them).
+      if step > start_step:
+        last_save = session.manager.save(checkpoint_number=step)
+      logging.error('Training failed at step %d; newest checkpoint: %s.', step, last_save)
+      raise
+    if last_save is None or int(last_save.rsplit('-', 1)[-1]) != step:
+      last_save = session.manager.save(checkpoint_number=step)
+    if signals.received:
+      logging.warning('Stopped by %s at step %d; checkpoint %s.', signals.received, step,
+                      last_save)
+  writer.flush()
+  return TrainResult(start_step=start_step, final_step=step,
+                     interrupted_by=signals.received, last_checkpoint=last_save,
+                     final_loss=loss, steps_per_second=rate,
+                     num_replicas=session.strategy.num_replicas_in_sync)
+
+
 def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
           loss_config: objective.LossConfig,
           dataset_fn: Callable[[], tf.data.Dataset],
@@ -158,104 +283,11 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
   Raises:
     NonFiniteLossError: the loss became non-finite; the newest checkpoint is the last good.
   """
-  strategy = make_strategy(config.strategy)
-  chief, write_dir = _write_dir(strategy, config.model_dir)
-  if chief:
-    tf.io.gfile.makedirs(config.model_dir)
-    if flags_text is not None:
-      with tf.io.gfile.GFile(os.path.join(config.model_dir, 'flags.txt'), 'w') as f:
-        f.write(flags_text)
-    with tf.io.gfile.GFile(os.path.join(config.model_dir, 'config.json'), 'w') as f:
-      f.write(config_lib.to_json(train=config, model=model_config, loss=loss_config,
-                                 **(extra_configs or {})))
-  device_type = _device_type(strategy)
-  jit = step_lib.resolve_jit_compile(config.jit_compile, device_type)
-  if model_config.conv3d_implementation == 'auto':
-    model_config = dataclasses.replace(
-        model_config, conv3d_implementation=conv3d.auto_implementation(device_type, jit))
-  _set_precision(config.mixed_precision, device_type)
-  tf.keras.utils.set_random_seed(config.seed)
+  configs = dict(train=config, model=model_config, loss=loss_config, **(extra_configs or {}))
+  strategy, chief, write_dir, model_config, jit = _prepare(config, model_config, flags_text,
+                                                           configs)
   dataset = dataset_fn()
   _check_batch(dataset, strategy)
-  logging.info('Strategy %s with %d replica(s) on %s; jit_compile=%s; conv3d %s; mode=%s.',
-               config.strategy, strategy.num_replicas_in_sync, device_type, jit,
-               model_config.conv3d_implementation, config.mode)
-
-  with strategy.scope():
-    model = models.build_model(model_config)
-    optimizer = tf.keras.optimizers.RMSprop(config.learning_rate)  # Paper: RMSProp, 1e-4.
-    if config.mixed_precision and device_type == 'GPU':
-      optimizer = tf.keras.mixed_precision.LossScaleOptimizer(optimizer)
-    trainer = step_lib.TrainStep(model, optimizer, loss_config, config.mode, strategy, jit)
-    optimizer.build(trainer.variables)
-    checkpoint = tf.train.Checkpoint(model=model, optimizer=optimizer)
-  manager = tf.train.CheckpointManager(checkpoint, write_dir,
-                                       max_to_keep=config.max_checkpoints)
-  latest = tf.train.latest_checkpoint(config.model_dir)  # Every worker resumes the chief's.
-  if latest:
-    checkpoint.restore(latest).assert_existing_objects_matched()
-    logging.info('Resumed from %s at step %d.', latest,
-                 int(optimizer.iterations.numpy()))
-  elif config.init_checkpoint:
-    init = resolve_checkpoint(config.init_checkpoint)
-    tf.train.Checkpoint(model=model).read(init).expect_partial()
-    logging.info('Initialised the model from %s.', init)
-
-  start_step = step = int(optimizer.iterations.numpy())
-  writer = (tf.summary.create_file_writer(os.path.join(config.model_dir, 'train')) if chief
-            else tf.summary.create_noop_writer())
-  iterator = iter(strategy.experimental_distribute_dataset(dataset))
-  last_save = latest
-  loss = math.nan
-  rate = 0.0
-  tick, tick_step = None, step
-  with _StopSignals() as signals, writer.as_default():
-    try:
-      while step < config.num_steps and signals.received is None:
-        batch = next(iterator)
-        scalars, outputs = trainer(batch)
-        step = int(optimizer.iterations.numpy())
-        loss = float(scalars['loss'])
-        gradient_norm = float(scalars['metrics/gradient_norm'])
-        if not (math.isfinite(loss) and (trainer.loss_scaled or
-                                         math.isfinite(gradient_norm))):
-          raise NonFiniteLossError(
-              f'Non-finite loss {loss} (gradient norm {gradient_norm}) at step {step}; '
-              f'stopping. The last good checkpoint is {manager.latest_checkpoint} '
-              '(not overwritten).')
-        if tick is None:  # The first step includes tracing and compilation.
-          tick, tick_step = time.perf_counter(), step
-        elif step > tick_step:
-          rate = (step - tick_step) / (time.perf_counter() - tick)
-        if step % config.summary_every == 0:
-          summaries.write_scalars({k: float(v) for k, v in scalars.items()}, step,
-                                  {'learning_rate': config.learning_rate,
-                                   'steps_per_second': rate})
-        if step % config.image_summary_every == 0:
-          local = strategy.experimental_local_results(batch)[0]
-          summaries.write_images(local, outputs, step, model_config.max_disparity)
-        if step % config.log_every == 0 or step == config.num_steps:
-          eta = (config.num_steps - step) / rate if rate > 0 else math.nan
-          logging.info('step %d/%d  loss %.4f  %.3f steps/s  ETA %.0f s', step,
-                       config.num_steps, loss, rate, eta)
-        if step % config.checkpoint_every == 0:
-          last_save = manager.save(checkpoint_number=step)
-    except NonFiniteLossError:
-      raise
-    except BaseException:
-      # A crash in the data or the step: keep the weights of the last completed step, if
-      # this run completed one (before that, the newest checkpoint already holds them).
-      if step > start_step:
-        last_save = manager.save(checkpoint_number=step)
-      logging.error('Training failed at step %d; newest checkpoint: %s.', step, last_save)
-      raise
-    if last_save is None or int(last_save.rsplit('-', 1)[-1]) != step:
-      last_save = manager.save(checkpoint_number=step)
-    if signals.received:
-      logging.warning('Stopped by %s at step %d; checkpoint %s.', signals.received, step,
-                      last_save)
-  writer.flush()
-  return TrainResult(start_step=start_step, final_step=step,
-                     interrupted_by=signals.received, last_checkpoint=last_save,
-                     final_loss=loss, steps_per_second=rate,
-                     num_replicas=strategy.num_replicas_in_sync)
+  session = _build(config, model_config, loss_config, strategy, chief, write_dir, jit)
+  start_step = _restore_or_initialise(session, config)
+  return _run_steps(session, config, dataset, start_step)

@@ -81,6 +81,9 @@ class TrainStep:
     self.mode = mode
     self.strategy = strategy
     self.variables = trainable_variables(model, mode)
+    # Monocular: the left view is the input itself, only the right one is separated.
+    self.separated_views = (('right',) if model.model_config.input_is_left
+                            else objective.VIEWS)
     # Dynamic loss scaling makes inf gradients a normal event (the step is skipped).
     self.loss_scaled = isinstance(optimizer, tf.keras.mixed_precision.LossScaleOptimizer)
     self._gradients = tf.function(self._loss_and_gradients, jit_compile=jit_compile)
@@ -90,7 +93,8 @@ class TrainStep:
     """The XLA-compilable part: forward, objective, backward, on numeric tensors only."""
     with tf.GradientTape() as tape:
       outputs = forward(self.model, batch, self.mode, training=True)
-      scalars = objective.total_loss(outputs, batch, self.loss_config, self.mode)
+      scalars = objective.total_loss(outputs, batch, self.loss_config, self.mode,
+                                     self.separated_views)
       # Each replica's loss is a mean over its share of the global batch; the gradients are
       # summed across replicas, so dividing by their number gives the global mean.
       loss = scalars['loss'] / self.strategy.num_replicas_in_sync

@@ -1,0 +1,294 @@
+"""Census + 4-path SGM kernels compiled with numba, on per-pixel disparity windows.
+
+The cost and the recursion are those of `sgm.py` (census codes per channel, Hamming cost
+averaged over all (left channel, right channel) pairs, `oob` where the match falls outside
+the right image, 4 paths with P1 / P2, winner-take-all with a parabola, the right disparity
+from the diagonal of the aggregated volume), restructured so that no cost volume is stored:
+  pass 1 (rows top to bottom): cost row -> left-to-right, right-to-left and top-down path
+    costs -> their sum, kept as uint16 (the only per-cell array: 2 bytes per cell);
+  pass 2 (rows bottom to top): the cost row again -> bottom-up path -> S = sum + L_up ->
+    the row's left and right winners.
+
+Disparity windows: pixel (y, x) searches d = lo[y, x] + i, i in [0, nds[y, x]). A full
+search is one window for all pixels; windows per pixel (coarse-to-fine, a temporal prior)
+cost work and memory in proportion to the sum of the widths. The recursion maps a
+neighbour's window onto the current one; disparities outside the neighbour's window cost
++inf there. `parallel_sgm` runs `sgm_strip` on horizontal strips in threads (the kernels
+release the GIL).
+
+Compiled kernels are cached on disk (`cache=True`: `__pycache__` beside this file, or
+numba's user-wide cache directory where that is not writable; NUMBA_CACHE_DIR overrides
+both), so only the first process after an install or an edit compiles them.
+"""
+
+import numba
+import numpy as np
+from numba.core import types
+from numba.extending import intrinsic
+
+_BIG = np.int32(30000)  # Above any path cost; _BIG + P2 still fits the int32 arithmetic.
+# Helpers are compiled into their callers (LLVM inlines them: faster to compile and run
+# than numba's inline='always'); the entry points release the GIL and are cached on disk.
+_INNER = {'error_model': 'numpy'}  # No ZeroDivisionError checks in the loops.
+_JIT = dict(_INNER, nogil=True, cache=True)
+
+
+@intrinsic
+def _popcount(typingctx, value):  # pylint: disable=unused-argument
+  """Bits set in a uint64 (LLVM's ctpop: one instruction where the CPU has it)."""
+  def codegen(context, builder, signature, args):  # pylint: disable=unused-argument
+    return builder.ctpop(args[0])
+  return types.uint64(types.uint64), codegen
+
+
+@numba.njit(**_JIT)
+def census_rows(padded, height, width, out):
+  """Census codes of a reflect-padded float32 block, as `sgm.census_transform`.
+
+  out[y, x] (uint64 [rows, W]) gets bit k set where the k-th neighbour of padded[y + ry,
+  x + rx] in its height x width window (row-major, centre skipped) is darker.
+  """
+  rows, w = out.shape
+  ry, rx = height // 2, width // 2
+  code = np.empty(w, np.uint64)
+  for y in range(rows):
+    code[:] = 0
+    centre = padded[y + ry, rx:rx + w]
+    for dy in range(height):
+      for dx in range(width):
+        if dy == ry and dx == rx:
+          continue
+        row = padded[y + dy, dx:dx + w]
+        for x in range(w):
+          code[x] = (code[x] << np.uint64(1)) | np.uint64(row[x] < centre[x])
+    out[y] = code
+
+
+@numba.njit(**_INNER)
+def _cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
+  """out[x, i] (uint8 [W, >= widths]) = mean Hamming cost of left (y, x) against right
+  (y, x - lo - i). The right codes are reversed (rev[b, k] = cr[b, y, W-1-k]) so the loop
+  over i reads consecutive words and vectorises; 1x1, 1x2 and 2x1 channel pairs (plain and
+  colour anaglyphs) have their own loops."""
+  kl, _, w = cl.shape
+  kr = cr.shape[0]
+  pairs = kl * kr
+  half = np.uint32(pairs // 2)
+  for b in range(kr):
+    for k in range(w):
+      rev[b, k] = cr[b, y, w - 1 - k]
+  for x in range(w):
+    d0, nd = lo[y, x], nds[y, x]
+    ia = min(nd, max(0, x - d0 - w + 1))  # i < ia: the match is right of the image.
+    ib = max(ia, min(nd, x - d0 + 1))  # i >= ib: the match is left of the image.
+    k0 = w - 1 - x + d0 + ia
+    o = out[x]
+    o[:ia] = oob
+    o[ib:nd] = oob
+    n = ib - ia
+    oo = o[ia:ib]
+    ca = cl[0, y, x]
+    r0 = rev[0, k0:k0 + n]
+    if pairs == 1:
+      for i in range(n):
+        oo[i] = np.uint8(_popcount(ca ^ r0[i]))
+    elif kl == 1 and kr == 2:
+      r1 = rev[1, k0:k0 + n]
+      for i in range(n):
+        oo[i] = np.uint8((np.uint32(_popcount(ca ^ r0[i])) +
+                          np.uint32(_popcount(ca ^ r1[i])) + np.uint32(1)) >> np.uint32(1))
+    elif kl == 2 and kr == 1:
+      cb = cl[1, y, x]
+      for i in range(n):
+        oo[i] = np.uint8((np.uint32(_popcount(ca ^ r0[i])) +
+                          np.uint32(_popcount(cb ^ r0[i])) + np.uint32(1)) >> np.uint32(1))
+    else:
+      a_ = acc[:n]
+      a_[:] = 0
+      for a in range(kl):
+        ca = cl[a, y, x]
+        for b in range(kr):
+          rb = rev[b, k0:k0 + n]
+          for i in range(n):
+            a_[i] += np.uint32(_popcount(ca ^ rb[i]))
+      for i in range(n):
+        oo[i] = np.uint8((a_[i] + half) // np.uint32(pairs))
+
+
+@numba.njit(**_INNER)
+def _start(cost, cur, nd):
+  """First pixel of a path: cur[i + 1] = cost[i]; returns min."""
+  m = _BIG
+  for i in range(nd):
+    v = np.int32(cost[i])
+    cur[i + 1] = v
+    m = v if v < m else m
+  cur[nd + 1] = _BIG
+  return m
+
+
+@numba.njit(**_INNER)
+def _step(prev, pm, shift, nprev, cost, cur, nd, p1, p2, tmp):
+  """One SGM recursion L(d) = C(d) + min(L'(d), L'(d +- 1) + P1, min L' + P2) - min L'.
+
+  prev, cur: int32 [>= nd + 2] with _BIG guards at 0 and nd + 1 (index i + 1 = window
+  position i). The neighbour's window starts `shift` disparities lower and has nprev
+  positions; a shifted or resized one is first copied into `tmp`, aligned with the current
+  window, so the recursion is always the same branch-free loop (selects on int32
+  vectorise, numba's float min does not). Returns min L.
+  """
+  src = prev
+  if shift != 0 or nprev != nd:
+    a = min(nd + 2, max(0, 1 - shift))  # tmp[k] = prev[k + shift] for k in [a, b).
+    b = max(a, min(nd + 2, nprev + 1 - shift))
+    tmp[:a] = _BIG
+    tmp[a:b] = prev[a + shift:b + shift]
+    tmp[b:nd + 2] = _BIG
+    src = tmp
+  lim = np.int32(pm + p2)
+  m = _BIG
+  for i in range(nd):
+    same, lower, upper = src[i + 1], src[i], src[i + 2]
+    q = np.int32((lower if lower < upper else upper) + p1)
+    same = same if same < lim else lim
+    v = np.int32(np.int32(cost[i]) + (same if same < q else q) - pm)
+    cur[i + 1] = v
+    m = v if v < m else m
+  cur[nd + 1] = _BIG
+  return m
+
+
+@numba.njit(**_INNER)
+def _refined(base, lower, best, upper):
+  """base + the parabola offset through three costs, in float32 as `sgm._winner`."""
+  lower, best, upper = np.float32(lower), np.float32(best), np.float32(upper)
+  curvature = lower - np.float32(2.0) * best + upper
+  offset = np.float32(0.0)
+  if curvature > 0:
+    offset = min(np.float32(0.5), max(np.float32(-0.5),
+                                      np.float32(0.5) * (lower - upper) / curvature))
+  return np.float32(np.float64(base) + np.float64(offset))
+
+
+@numba.njit(**_INNER)
+def _winners(s, offsets, lo, nds, y, dl, dr, best, bestd):
+  """Left winners of the row's aggregated costs and right winners along the diagonal.
+
+  s: int32 flat costs, pixel x at offsets[x] + [0, nds[y, x]). Right pixels no left pixel
+  reaches get NaN.
+  """
+  w = dl.shape[1]
+  for x in range(w):
+    row = s[offsets[x]:offsets[x + 1]]
+    nd = nds[y, x]
+    bi = 0
+    for i in range(1, nd):
+      if row[i] < row[bi]:
+        bi = i
+    if 0 < bi < nd - 1:
+      dl[y, x] = _refined(lo[y, x] + bi, row[bi - 1], row[bi], row[bi + 1])
+    else:
+      dl[y, x] = lo[y, x] + bi
+  best[:] = _BIG * 8
+  for x in range(w):
+    d0 = lo[y, x]
+    row = s[offsets[x]:offsets[x + 1]]
+    xr0 = x - d0  # Right pixel of window position 0; position i -> xr0 - i.
+    for i in range(max(0, xr0 - w + 1), min(nds[y, x], xr0 + 1)):
+      k, v = xr0 - i, row[i]
+      take = v < best[k]
+      best[k] = v if take else best[k]
+      bestd[k] = (d0 + i) if take else bestd[k]
+  for xr in range(w):
+    if best[xr] >= _BIG * 8:
+      dr[y, xr] = np.nan
+      continue
+    d = bestd[xr]
+    dr[y, xr] = d
+    xa, xb = xr + d - 1, xr + d + 1  # Diagonal neighbours: left x -+ 1 at d -+ 1.
+    if 0 <= xa and xb < w:
+      ia, ib = d - 1 - lo[y, xa], d + 1 - lo[y, xb]
+      if 0 <= ia < nds[y, xa] and 0 <= ib < nds[y, xb]:
+        dr[y, xr] = _refined(d, s[offsets[xa] + ia], best[xr], s[offsets[xb] + ib])
+
+
+@numba.njit(**_JIT)
+def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
+  """SGM over rows [y0, y1); writes the winners of rows [w0, w1) into dl, dr.
+
+  Args:
+    cl, cr: uint64 [K_L, H, W], [K_R, H, W] census codes (C-contiguous).
+    lo, nds: int32 [H, W] windows: pixel (y, x) searches lo + [0, nds), nds >= 1.
+    y0, y1, w0, w1: rows aggregated and rows written (y0 <= w0 < w1 <= y1).
+    p1, p2: SGM penalties; oob: uint8 cost of a match outside the right image.
+    dl, dr: float32 [H, W] outputs: the left pixel x matches the right pixel x - dl, the
+      right pixel x matches the left pixel x + dr (NaN where no window reaches it).
+  """
+  _, _, w = cl.shape
+  n = y1 - y0
+  pen1, pen2 = np.int32(p1), np.int32(p2)
+  offsets = np.zeros(n * w + 1, np.int64)  # Pixel (y0 + k, x) at offsets[k * w + x].
+  nd = 1
+  for k in range(n):
+    for x in range(w):
+      offsets[k * w + x + 1] = offsets[k * w + x] + nds[y0 + k, x]
+      nd = max(nd, nds[y0 + k, x])
+  total = np.empty(offsets[n * w], np.uint16)
+  crow = np.empty((w, nd), np.uint8)
+  rev = np.empty((cr.shape[0], w), np.uint64)
+  acc = np.zeros(nd, np.uint32)
+  hor = np.full((w, nd + 2), _BIG, np.int32)
+  vprev = np.full((w, nd + 2), _BIG, np.int32)
+  vcur = np.full((w, nd + 2), _BIG, np.int32)
+  vpm = np.zeros(w, np.int32)
+  t1 = np.full(nd + 2, _BIG, np.int32)
+  t2 = np.full(nd + 2, _BIG, np.int32)
+  tmp = np.full(nd + 2, _BIG, np.int32)
+  for k in range(n):  # Pass 1: left-to-right (hor), top-down (vcur), right-to-left (t1).
+    y = y0 + k
+    _cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
+    pm = _start(crow[0], hor[0], nds[y, 0])
+    for x in range(1, w):
+      pm = _step(hor[x - 1], pm, lo[y, x] - lo[y, x - 1], nds[y, x - 1], crow[x], hor[x],
+                 nds[y, x], pen1, pen2, tmp)
+    for x in range(w):
+      if k == 0:
+        vpm[x] = _start(crow[x], vcur[x], nds[y, x])
+      else:
+        vpm[x] = _step(vprev[x], vpm[x], lo[y, x] - lo[y - 1, x], nds[y - 1, x], crow[x],
+                       vcur[x], nds[y, x], pen1, pen2, tmp)
+    for x in range(w - 1, -1, -1):
+      if x == w - 1:
+        pm = _start(crow[x], t1, nds[y, x])
+      else:
+        pm = _step(t2, pm, lo[y, x] - lo[y, x + 1], nds[y, x + 1], crow[x], t1, nds[y, x],
+                   pen1, pen2, tmp)
+      out = total[offsets[k * w + x]:offsets[k * w + x + 1]]
+      h_, v_ = hor[x], vcur[x]
+      for i in range(nds[y, x]):
+        out[i] = np.uint16(t1[i + 1] + h_[i + 1] + v_[i + 1])
+      t1, t2 = t2, t1
+    vprev, vcur = vcur, vprev
+  srow = np.empty(w * nd, np.int32)  # Pass 2: bottom-up path, S = total + L_up, winners.
+  row_offsets = np.empty(w + 1, np.int64)
+  best = np.empty(w, np.int32)
+  bestd = np.zeros(w, np.int32)
+  for k in range(n - 1, -1, -1):
+    y = y0 + k
+    _cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
+    row_offsets[0] = 0
+    for x in range(w):
+      if k == n - 1:
+        vpm[x] = _start(crow[x], vcur[x], nds[y, x])
+      else:
+        vpm[x] = _step(vprev[x], vpm[x], lo[y, x] - lo[y + 1, x], nds[y + 1, x], crow[x],
+                       vcur[x], nds[y, x], pen1, pen2, tmp)
+      tot = total[offsets[k * w + x]:offsets[k * w + x + 1]]
+      row_offsets[x + 1] = row_offsets[x] + nds[y, x]
+      s_ = srow[row_offsets[x]:row_offsets[x + 1]]
+      v_ = vcur[x]
+      for i in range(nds[y, x]):
+        s_[i] = np.int32(tot[i]) + v_[i + 1]
+    vprev, vcur = vcur, vprev
+    if w0 <= y < w1:
+      _winners(srow, row_offsets, lo, nds, y, dl, dr, best, bestd)

@@ -1,0 +1,1 @@
+"""Support for the command-line tools: quiet start-up and the flags they share."""

@@ -1,0 +1,170 @@
+"""Flags shared by several command-line tools, each declared once, and config translation.
+
+Each `define_*` group declares its flags the first time it is called (later calls do
+nothing), so tools that share a flag share one declaration. Defaults come from the frozen
+config dataclasses. Library code raises errors naming config fields
+(`PredictorConfig.checkpoint`); `usage_error` turns them into the flags the user typed.
+"""
+
+import dataclasses
+import functools
+import re
+from typing import Any, Dict, Optional, Sequence, Tuple
+
+from absl import app
+from absl import flags
+
+from mixstereo_tf import disparity_range
+from mixstereo_tf import inference
+from mixstereo_tf import mixtures
+from mixstereo_tf import models
+
+FLAGS = flags.FLAGS
+
+# Config fields whose flag has another name; other fields map to the flag of their name.
+_RENAMED = {
+    'DataConfig.middlebury_scales': 'middlebury_scale',
+    'EvalConfig.middlebury_scales': 'middlebury_scale',
+    'ModelConfig.separation_widths': 'unet_widths',
+    'ModelConfig.stereo_residual_blocks': 'num_res_blocks',
+    'ModelConfig.stereo_3d_widths': 'volume_features',
+}
+
+
+def defaults(config_class: type) -> Dict[str, Any]:
+  """{field: default} of a config dataclass (fields without a default are left out)."""
+  return {f.name: f.default for f in dataclasses.fields(config_class)
+          if f.default is not dataclasses.MISSING}
+
+
+@functools.lru_cache(maxsize=None)
+def define_mixture() -> None:
+  """--mixture: the mixture operator of the inputs."""
+  flags.DEFINE_string('mixture', None,
+                      'Mixture operator f of I = f(I_L, I_R), one of ' +
+                      ', '.join(mixtures.MIXTURE_NAMES) + '. Training: the one to learn '
+                      "(default anaglyph), or a comma-separated list ('anaglyphs' = every "
+                      "anaglyph encoding) to draw one per pair from; evaluate / unmix: the "
+                      "inputs', or 'auto' to detect each image's anaglyph encoding "
+                      "(default: the model's; required for --method=classical).")
+
+
+@functools.lru_cache(maxsize=None)
+def define_max_disparity() -> None:
+  """--max_disparity: the network's disparity levels at full resolution."""
+  flags.DEFINE_integer('max_disparity', defaults(models.ModelConfig)['max_disparity'],
+                       'Disparity levels at full resolution (paper: 96).')
+
+
+@functools.lru_cache(maxsize=None)
+def define_output_dir() -> None:
+  """--output_dir (required by every tool that declares it)."""
+  flags.DEFINE_string('output_dir', None, 'Where to write the results.')
+  flags.mark_flag_as_required('output_dir')
+
+
+@functools.lru_cache(maxsize=None)
+def define_shared_dir() -> None:
+  """--shared_dir: a folder of real stereo frames (the experiments' extra scenes)."""
+  flags.DEFINE_string('shared_dir', None, 'Folder of the shared stereo samples (e.g. '
+                      '../shared/stereo_samples); left out: those scenes are skipped.')
+
+
+@functools.lru_cache(maxsize=None)
+def define_checkpoint() -> None:
+  """--checkpoint: a trained model."""
+  flags.DEFINE_string('checkpoint', None, 'A training run directory (its newest checkpoint) '
+                      'or a checkpoint prefix such as runs/demo/ckpt-7000.')
+
+
+@functools.lru_cache(maxsize=None)
+def define_predictor() -> None:
+  """The predictor group: --method, --checkpoint, --saved_model, --mixture, --restore_colour,
+  --disparity_range, --max_network_pixels."""
+  define_checkpoint()
+  define_mixture()
+  defaults = inference.PredictorConfig()
+  flags.DEFINE_enum('method', defaults.method, inference.METHODS,
+                    'model: a trained network (--checkpoint or --saved_model); classical: the '
+                    'training-free baseline; oracle: the stereo module of --checkpoint (a '
+                    'stereo_only run) on the clean pairs (evaluation only).')
+  flags.DEFINE_string('saved_model', defaults.saved_model,
+                      'A SavedModel written by mixstereo_tf.export.')
+  flags.DEFINE_boolean('restore_colour', defaults.restore_colour,
+                       "Rebuild the views' exact channels from the mixture and disparities "
+                       '(paper 4.2); default: on for channel anaglyphs. --method=model only.')
+  flags.DEFINE_alias('restore_colors', 'restore_colour')
+  flags.DEFINE_string('disparity_range', 'auto', "'auto' (estimated per image) or MIN,MAX: "
+                      'the signed disparities to search, pixels of the input (negative = in '
+                      'front of the screen).')
+  flags.DEFINE_integer('max_network_pixels', defaults.max_network_pixels,
+                       "A model's input is reduced to at most this many pixels.",
+                       lower_bound=1)
+
+
+@functools.lru_cache(maxsize=None)
+def define_data() -> None:
+  """--data_dir and --middlebury_scale, shared by training and evaluation."""
+  flags.DEFINE_string('data_dir', None, 'Dataset root: KITTI raw (with the split list), KITTI '
+                      'stereo (holding training/), or Middlebury scene folders; unused by '
+                      'the embedded sample source.')
+  flags.DEFINE_list('middlebury_scale', [], 'Ground-truth disparity scale per Middlebury '
+                    'scene as scene:scale items, e.g. tsukuba:16,venus:8 (replaces the '
+                    "layout's scale).")
+
+
+def predictor_config() -> inference.PredictorConfig:
+  """The PredictorConfig of the parsed predictor flags."""
+  try:
+    search = disparity_range.parse(FLAGS.disparity_range)
+  except ValueError as e:
+    raise app.UsageError(f'--disparity_range: {e}') from None
+  return inference.PredictorConfig(
+      method=FLAGS.method, checkpoint=FLAGS.checkpoint, saved_model=FLAGS.saved_model,
+      mixture=FLAGS.mixture, restore_colour=FLAGS.restore_colour, disparity_range=search,
+      max_network_pixels=FLAGS.max_network_pixels)
+
+
+def middlebury_scales() -> Tuple[Tuple[str, float], ...]:
+  """The parsed --middlebury_scale items as (scene, scale) pairs.
+
+  Raises:
+    app.UsageError: an item is not scene:scale with a number as scale.
+  """
+  return parse_scene_scales(FLAGS.middlebury_scale)
+
+
+def parse_scene_scales(items: Sequence[str]) -> Tuple[Tuple[str, float], ...]:
+  """Parses `scene:scale` items (['tsukuba:16', 'venus:8']) into (scene, scale) pairs.
+
+  Scales are checked by the configs (positive, each scene once).
+
+  Raises:
+    app.UsageError: an item is not `scene:scale` with a number as scale, naming the item.
+  """
+  pairs = []
+  for item in items:
+    scene, _, value = item.rpartition(':')
+    try:
+      scale = float(value)
+    except ValueError:
+      raise app.UsageError(f'--middlebury_scale: expected scene:scale with a number as scale '
+                           f'(e.g. tsukuba:16), got {item!r}.') from None
+    pairs.append((scene.strip(), scale))
+  return tuple(pairs)
+
+
+def usage_error(error: Exception, renamed: Optional[Dict[str, str]] = None) -> app.UsageError:
+  """A UsageError whose message names flags instead of config fields.
+
+  `Config.field` becomes `--flag` where the tool has that flag: the flag named in
+  `renamed` (this tool's own renamings) or `_RENAMED`, else the flag of the field's name.
+  """
+  names = dict(_RENAMED, **(renamed or {}))
+
+  def flag(match: re.Match) -> str:
+    key = f'{match.group(1)}.{match.group(2)}'
+    name = names.get(key, match.group(2))
+    return f'--{name}' if name in FLAGS else match.group(0)
+
+  return app.UsageError(re.sub(r'\b([A-Z]\w*Config)\.(\w+)\b', flag, str(error)))

@@ -1,0 +1,84 @@
+"""Image value ranges in one place: uint8 <-> [0, 1] <-> [-1, 1], for NumPy and TensorFlow.
+
+Three ranges are in use (docs/DESIGN.md):
+  * uint8 0..255: image files, readers, predictor inputs and outputs;
+  * 'unit' [0, 1]: photometric augmentation, the classical baselines, the losses' SSIM/L1
+    terms (monodepth's constants are for this range);
+  * 'signed' [-1, 1]: network inputs and outputs (the paper normalises to [-1, 1]).
+
+Every function takes a NumPy array (or anything `np.asarray` accepts) or a `tf.Tensor`
+and returns the same kind. Float results are float32 for uint8 inputs and keep the input's
+float dtype otherwise. Conversions to uint8 round half to even and clip to 0..255.
+"""
+
+import numpy as np
+import tensorflow as tf
+
+
+def _is_tensor(value) -> bool:
+  return tf.is_tensor(value)
+
+
+def u8_to_unit(image):
+  """uint8 0..255 -> float32 [0, 1] (value / 255)."""
+  if _is_tensor(image):
+    return tf.cast(image, tf.float32) / 255.0
+  return np.asarray(image).astype(np.float32) / np.float32(255.0)
+
+
+def u8_to_signed(image):
+  """uint8 0..255 -> float32 [-1, 1] (value / 127.5 - 1)."""
+  if _is_tensor(image):
+    return tf.cast(image, tf.float32) / 127.5 - 1.0
+  return np.asarray(image).astype(np.float32) / np.float32(127.5) - np.float32(1.0)
+
+
+def unit_to_signed(image):
+  """[0, 1] -> [-1, 1] (2 x - 1)."""
+  return image * 2.0 - 1.0
+
+
+def signed_to_unit(image):
+  """[-1, 1] -> [0, 1] ((x + 1) / 2)."""
+  return (image + 1.0) * 0.5
+
+
+def unit_to_u8(image):
+  """[0, 1] -> uint8: round(x * 255), clipped to 0..255."""
+  if _is_tensor(image):
+    return tf.cast(tf.round(tf.clip_by_value(image * 255.0, 0.0, 255.0)), tf.uint8)
+  return np.clip(np.rint(np.asarray(image) * 255.0), 0, 255).astype(np.uint8)
+
+
+def signed_to_u8(image):
+  """[-1, 1] -> uint8: round((x + 1) * 127.5), clipped to 0..255.
+
+  NumPy inputs are computed in float64, so the rounding is that of the exact value.
+  """
+  if _is_tensor(image):
+    return tf.cast(tf.round(tf.clip_by_value((image + 1.0) * 127.5, 0.0, 255.0)), tf.uint8)
+  image = np.asarray(image, dtype=np.float64)
+  return np.clip(np.round((image + 1.0) * 127.5), 0, 255).astype(np.uint8)
+
+
+def as_unit_float(image, name: str = 'image') -> np.ndarray:
+  """A NumPy RGB image as float32 [0, 1]: uint8 is divided by 255, float is checked.
+
+  Args:
+    image: uint8 [H, W, 3] (0..255) or float [H, W, 3] in [0, 1].
+    name: what the image is, for error messages.
+
+  Raises:
+    ValueError: not [H, W, 3], another dtype, or floats outside [0, 1] / non-finite.
+  """
+  image = np.asarray(image)
+  if image.ndim != 3 or image.shape[-1] != 3:
+    raise ValueError(f'{name} must be an RGB image [H, W, 3], got shape {image.shape}.')
+  if image.dtype == np.uint8:
+    return u8_to_unit(image)
+  if not np.issubdtype(image.dtype, np.floating):
+    raise ValueError(f'{name} must be uint8 or float in [0, 1], got dtype {image.dtype}.')
+  if not np.all(np.isfinite(image)) or image.min() < -1e-3 or image.max() > 1 + 1e-3:
+    raise ValueError(f'float {name} must be finite and in [0, 1], got range '
+                     f'[{np.nanmin(image)}, {np.nanmax(image)}].')
+  return np.clip(image, 0.0, 1.0).astype(np.float32)

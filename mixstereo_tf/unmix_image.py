@@ -1,0 +1,128 @@
+"""One mixture image through a predictor: its encoding, its disparity range, the network's
+plan around that range, the restoration of both views, and what was done (`info`).
+
+Steps, shared by the model and the classical method:
+  1. the encoding: the one asked for, or detected from the image (`detection`); an asked
+     encoding that the detector confidently contradicts is logged as a warning;
+  2. the disparity range: the one asked for, or estimated from the image's eye channels
+     (`matcher.estimate_range`; anaglyphs only);
+  3. the model: the mixture's right-eye channels shifted and the image reduced so the
+     range fits the network's levels (`disparity_range.plan`), the outputs brought back to
+     the input's pixels, then both views restored from the encoding's matrices with the
+     network's views as the prior (`restoration`); the classical method: `baselines`.
+Outputs: 'left', 'right' uint8 [H, W, 3], 'disparity_left', 'disparity_right' float32
+[H, W] signed pixels, and 'info' (a JSON-able dict: mixture, detection, disparity range,
+shift, scale, seconds).
+"""
+
+import time
+from typing import Callable, Dict, Optional, Sequence, Tuple
+
+from absl import logging
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf import baselines
+from mixstereo_tf import detection
+from mixstereo_tf import disparity_range
+from mixstereo_tf import image_range
+from mixstereo_tf import mixtures
+from mixstereo_tf import restoration
+from mixstereo_tf.baselines import anaglyph
+from mixstereo_tf.baselines import matcher
+
+AUTO = 'auto'
+# A named encoding the detector contradicts with at least this confidence is warned about.
+WARN_CONFIDENCE = 0.9
+Range = Optional[Tuple[int, int]]
+
+
+def resolve_mixture(image: np.ndarray, requested: str,
+                    allowed: Sequence[str]) -> Tuple[str, Dict[str, object]]:
+  """(encoding to unmix with, detection info) for an image.
+
+  Args:
+    image: uint8 [H, W, 3] mixture.
+    requested: a mixture name, or 'auto' to detect it.
+    allowed: the encodings the predictor can unmix.
+
+  Raises:
+    ValueError: 'auto' on an image that is not an anaglyph, or an encoding outside
+      `allowed`.
+  """
+  found = detection.detect(image)
+  info = {'detected': found.name, 'confidence': round(found.confidence, 3)}
+  if requested == AUTO:
+    if found.name is None:
+      raise ValueError(f'This image does not look like an anaglyph ({found.reason}); name '
+                       'its mixture with PredictorConfig.mixture (e.g. diplopia).')
+    name = found.name
+  else:
+    name = requested
+    if found.confidence >= WARN_CONFIDENCE and found.name != name and (
+        found.name is not None or mixtures.get_mixture(name).is_anaglyph):
+      logging.warning('The image was given as %r but looks like %s (confidence %.2f).',
+                      name, found.name or 'no anaglyph', found.confidence)
+  if name not in allowed:
+    raise ValueError(f'The image is a {name!r} mixture; this predictor unmixes '
+                     f'{", ".join(allowed)}.')
+  return name, info
+
+
+def estimate_range(image: np.ndarray, name: str, requested: Range,
+                   default: Tuple[int, int]) -> Tuple[int, int]:
+  """The range asked for; else, for anaglyphs, estimated from the eye channels; else
+  `default`."""
+  if requested is not None:
+    return requested
+  if not mixtures.get_mixture(name).is_anaglyph:
+    return default
+  left_eye, right_eye = anaglyph.eye_images(image_range.u8_to_unit(image), name)
+  return matcher.estimate_range(left_eye, right_eye)
+
+
+def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.ndarray,
+                name: str, search: Tuple[int, int], levels: int,
+                max_pixels: Optional[int], restore: bool) -> Dict[str, object]:
+  """The network around a disparity range, then the restoration (module docstring)."""
+  spec = mixtures.get_mixture(name)
+  height, width = image.shape[:2]
+  chosen = disparity_range.plan(search, levels, height, width, max_pixels,
+                                can_shift=spec.is_anaglyph)
+  network_input = disparity_range.to_network(
+      image, spec.eye_channels[1] if spec.is_anaglyph else (), chosen)
+  raw = graph(tf.constant(network_input))
+  outputs = disparity_range.from_network(
+      {'left': raw['left'].numpy(), 'right': raw['right'].numpy(),
+       'disparity_left': raw['disparity'].numpy(),
+       'disparity_right': raw['disparity_right'].numpy()}, chosen, height, width)
+  if restore and spec.is_anaglyph:
+    views = restoration.restore_views(
+        image_range.u8_to_unit(image), name, outputs['disparity_left'],
+        outputs['disparity_right'], image_range.u8_to_unit(outputs['left']),
+        image_range.u8_to_unit(outputs['right']))
+    outputs.update({k: image_range.unit_to_u8(views[k]) for k in ('left', 'right')})
+  outputs['info'] = {'shift': chosen.shift, 'scale': round(chosen.scale, 4)}
+  return outputs
+
+
+def classical_unmix(image: np.ndarray, name: str, search: Range) -> Dict[str, object]:
+  """The training-free method."""
+  out = baselines.unmix_classical(image, name, search)
+  return {key: out[key] for key in ('left', 'right', 'disparity_left', 'disparity_right')}
+
+
+def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
+        requested_range: Range, default_range: Tuple[int, int], method: str,
+        solve: Callable[[np.ndarray, str, Tuple[int, int]], Dict[str, object]]
+        ) -> Dict[str, object]:
+  """Steps 1-3 for one image; `solve(image, name, range)` is the method's step 3."""
+  start = time.perf_counter()
+  name, info = resolve_mixture(image, requested_mixture, allowed)
+  search = estimate_range(image, name, requested_range, default_range)
+  outputs = solve(image, name, search)
+  info = dict(info, method=method, mixture=name, disparity_range=list(search),
+              **outputs.get('info', {}))
+  info['seconds'] = round(time.perf_counter() - start, 3)
+  outputs['info'] = info
+  return outputs

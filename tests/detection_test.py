@@ -1,0 +1,101 @@
+"""Tests of detection: anaglyphs made by FFmpeg's stereo3d filter (imageio-ffmpeg's binary,
+where installed) and by our operators from a synthetic stereo pair with known disparities."""
+
+import subprocess
+
+import cv2
+import numpy as np
+import pytest
+
+from mixstereo_tf import detection
+from mixstereo_tf import image_range
+from mixstereo_tf import mixtures
+
+# FFmpeg stereo3d output modes (from a left-first side-by-side input) -> our encodings.
+FFMPEG_MODES = {'arcg': 'gray', 'arcc': 'anaglyph', 'agmg': 'green_magenta_gray',
+                'aybg': 'amber_blue_gray'}
+FAMILY_OF_MODE = {'arch': 'red_cyan', 'arcd': 'red_cyan', 'agmc': 'green_magenta',
+                  'agmh': 'green_magenta', 'agmd': 'green_magenta', 'aybc': 'amber_blue',
+                  'aybh': 'amber_blue', 'aybd': 'amber_blue'}
+
+
+def _pair(height=150, width=240):
+  """A textured colour pair: luminance detail times smooth colours (channels correlated, as
+  in photographs); disparities 4 px (background), 14 px (a box), 9 px (a disc)."""
+  rng = np.random.default_rng(3)
+  def smooth(cells, channels):
+    noise = rng.uniform(0, 1, (height // cells + 1, (width + 40) // cells + 1, channels))
+    return cv2.resize(noise.astype(np.float32), (width + 40, height),
+                      interpolation=cv2.INTER_CUBIC).reshape(height, width + 40, channels)
+  texture = np.clip((0.3 + 0.7 * smooth(3, 1)) * (0.2 + 0.8 * smooth(40, 3)), 0, 1)
+  disparity = np.full((height, width), 4, int)
+  disparity[30:100, 40:120] = 14
+  yy, xx = np.mgrid[:height, :width]
+  disparity[(yy - 100) ** 2 + (xx - 180) ** 2 < 30 ** 2] = 9
+  left = texture[:, 20:20 + width]
+  right = texture[yy, 20 + xx + disparity]  # Right pixel x shows the left pixel x + d.
+  return image_range.unit_to_u8(left), image_range.unit_to_u8(right), disparity
+
+
+def _ours(name, left, right):
+  mixed = mixtures.mix(name, image_range.u8_to_signed(left), image_range.u8_to_signed(right))
+  return image_range.signed_to_u8(mixed.numpy())
+
+
+def _ffmpeg(tmp_path, left, right, mode):
+  imageio_ffmpeg = pytest.importorskip('imageio_ffmpeg')
+  sbs = tmp_path / 'sbs.png'
+  out = tmp_path / f'{mode}.png'
+  cv2.imwrite(str(sbs), cv2.cvtColor(np.concatenate([left, right], 1), cv2.COLOR_RGB2BGR))
+  subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), '-y', '-loglevel', 'error', '-i', str(sbs),
+                  '-vf', f'stereo3d=sbsl:{mode}', str(out)], check=True)
+  return cv2.cvtColor(cv2.imread(str(out)), cv2.COLOR_BGR2RGB)
+
+
+@pytest.mark.parametrize('name', ['anaglyph', 'gray', 'green_magenta_gray', 'amber_blue_gray',
+                                  'half_color', 'dubois', 'green_magenta', 'amber_blue'])
+def test_family_and_gray_variants_of_our_operators(name):
+  left, right, _ = _pair()
+  found = detection.detect(_ours(name, left, right))
+  spec = mixtures.get_mixture(name)
+  assert found.name is not None, found.reason
+  assert mixtures.get_mixture(found.name).family == spec.family, found
+  if not spec.transmits_colour:
+    assert found.name == name and found.confidence > 0.9, found
+
+
+@pytest.mark.parametrize('mode', sorted(FFMPEG_MODES) + sorted(FAMILY_OF_MODE))
+def test_ffmpeg_stereo3d_anaglyphs(tmp_path, mode):
+  left, right, _ = _pair()
+  found = detection.detect(_ffmpeg(tmp_path, left, right, mode))
+  assert found.name is not None, found.reason
+  if mode in FFMPEG_MODES:
+    assert found.name == FFMPEG_MODES[mode], found
+  else:
+    assert mixtures.get_mixture(found.name).family == FAMILY_OF_MODE[mode], found
+
+
+@pytest.mark.parametrize('kind', ['left view', 'diplopia', 'gray photo'])
+def test_images_that_are_not_anaglyphs_are_refused(kind):
+  left, right, _ = _pair()
+  image = {'left view': left,
+           'diplopia': ((left.astype(np.float32) + right) / 2).round().astype(np.uint8),
+           'gray photo': np.repeat(left.mean(-1, keepdims=True), 3, -1).astype(np.uint8)}[kind]
+  found = detection.detect(image)
+  assert found.name is None and found.confidence > 0.5, found
+  assert 'displaced' in found.reason
+
+
+def test_colour_red_cyan_of_a_saturated_scene_is_not_half_colour():
+  """Half-colour needs R - 0.587 G - 0.114 B in [0, 0.299] (R = luma of the left view): a
+  saturated colour anaglyph breaks that, so the colour encoding wins there."""
+  left, right, _ = _pair()
+  found = detection.detect(_ours('anaglyph', left, right))
+  assert found.name == 'anaglyph', found
+
+
+def test_small_or_malformed_images_are_errors():
+  with pytest.raises(ValueError, match='RGB'):
+    detection.detect(np.zeros((40, 40), np.uint8))
+  with pytest.raises(ValueError, match='16x16'):
+    detection.detect(np.zeros((8, 8, 3), np.uint8))

@@ -1,0 +1,22 @@
+"""The wheel carries what an installed package needs outside the repository."""
+
+import glob
+import os
+import subprocess
+import sys
+import zipfile
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def test_the_wheel_ships_the_split_lists_as_package_data(tmp_path):
+  result = subprocess.run(
+      [sys.executable, '-m', 'pip', 'wheel', '--no-deps', '--no-build-isolation', '-q',
+       '-w', str(tmp_path), REPO], capture_output=True, text=True, timeout=300, check=False)
+  assert result.returncode == 0, result.stderr[-3000:]
+  wheel, = glob.glob(str(tmp_path / 'mixstereo_tf-*.whl'))
+  names = set(zipfile.ZipFile(wheel).namelist())
+  for name in ('eigen_test_files.txt', 'kitti_train_files.txt', 'eigen_train_files.txt'):
+    assert f'mixstereo_tf/data_lists/kitti/{name}' in names
+  assert 'mixstereo_tf/evaluation/protocols/eigen.py' in names
+  assert 'mixstereo_tf/cli/flags.py' in names

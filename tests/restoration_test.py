@@ -1,0 +1,95 @@
+"""Known-answer tests of the restoration of both views from a mixture and disparities."""
+
+import numpy as np
+import pytest
+
+from mixstereo_tf import mixtures
+from mixstereo_tf import restoration
+
+
+def _pair(shift=3, height=24, width=40, seed=0):
+  """A textured pair with constant disparity `shift` ([0, 1] floats) and its masks."""
+  rng = np.random.default_rng(seed)
+  base = rng.uniform(0.1, 0.9, (height, width + shift, 1))
+  texture = np.clip(base * [1.0, 0.8, 0.6] + rng.uniform(-0.1, 0.1, (height, width + shift, 3)),
+                    0, 1).astype(np.float32)
+  left, right = texture[:, :width], texture[:, shift:]  # Left x is right x - shift.
+  d = np.full((height, width), float(shift), np.float32)
+  inside = np.broadcast_to(np.arange(width)[None, :] >= shift, (height, width))  # Match in image.
+  return left, right, d, inside
+
+
+def _mix(name, left, right):
+  spec = mixtures.get_mixture(name)
+  mixed = left @ np.asarray(spec.left_matrix).T + right @ np.asarray(spec.right_matrix).T
+  return np.clip(mixed, 0, 1).astype(np.float32)
+
+
+def test_sample_horizontal_shifts_and_replicates_edges():
+  image = np.arange(5, dtype=np.float32)[None, :].repeat(2, 0)
+  np.testing.assert_array_equal(restoration.sample_horizontal(image, np.full((2, 5), 1.5)),
+                                [[1.5, 2.5, 3.5, 4, 4]] * 2)
+  np.testing.assert_array_equal(restoration.sample_horizontal(image, np.full((2, 5), -2.0)),
+                                [[0, 0, 0, 1, 2]] * 2)
+
+
+def test_lr_consistency_flags_disagreement_and_the_border():
+  d = np.full((1, 8), 2.0, np.float32)
+  other = d.copy()
+  other[0, 4] = 6.0  # The left pixel 6 matches right 4, which disagrees.
+  ok_left, ok_right = restoration.lr_consistency(d, other)
+  np.testing.assert_array_equal(ok_left[0], [0, 0, 1, 1, 1, 1, 0, 1])
+  assert not ok_right[0, 6] and not ok_right[0, 7]  # x + 2 leaves the image.
+
+
+@pytest.mark.parametrize('name', ['anaglyph', 'green_magenta', 'amber_blue'])
+def test_channel_anaglyphs_are_recovered_exactly_where_both_views_see(name):
+  left, right, d, inside = _pair()
+  out = restoration.restore_views(_mix(name, left, right), name, d, d)
+  assert out['consistent_left'][inside].all()
+  # Copied channels exactly; warped ones up to the prior's 1 % pull (w_prior / w_match).
+  np.testing.assert_allclose(out['left'][inside], left[inside], atol=5e-3)
+  seen_right = np.arange(d.shape[1])[None, :] + d < d.shape[1] - 1
+  np.testing.assert_allclose(out['right'][np.broadcast_to(seen_right, d.shape)],
+                             right[np.broadcast_to(seen_right, d.shape)], atol=5e-3)
+  for view, truth, copied in (('left', left, mixtures.get_mixture(name).left_channels),
+                              ('right', right, mixtures.get_mixture(name).right_channels)):
+    for channel in copied:
+      np.testing.assert_array_equal(out[view][..., channel], truth[..., channel])
+
+
+def test_lossy_encodings_keep_their_luminance_and_gray_gives_gray():
+  left, right, d, inside = _pair(seed=1)
+  luma = np.asarray(mixtures.LUMA, np.float32)
+  gray = restoration.restore_views(_mix('gray', left, right), 'gray', d, d)
+  np.testing.assert_allclose(gray['left'][..., 0], gray['left'][..., 2], atol=1e-6)
+  np.testing.assert_allclose(gray['left'][inside] @ luma, left[inside] @ luma, atol=3e-3)
+  half = restoration.restore_views(_mix('half_color', left, right), 'half_color', d, d)
+  np.testing.assert_allclose(half['left'][inside] @ luma, left[inside] @ luma, atol=3e-3)
+  # Colour came from the right view: the left view's colour is recovered, not only its Y.
+  assert np.abs(half['left'][inside] - left[inside]).mean() < 0.02
+
+
+def test_the_network_prior_fills_what_nothing_else_fixes():
+  left, right, d, inside = _pair(seed=2)
+  prior = np.full_like(left, 0.5)
+  out = restoration.restore_views(_mix('anaglyph', left, right), 'anaglyph', d, d, prior,
+                                  prior)
+  occluded = ~inside
+  np.testing.assert_allclose(out['left'][occluded][:, 0], left[occluded][:, 0], atol=2e-3)
+  np.testing.assert_allclose(out['left'][occluded][:, 1:], 0.5, atol=0.02)
+
+
+def test_local_linear_transfer_recovers_an_affine_channel():
+  rng = np.random.default_rng(1)
+  guide = rng.uniform(0.2, 0.8, (24, 24, 1))
+  target = 0.5 * guide + 0.1
+  train = rng.uniform(size=(24, 24)) < 0.5
+  predicted = restoration.local_linear_transfer(guide, target, train, radius=3, eps=1e-6)
+  np.testing.assert_allclose(predicted, target, atol=2e-3)
+
+
+def test_only_anaglyphs_are_restored():
+  left, right, d, _ = _pair()
+  with pytest.raises(ValueError, match='anaglyph encoding'):
+    restoration.restore_views(_mix('diplopia', left, right), 'diplopia', d, d)

@@ -1,0 +1,186 @@
+"""Tests for unmixing files: images, folders, globs and videos (mixstereo_tf.unmix_files)."""
+
+import io
+import json
+import os
+
+import cv2
+import numpy as np
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf import inference
+from mixstereo_tf import media
+from mixstereo_tf import models
+from mixstereo_tf import colormap
+from mixstereo_tf import runs
+from mixstereo_tf import unmix_files
+from tests import inference_test
+
+INFO = runs.RunInfo('anaglyph', 64, 128, inference_test.TINY)
+
+
+@pytest.fixture(scope='module')
+def model():
+  tf.keras.utils.set_random_seed(5)
+  return models.build_model(inference_test.TINY)
+
+
+@pytest.fixture(scope='module')
+def setup(model):
+  graph = tf.function(inference.serving_function(model))
+  return inference.model_unmixer(graph, INFO, inference.PredictorConfig(
+      mixture='anaglyph', disparity_range=(0, 7)))
+
+
+def _image(path, shape=(40, 50, 3), seed=0):
+  image = np.random.RandomState(seed).randint(0, 256, shape).astype(np.uint8)
+  media.write_image(str(path), image)
+  return image
+
+
+class _Terminal(io.StringIO):
+  """A stream that says it is a terminal, so progress is drawn on it."""
+
+  def isatty(self):
+    return True
+
+
+def test_every_layout_for_one_image(setup, tmp_path):
+  _image(tmp_path / 'scene.png')
+  expected = {'separate': ['scene_left.png', 'scene_right.png'], 'sbs': ['scene_sbs.png'],
+              'sbs_half': ['scene_sbs_half.png'], 'tb': ['scene_tb.png']}
+  shapes = {'scene_left.png': (40, 50, 3), 'scene_right.png': (40, 50, 3),
+            'scene_sbs.png': (40, 100, 3), 'scene_sbs_half.png': (40, 50, 3),
+            'scene_tb.png': (80, 50, 3)}
+  for layout, names in expected.items():
+    out = tmp_path / layout
+    report = unmix_files.unmix_inputs(setup, str(tmp_path / 'scene.png'), str(out), layout)
+    assert (report.processed, report.frames, report.failures) == (1, 1, [])
+    common = ['scene_disparity.png', 'scene_disparity16.png', 'scene_disparity.npy',
+              'scene_info.json']
+    assert sorted(os.listdir(out)) == sorted(names + common)
+    for name in names:
+      assert media.read_image(str(out / name)).shape == shapes[name]
+  # The three disparity files agree with each other and with the unmixer.
+  disparity = np.load(tmp_path / 'tb' / 'scene_disparity.npy')
+  direct = setup(media.read_image(str(tmp_path / 'scene.png')))['disparity_left']
+  np.testing.assert_allclose(disparity, direct, atol=1e-5)
+  raw = cv2.imread(str(tmp_path / 'tb' / 'scene_disparity16.png'), cv2.IMREAD_UNCHANGED)
+  assert raw.dtype == np.uint16
+  np.testing.assert_allclose(raw / 256.0, disparity, atol=1 / 512 + 1e-6)
+  colour = media.read_image(str(tmp_path / 'tb' / 'scene_disparity.png'))
+  low, high = media.display_range(disparity)  # The range the map covers.
+  np.testing.assert_array_equal(colour, colormap.colorize(disparity, high, low))
+  info = json.loads((tmp_path / 'tb' / 'scene_info.json').read_text())
+  assert (info['method'], info['mixture'], info['disparity_range']) == (
+      'model', 'anaglyph', [0, 7])
+  assert info['display_range'] == pytest.approx([low, high], abs=1e-3) and info['seconds'] > 0
+
+
+def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
+  folder = tmp_path / 'in'
+  folder.mkdir()
+  _image(folder / 'a.png')
+  (folder / 'b.png').write_bytes(b'\x89PNG\r\n\x1a\n truncated')
+  cv2.imwrite(str(folder / 'c.jpg'), np.full((33, 47), 90, np.uint8))  # Gray.
+  terminal = _Terminal()
+  report = unmix_files.unmix_inputs(setup, str(folder), str(tmp_path / 'out'), 'sbs_half',
+                                 progress_stream=terminal)
+  assert report.processed == 2 and report.frames == 2
+  assert '[##########] 3/3' in terminal.getvalue() and terminal.getvalue().endswith('\n')
+  assert [os.path.basename(p) for p, _ in report.failures] == ['b.png']
+  assert 'b.png' in report.failures[0][1]
+  assert unmix_files.failure_message(report) == (
+      f'error: 1 of 3 input(s) failed: {folder / "b.png"}')
+  assert media.read_image(str(tmp_path / 'out' / 'c_sbs_half.png')).shape == (33, 47, 3)
+  assert not os.path.exists(tmp_path / 'out' / 'b_disparity.npy')
+  # Nothing readable: the report asks for a non-zero exit.
+  os.remove(folder / 'a.png')
+  os.remove(folder / 'c.jpg')
+  report = unmix_files.unmix_inputs(setup, str(folder), str(tmp_path / 'out2'))
+  assert report.processed == 0 and len(report.failures) == 1
+  assert '1 of 1 input(s) failed' in unmix_files.failure_message(report)
+
+
+def test_video(setup, tmp_path):
+  path = str(tmp_path / 'clip.avi')
+  with media.VideoWriter(path, fps=10.0) as writer:
+    for seed in range(3):
+      writer.write(np.random.RandomState(seed).randint(0, 256, (64, 96, 3)).astype(np.uint8))
+  terminal = _Terminal()
+  report = unmix_files.unmix_inputs(setup, path, str(tmp_path / 'out'), 'tb',
+                                 progress_stream=terminal)
+  assert (report.processed, report.frames) == (1, 3) and report.frames_per_second > 0
+  # One video: only its frame bar, whose total is the container's frame count.
+  assert terminal.getvalue().startswith('\rclip.avi  [###') and terminal.getvalue().endswith('\n')
+  assert 'clip.avi  [##########] 3/3  ' in terminal.getvalue()
+  for name, shape in (('clip_tb.mp4', (128, 96, 3)), ('clip_disparity.mp4', (64, 96, 3))):
+    fps, _, frames = media.video_frames(str(tmp_path / 'out' / name))
+    frames = list(frames)
+    assert len(frames) == 3 and frames[0].shape == shape and fps == pytest.approx(10.0)
+
+
+def test_classical_method(tmp_path):
+  setup = inference.build_unmixer(inference.PredictorConfig('classical', mixture='anaglyph'))
+  mixture = _image(tmp_path / 'x.png', (30, 44, 3))
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'x.png'), str(tmp_path / 'out'))
+  assert report.processed == 1 and not report.failures
+  left = media.read_image(str(tmp_path / 'out' / 'x_left.png'))
+  right = media.read_image(str(tmp_path / 'out' / 'x_right.png'))
+  np.testing.assert_array_equal(left[..., 0], mixture[..., 0])  # Red-cyan channels kept.
+  np.testing.assert_array_equal(right[..., 1:], mixture[..., 1:])
+  assert np.load(tmp_path / 'out' / 'x_disparity.npy').shape == (30, 44)
+
+
+def test_inputs_sharing_a_stem_keep_their_own_outputs(setup, tmp_path):
+  folder = tmp_path / 'in'
+  folder.mkdir()
+  _image(folder / 'a.png', seed=1)
+  _image(folder / 'a.jpg', seed=2)
+  out = tmp_path / 'out'
+  report = unmix_files.unmix_inputs(setup, str(folder / 'a.*'), str(out))
+  assert report.processed == 2 and not report.failures
+  assert sorted(os.listdir(out)) == sorted(
+      f'a_{ext}_{suffix}' for ext in ('png', 'jpg') for suffix in (
+          'left.png', 'right.png', 'disparity.png', 'disparity16.png', 'disparity.npy',
+          'info.json'))
+  for ext in ('png', 'jpg'):
+    expected = setup(media.read_image(str(folder / f'a.{ext}')))['disparity_left']
+    np.testing.assert_allclose(np.load(out / f'a_{ext}_disparity.npy'), expected, atol=1e-5)
+
+
+def test_tensorflow_and_file_system_errors_skip_only_their_input(tmp_path):
+  def unmix(image):
+    value = int(image[0, 0, 0])
+    if value == 10:
+      raise tf.errors.ResourceExhaustedError(None, None, 'OOM when allocating\n  (trace)')
+    if value == 20:
+      raise OSError(28, 'No space left on device')
+    if value == 40:
+      raise KeyError('a bug, not a bad input')
+    return {'left': image, 'right': image,
+            'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  folder = tmp_path / 'in'
+  folder.mkdir()
+  for name, value in (('a', 10), ('b', 20), ('c', 30)):
+    media.write_image(str(folder / f'{name}.png'), np.full((8, 8, 3), value, np.uint8))
+  unmixer = inference.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+  report = unmix_files.unmix_inputs(unmixer, str(folder), str(tmp_path / 'out'))
+  assert report.processed == 1 and os.path.exists(tmp_path / 'out' / 'c_left.png')
+  assert report.failures == [
+      (str(folder / 'a.png'), 'ResourceExhaustedError: OOM when allocating'),
+      (str(folder / 'b.png'), 'OSError: [Errno 28] No space left on device')]
+  assert unmix_files.failure_message(report).startswith('error: 2 of 3 input(s) failed: ')
+  # Anything else is a bug and stops the run rather than being reported as a bad input.
+  media.write_image(str(folder / 'd.png'), np.full((8, 8, 3), 40, np.uint8))
+  with pytest.raises(KeyError):
+    unmix_files.unmix_inputs(unmixer, str(folder), str(tmp_path / 'out2'))
+
+
+def test_failure_message_names_at_most_five_inputs():
+  assert unmix_files.failure_message(unmix_files.UnmixReport(processed=3)) is None
+  report = unmix_files.UnmixReport(processed=1, failures=[(f'{i}.png', 'bad') for i in range(7)])
+  assert unmix_files.failure_message(report) == (
+      'error: 7 of 8 input(s) failed: 0.png, 1.png, 2.png, 3.png, 4.png, ...')
