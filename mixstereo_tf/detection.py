@@ -13,24 +13,35 @@ Two questions, each answered by a physical property of the encodings (`mixtures`
      scores min(displacement of the odd channel against the other two) - displacement of
      the other two against each other. An ordinary photo, a gray photo or a diplopia image
      (every channel holds both views, aligned) scores ~0 for every family and is refused.
-  2. **Variant (colour, gray, half-colour, optimized, Dubois).** The odd channel is matched
+  2. **Variant (colour, gray, half-colour, optimized).** The odd channel is matched
      against the mean of the other two; at consistent, smooth pixels the colour c of the
      surface is seen as o = [odd channel at x, other channels at x - d]. Under encoding h
-     (matrices A_L, A_R) o = clip(M_h c), M_h = A_L + A_R, c in [0, 1]^3. Each h is scored
-     by the mean log-likelihood of a uniform c blurred by noise: -0.5 log det(M M^T +
-     thickness^2 I) - |o - clip(M c*)|^2 / (2 noise^2) (c* the box-constrained fit; each
-     sample's term capped at max_penalty). The colour encoding explains every o with
-     volume 1; gray (R = G = B), optimized (a plane) and half-colour or Dubois (smaller
-     parallelepipeds) explain less and so win wherever their samples fit them.
-Confidence: the family's margin through a logistic, times the variant's posterior
-(softmax of `evidence` x mean log-likelihood). Dubois red-cyan images are reported as
-'dubois_ffmpeg': the two Dubois matrices of `mixtures` differ by < 0.03 per coefficient,
-which an image cannot tell apart. Desaturated scenes hold little colour evidence, so there
-colour, half-colour and Dubois are close (and close in what unmixing gives).
+     (matrices A_L, A_R) o = clip(M_h c), M_h = A_L + A_R, c in [0, 1]^3: the colour
+     encoding explains every o; gray (R = G = B), optimized (a plane) and half-colour (a
+     slab 0.299 thick) explain less. The smallest set that explains the samples wins,
+     ordered by rank and volume |det M_h|; colour is the fallback. Gray: the two channels
+     of one eye equal on singular_share of the pixels. Others: for c uniform in the box,
+     a sample inside the set (within `noise`) is 1 / V times likelier than under colour
+     (V = max(|det M_h|, 2 noise)) and one outside costs `outside_penalty` nats, so the set
+     explains the samples when its outside share is at most log(1/V) / (log(1/V) +
+     outside_penalty). A colour anaglyph of a scene without saturated colours lies inside
+     the half-colour sets as well and is reported as half-colour.
+  3. **Dubois ghosts.** Dubois matrices leak a little of the odd eye into the other
+     channels (red-cyan: G gets -0.094 of the left view). Regressing the high-passed other
+     channels at a right pixel on the high-passed odd channel at the matching left pixel and
+     at the same pixel, the second coefficient is that leak (0 for colour, gray,
+     half-colour). Its projection on a Dubois encoding's expected leak (`expected_ghost`),
+     as a fraction of it, chooses the Dubois encoding at >= ghost_fraction and rules it
+     out below; the colour samples then choose among the others.
+Confidence: the family's margin through a logistic, times the variant's: the explained
+share's distance to its threshold through a logistic of scale share_softness (1 for gray
+and Dubois decisions). Dubois red-cyan images are reported as 'dubois_ffmpeg': the two
+Dubois matrices of `mixtures` differ by < 0.03 per coefficient, which an image cannot tell
+apart.
 """
 
 import dataclasses
-from typing import Dict, Optional
+from typing import Dict, Optional, Tuple
 
 import cv2
 import numpy as np
@@ -42,12 +53,6 @@ from mixstereo_tf.baselines import matcher
 FAMILY_ODD_CHANNEL = {'red_cyan': 0, 'green_magenta': 1, 'amber_blue': 2}
 CANDIDATES = tuple(name for name in mixtures.ANAGLYPH_NAMES if name != 'dubois')
 _PAIRS = ((0, 1), (0, 2), (1, 2))
-# The colours of natural photographs, [0, 1] RGB: mean and covariance of every 7th pixel of
-# scikit-image's astronaut, coffee, chelsea and rocket pictures (training data only).
-NATURAL_MEAN = np.array([0.471, 0.345, 0.309])
-NATURAL_COVARIANCE = np.array([[0.0854, 0.0547, 0.0316],
-                               [0.0547, 0.0537, 0.0452],
-                               [0.0316, 0.0452, 0.0502]])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,11 +65,15 @@ class DetectConfig:
     min_family_score: below this family score the image is not an anaglyph.
     family_softness: the logistic's scale on the family margin.
     noise: the colour residual's standard deviation, [0, 1] units.
-    singular_share: a rank-deficient encoding (gray, optimized) is chosen when this share
-      of pixels (gray: two channels of one eye equal within noise / 2) ...
-    plane_share: ... or this share of colour samples within noise of its plane fits it.
-    evidence: how many independent samples the mean log-likelihood stands for.
+    singular_share: a gray encoding is chosen when this share of pixels has the two
+      channels of one eye equal within noise / 2 ...
+    outside_penalty: ... another smaller encoding by its share of colour samples outside
+      it, each costing this many nats (step 2).
+    share_softness: the logistic's scale on the explained share's margin.
     samples: at most this many colour samples.
+    ghost_sigma: the Gaussian high-pass of the ghost regression, pixels of the copy.
+    ghost_fraction: a Dubois encoding is chosen when at least this fraction of its
+      expected leak is observed.
   """
   width: int = 320
   reach_fraction: float = 0.2
@@ -72,9 +81,11 @@ class DetectConfig:
   family_softness: float = 0.03
   noise: float = 0.025
   singular_share: float = 0.9
-  plane_share: float = 0.97
-  evidence: float = 3.0
+  outside_penalty: float = 40.0
+  share_softness: float = 0.01
   samples: int = 20000
+  ghost_sigma: float = 2.0
+  ghost_fraction: float = 0.2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,7 +96,8 @@ class Detection:
     name: the encoding (of CANDIDATES), or None when the image is not an anaglyph.
     confidence: in [0, 1]: of `name`, or that the image is no anaglyph when name is None.
     reason: one line saying why.
-    scores: family scores ('family:<name>') and variant posteriors (encoding names).
+    scores: family scores ('family:<name>'), Dubois leaks ('ghost:<name>', as a fraction
+      of the expected) and explained shares (encoding names).
   """
   name: Optional[str]
   confidence: float
@@ -126,19 +138,26 @@ def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
   return scores
 
 
-def colour_samples(small: np.ndarray, odd: int, config: DetectConfig) -> np.ndarray:
-  """[N, 3] colours o in [0, 1] (step 2): the odd channel at x, the others at x - d."""
+def eye_match(small: np.ndarray, odd: int, config: DetectConfig) -> Tuple[np.ndarray, ...]:
+  """(ys, xs, xr): the odd channel's left-right consistent pixels (y, x) and the columns xr
+  = x - d where the mean of the other channels sees the same surface."""
   others = [c for c in range(3) if c != odd]
   reach = max(2, round(config.reach_fraction * small.shape[1]))
   out = _match(small[..., odd], small[..., others].mean(axis=2), reach)
+  ys, xs = np.nonzero(out['consistent_left'])
+  xr = np.rint(xs - out['disparity_left'][ys, xs]).astype(int)
+  keep = (xr >= 0) & (xr < small.shape[1])
+  return ys[keep], xs[keep], xr[keep]
+
+
+def colour_samples(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
+                   config: DetectConfig) -> np.ndarray:
+  """[N, 3] colours o in [0, 1] (step 2): the odd channel at x, the others at x - d."""
+  others = [c for c in range(3) if c != odd]
   smooth = cv2.blur(small, (3, 3)) / 255.0
   grad = sum(np.abs(cv2.Sobel(smooth[..., c], cv2.CV_32F, 1, 0)) +
              np.abs(cv2.Sobel(smooth[..., c], cv2.CV_32F, 0, 1)) for c in range(3))
-  h, w = small.shape[:2]
-  ys, xs = np.nonzero(out['consistent_left'])
-  xr = np.rint(xs - out['disparity_left'][ys, xs]).astype(int)
-  keep = (xr >= 0) & (xr < w)
-  ys, xs, xr = ys[keep], xs[keep], xr[keep]
+  ys, xs, xr = matched
   flat = (grad[ys, xs] <= np.median(grad)) & (grad[ys, xr] <= np.median(grad))
   ys, xs, xr = ys[flat], xs[flat], xr[flat]
   if ys.size > config.samples:
@@ -148,6 +167,29 @@ def colour_samples(small: np.ndarray, odd: int, config: DetectConfig) -> np.ndar
   obs[:, odd] = smooth[ys, xs, odd]
   obs[:, others] = smooth[ys, xr][:, others]
   return obs
+
+
+def observed_ghost(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
+                   config: DetectConfig) -> np.ndarray:
+  """[2]: per other channel, the leak of the odd eye into it (step 3 of the module
+  docstring); ~0 without a leak."""
+  high = small / 255.0 - cv2.GaussianBlur(small / 255.0, (0, 0), config.ghost_sigma)
+  ys, xs, xr = matched
+  regressors = np.stack([high[ys, xs, odd], high[ys, xr, odd]], axis=1)
+  if ys.size < 50:
+    return np.zeros(2)
+  return np.array([np.linalg.lstsq(regressors, high[ys, xr, c], rcond=None)[0][1]
+                   for c in range(3) if c != odd])
+
+
+def expected_ghost(name: str) -> np.ndarray:
+  """[2]: an encoding's leak of the odd eye into the other channels, relative to the odd
+  channel (row sums of the odd eye's matrix; zero for all but Dubois)."""
+  spec = mixtures.get_mixture(name)
+  odd = FAMILY_ODD_CHANNEL[spec.family]
+  left, right = np.asarray(spec.left_matrix), np.asarray(spec.right_matrix)
+  eye = left if np.abs(left[odd]).sum() > np.abs(right[odd]).sum() else right
+  return np.array([eye[c].sum() / eye[odd].sum() for c in range(3) if c != odd])
 
 
 def _matrix(name: str) -> np.ndarray:
@@ -167,34 +209,54 @@ def _fit(obs: np.ndarray, name: str) -> np.ndarray:
   return ((obs - np.clip(c @ m.T, 0.0, 1.0)) ** 2).sum(axis=1)
 
 
-def log_likelihood(obs: np.ndarray, name: str) -> float:
-  """Mean log-likelihood of colour samples [N, 3] under a full-rank encoding (step 2):
-  log N(M^-1 o; NATURAL_MEAN, NATURAL_COVARIANCE) - log |det M|."""
-  m = _matrix(name)
-  centred = obs @ np.linalg.inv(m).T - NATURAL_MEAN
-  mahalanobis = np.einsum('ni,ij,nj->n', centred, np.linalg.inv(NATURAL_COVARIANCE), centred)
-  return float(-0.5 * mahalanobis.mean() - np.linalg.slogdet(m)[1])
-
-
-def fits_singular(small: np.ndarray, obs: np.ndarray, name: str,
-                  config: DetectConfig) -> bool:
-  """Whether a rank-deficient encoding explains the image (step 2): gray ones by the
-  equality of the two channels of one eye on every pixel, others by the share of colour
-  samples within 2 noise of their set."""
+def explained_share(small: np.ndarray, obs: np.ndarray, name: str,
+                    config: DetectConfig) -> float:
+  """The share of the image a smaller encoding explains (step 2): gray ones, the pixels
+  whose two channels of one eye are equal within noise / 2; others, the colour samples
+  within noise of their set."""
   spec = mixtures.get_mixture(name)
   if not spec.transmits_colour:
     pair = next(eye for eye in spec.eye_channels if len(eye) == 2)
     same = np.abs(small[..., pair[0]] - small[..., pair[1]]) <= 255.0 * config.noise / 2
-    return bool(same.mean() >= config.singular_share)
-  inside = _fit(obs, name) <= config.noise ** 2
-  return bool(inside.mean() >= config.plane_share)
+    return float(same.mean())
+  if len(obs) < 50:
+    return 0.0
+  return float((_fit(obs, name) <= config.noise ** 2).mean())
 
 
-def _softmax(values: Dict[str, float], scale: float) -> Dict[str, float]:
-  top = max(values.values())
-  weights = {k: np.exp(scale * (v - top)) for k, v in values.items()}
-  total = sum(weights.values())
-  return {k: float(v / total) for k, v in weights.items()}
+def _size(name: str) -> Tuple[int, float]:
+  """(rank, |det|) of an encoding's M: smaller sets first."""
+  m = _matrix(name)
+  return int(np.linalg.matrix_rank(m, tol=1e-3)), abs(float(np.linalg.det(m)))
+
+
+def _logistic(value: float) -> float:
+  return float(1.0 / (1.0 + np.exp(-value)))
+
+
+def needed_share(name: str, config: DetectConfig) -> float:
+  """The share of the image a smaller encoding must explain to be chosen (step 2)."""
+  if not mixtures.get_mixture(name).transmits_colour:
+    return config.singular_share
+  gain = -np.log(max(_size(name)[1], 2.0 * config.noise))
+  return 1.0 - gain / (gain + config.outside_penalty)
+
+
+def choose_variant(small: np.ndarray, obs: np.ndarray, names, config: DetectConfig
+                   ) -> Tuple[str, float, Dict[str, float]]:
+  """(encoding, confidence, explained shares): the smallest of `names` that explains the
+  samples, else the largest (step 2)."""
+  ordered = sorted(names, key=_size)
+  shares, closest = {}, -np.inf
+  for name in ordered[:-1]:
+    gray = not mixtures.get_mixture(name).transmits_colour
+    shares[name] = explained_share(small, obs, name, config)
+    margin = (shares[name] - needed_share(name, config)) / config.share_softness
+    if margin >= 0:
+      return name, 1.0 if gray else _logistic(margin), shares
+    if not gray:
+      closest = max(closest, margin)
+  return ordered[-1], _logistic(-closest), shares
 
 
 def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
@@ -213,21 +275,21 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
     return Detection(None, 1.0 - family_confidence,
                      f'no colour channel is displaced against the others (best family '
                      f'{family}: {families[family]:.3f} < {config.min_family_score})', scores)
-  obs = colour_samples(small, FAMILY_ODD_CHANNEL[family], config)
+  odd = FAMILY_ODD_CHANNEL[family]
+  matched = eye_match(small, odd, config)
+  obs = colour_samples(small, odd, matched, config)
   names = [n for n in CANDIDATES if mixtures.get_mixture(n).family == family]
-  singular = [n for n in names if np.linalg.matrix_rank(_matrix(n), tol=1e-3) < 3]
-  fitting = [n for n in singular if fits_singular(small, obs, n, config)]
-  if fitting:  # The lowest rank that fits: gray before optimized.
-    best = min(fitting, key=lambda n: np.linalg.matrix_rank(_matrix(n), tol=1e-3))
-    posterior = {n: float(n == best) for n in names}
-  elif len(obs) < 50:
-    full = [n for n in names if n not in singular]
-    posterior = {n: 1.0 / len(full) for n in full}
+  ghost = observed_ghost(small, odd, matched, config)
+  leaky = {n: float(ghost @ expected_ghost(n) / (expected_ghost(n) @ expected_ghost(n)))
+           for n in names if np.abs(expected_ghost(n)).max() > 0.01}
+  scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})
+  if any(t >= config.ghost_fraction for t in leaky.values()):
+    names = [max(leaky, key=leaky.get)]
   else:
-    posterior = _softmax({n: log_likelihood(obs, n) for n in names
-                          if n not in singular}, config.evidence)
-  scores.update({n: round(p, 4) for n, p in posterior.items()})
-  name = max(posterior, key=posterior.get)
-  return Detection(name, family_confidence * posterior[name],
+    names = [n for n in names if n not in leaky]
+  name, variant_confidence, shares = choose_variant(small, obs, names, config)
+  scores.update({n: round(v, 4) for n, v in shares.items()})
+  return Detection(name, family_confidence * variant_confidence,
                    f'{family} channels displaced (score {families[family]:.3f}); '
-                   f'{len(obs)} colour samples fit {name} best', scores)
+                   f'{len(obs)} colour samples: {name} is the smallest encoding that '
+                   'explains them', scores)

@@ -12,11 +12,11 @@ from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
 
 # FFmpeg stereo3d output modes (from a left-first side-by-side input) -> our encodings.
-FFMPEG_MODES = {'arcg': 'gray', 'arcc': 'anaglyph', 'agmg': 'green_magenta_gray',
-                'aybg': 'amber_blue_gray'}
-FAMILY_OF_MODE = {'arch': 'red_cyan', 'arcd': 'red_cyan', 'agmc': 'green_magenta',
-                  'agmh': 'green_magenta', 'agmd': 'green_magenta', 'aybc': 'amber_blue',
-                  'aybh': 'amber_blue', 'aybd': 'amber_blue'}
+FFMPEG_MODES = {'arcg': 'gray', 'arcc': 'anaglyph', 'arch': 'half_color',
+                'arcd': 'dubois_ffmpeg', 'agmg': 'green_magenta_gray',
+                'agmc': 'green_magenta', 'agmh': 'green_magenta_half',
+                'agmd': 'green_magenta_dubois', 'aybg': 'amber_blue_gray', 'aybc': 'amber_blue',
+                'aybh': 'amber_blue_half', 'aybd': 'amber_blue_dubois'}
 
 
 def _pair(height=150, width=240):
@@ -52,27 +52,47 @@ def _ffmpeg(tmp_path, left, right, mode):
   return cv2.cvtColor(cv2.imread(str(out)), cv2.COLOR_BGR2RGB)
 
 
-@pytest.mark.parametrize('name', ['anaglyph', 'gray', 'green_magenta_gray', 'amber_blue_gray',
-                                  'half_color', 'dubois', 'green_magenta', 'amber_blue'])
-def test_family_and_gray_variants_of_our_operators(name):
+@pytest.mark.parametrize('name', mixtures.ANAGLYPH_NAMES)
+def test_every_encoding_of_our_operators(name):
   left, right, _ = _pair()
   found = detection.detect(_ours(name, left, right))
-  spec = mixtures.get_mixture(name)
-  assert found.name is not None, found.reason
-  assert mixtures.get_mixture(found.name).family == spec.family, found
-  if not spec.transmits_colour:
-    assert found.name == name and found.confidence > 0.9, found
+  # The two red-cyan Dubois matrices differ by < 0.03: both are reported as dubois_ffmpeg.
+  assert found.name == ('dubois_ffmpeg' if name == 'dubois' else name), found
+  assert found.confidence > 0.6, found
 
 
-@pytest.mark.parametrize('mode', sorted(FFMPEG_MODES) + sorted(FAMILY_OF_MODE))
+@pytest.mark.parametrize('mode', sorted(FFMPEG_MODES))
 def test_ffmpeg_stereo3d_anaglyphs(tmp_path, mode):
   left, right, _ = _pair()
   found = detection.detect(_ffmpeg(tmp_path, left, right, mode))
-  assert found.name is not None, found.reason
-  if mode in FFMPEG_MODES:
-    assert found.name == FFMPEG_MODES[mode], found
-  else:
-    assert mixtures.get_mixture(found.name).family == FAMILY_OF_MODE[mode], found
+  assert found.name == FFMPEG_MODES[mode], found
+  dubois = FFMPEG_MODES[mode].endswith('dubois') or FFMPEG_MODES[mode] == 'dubois_ffmpeg'
+  ghost = next(v for k, v in found.scores.items() if k.startswith('ghost:'))
+  # Dubois leaks the odd eye into the other channels as its matrices say; the others not.
+  assert (ghost > 0.6) if dubois else (abs(ghost) < 0.15), found.scores
+
+
+def test_expected_ghost_is_the_odd_eyes_leak():
+  # Red-cyan Dubois: G gets (-0.040 - 0.038 - 0.016) of the left view, R (0.456 + 0.500 +
+  # 0.176); B gets (-0.015 - 0.021 - 0.005).
+  spec = mixtures.get_mixture('dubois_ffmpeg')
+  left = np.asarray(spec.left_matrix)
+  np.testing.assert_allclose(detection.expected_ghost('dubois_ffmpeg'),
+                             [left[1].sum() / left[0].sum(), left[2].sum() / left[0].sum()])
+  assert -0.09 < detection.expected_ghost('dubois_ffmpeg')[0] < -0.07
+  for name in ('anaglyph', 'half_color', 'gray', 'green_magenta', 'amber_blue_half'):
+    np.testing.assert_array_equal(detection.expected_ghost(name), [0.0, 0.0])
+
+
+def test_needed_share_follows_the_sets_volume():
+  config = detection.DetectConfig()
+  # A thinner set is likelier per sample, so it may leave more samples outside.
+  red_cyan, green_magenta = (detection.needed_share(n, config)
+                             for n in ('half_color', 'green_magenta_half'))
+  assert 0.9 < red_cyan < green_magenta < 1.0
+  gain = -np.log(0.299)
+  assert red_cyan == pytest.approx(1 - gain / (gain + config.outside_penalty), rel=1e-2)
+  assert detection.needed_share('gray', config) == config.singular_share
 
 
 @pytest.mark.parametrize('kind', ['left view', 'diplopia', 'gray photo'])
