@@ -72,6 +72,8 @@ class DetectConfig:
     share_softness: the logistic's scale on the explained share's margin.
     samples: at most this many colour samples.
     ghost_sigma: the Gaussian high-pass of the ghost regression, pixels of the copy.
+    ghost_correlation: ... over pixels matched with at least this correlation ...
+    ghost_min_shift: ... and at least this many pixels of displacement.
     ghost_fraction: a Dubois encoding is chosen when at least this fraction of its
       expected leak is observed.
   """
@@ -85,7 +87,9 @@ class DetectConfig:
   share_softness: float = 0.01
   samples: int = 20000
   ghost_sigma: float = 2.0
-  ghost_fraction: float = 0.2
+  ghost_correlation: float = 0.85
+  ghost_min_shift: int = 3
+  ghost_fraction: float = 0.3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -172,14 +176,26 @@ def colour_samples(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
 def observed_ghost(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
                    config: DetectConfig) -> np.ndarray:
   """[2]: per other channel, the leak of the odd eye into it (step 3 of the module
-  docstring); ~0 without a leak."""
+  docstring); ~0 without a leak. Only pixels matched with confidence count: the
+  high-passed odd channel and other channels agree over 7x7 (normalised correlation >=
+  ghost_correlation) and lie >= ghost_min_shift px apart."""
   high = small / 255.0 - cv2.GaussianBlur(small / 255.0, (0, 0), config.ghost_sigma)
+  others = [c for c in range(3) if c != odd]
   ys, xs, xr = matched
-  regressors = np.stack([high[ys, xs, odd], high[ys, xr, odd]], axis=1)
+  odd_map, other_map = (np.zeros(small.shape[:2], np.float32) for _ in range(2))
+  odd_map[ys, xs] = high[ys, xs, odd]
+  other_map[ys, xs] = high[ys, xr][:, others].mean(axis=1)
+  box = lambda image: cv2.boxFilter(image, -1, (7, 7), normalize=False)
+  correlation = box(odd_map * other_map) / np.sqrt(
+      box(odd_map ** 2) * box(other_map ** 2) + 1e-12)
+  keep = (correlation[ys, xs] >= config.ghost_correlation) & (
+      np.abs(xs - xr) >= config.ghost_min_shift)
+  ys, xs, xr = ys[keep], xs[keep], xr[keep]
   if ys.size < 50:
     return np.zeros(2)
+  regressors = np.stack([high[ys, xs, odd], high[ys, xr, odd]], axis=1)
   return np.array([np.linalg.lstsq(regressors, high[ys, xr, c], rcond=None)[0][1]
-                   for c in range(3) if c != odd])
+                   for c in others])
 
 
 def expected_ghost(name: str) -> np.ndarray:
@@ -279,11 +295,15 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   matched = eye_match(small, odd, config)
   obs = colour_samples(small, odd, matched, config)
   names = [n for n in CANDIDATES if mixtures.get_mixture(n).family == family]
+  gray = [n for n in names if not mixtures.get_mixture(n).transmits_colour and
+          explained_share(small, obs, n, config) >= config.singular_share]
   ghost = observed_ghost(small, odd, matched, config)
   leaky = {n: float(ghost @ expected_ghost(n) / (expected_ghost(n) @ expected_ghost(n)))
            for n in names if np.abs(expected_ghost(n)).max() > 0.01}
   scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})
-  if any(t >= config.ghost_fraction for t in leaky.values()):
+  if gray:  # Equal channels are the surest sign; a leak is measured less surely.
+    names = gray
+  elif any(t >= config.ghost_fraction for t in leaky.values()):
     names = [max(leaky, key=leaky.get)]
   else:
     names = [n for n in names if n not in leaky]

@@ -16,28 +16,33 @@ pixel x matches the right pixel x - d_L, the right pixel x matches the left x + 
 
 import dataclasses
 import math
-from typing import Optional, Sequence, Tuple
+from typing import Optional, Sequence, Tuple, Union
 
 import cv2
 import numpy as np
 
 Range = Tuple[int, int]
+# The range a method covers as it is (a network: [0, D - 1], its input neither shifted nor
+# scaled), the one the paper's benchmark protocols use.
+NETWORK = 'network'
 
 
-def parse(text: str) -> Optional[Range]:
-  """'auto' -> None; 'MIN,MAX' -> (MIN, MAX) integers with MIN < MAX.
+def parse(text: str) -> Union[None, str, Range]:
+  """'auto' -> None; 'network' -> NETWORK; 'MIN,MAX' -> (MIN, MAX) integers, MIN < MAX.
 
   Raises:
     ValueError: anything else, naming the text.
   """
   if text.strip().lower() == 'auto':
     return None
+  if text.strip().lower() == NETWORK:
+    return NETWORK
   parts = text.split(',')
   try:
     low, high = (int(round(float(p))) for p in parts)
   except ValueError:
-    raise ValueError(f"disparity range must be 'auto' or MIN,MAX in pixels (e.g. -40,120), "
-                     f'got {text!r}.') from None
+    raise ValueError("disparity range must be 'auto', 'network' or MIN,MAX in pixels (e.g. "
+                     f'-40,120), got {text!r}.') from None
   if low >= high:
     raise ValueError(f'disparity range needs MIN < MAX, got {text!r}.')
   return low, high

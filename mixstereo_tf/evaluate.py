@@ -7,8 +7,11 @@ Protocols (mixstereo_tf/evaluation/protocols/): kitti2015 / kitti2012 (stereo tr
 sets), middlebury (scene folders), eigen (KITTI raw root + the Eigen test list; depth from
 the left disparity) and sample (the embedded held-out set, nothing to download). The
 mixture of each pair is synthesised from its true views; the tables print the paper's
-numbers beside ours.
+numbers beside ours. A model is fed each image as it is (--disparity_range=network, the
+paper's protocol) unless --disparity_range is given.
 """
+
+import dataclasses
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
 
@@ -16,6 +19,7 @@ from absl import app  # pylint: disable=g-bad-import-order
 from absl import flags
 from absl import logging
 
+from mixstereo_tf import disparity_range
 from mixstereo_tf import inference
 from mixstereo_tf import mixtures
 from mixstereo_tf.cli import flags as cli_flags
@@ -60,7 +64,11 @@ def main(argv):
   if len(argv) > 1:
     raise app.UsageError(f'Unexpected arguments: {argv[1:]}')
   try:
-    unmixer = inference.build_unmixer(cli_flags.predictor_config())
+    predictor = cli_flags.predictor_config()
+    if predictor.method == 'model' and not FLAGS['disparity_range'].present:
+      # The paper's protocols feed the network the image as it is.
+      predictor = dataclasses.replace(predictor, disparity_range=disparity_range.NETWORK)
+    unmixer = inference.build_unmixer(predictor)
     encoding = FLAGS.encoding or unmixer.mixture
     if encoding == 'auto':
       raise ValueError('--mixture=auto needs --encoding: the mixture the pairs are mixed '

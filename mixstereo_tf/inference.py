@@ -15,12 +15,13 @@ The `Unmixer` is the one predictor object every tool uses (unmix, evaluate, benc
 """
 
 import dataclasses
-from typing import Callable, Dict, Optional, Sequence, Tuple
+from typing import Callable, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import tensorflow as tf
 
 from mixstereo_tf import baselines
+from mixstereo_tf import disparity_range
 from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
 from mixstereo_tf import models
@@ -132,7 +133,8 @@ class PredictorConfig:
       trained on.
     restore_colour: restore both views from the encoding and the disparities with the
       network's views as the prior (paper 4.2; None: on for anaglyphs); 'model' only.
-    disparity_range: (min, max) signed pixels of the input; None: estimated per image.
+    disparity_range: (min, max) signed pixels of the input; None: estimated per image;
+      disparity_range.NETWORK: the method's own (a network's [0, D - 1], input as is).
     max_network_pixels: a model's input is reduced to at most this many pixels.
   """
   method: str = 'model'
@@ -140,7 +142,7 @@ class PredictorConfig:
   saved_model: Optional[str] = None
   mixture: Optional[str] = None
   restore_colour: Optional[bool] = None
-  disparity_range: Optional[Tuple[int, int]] = None
+  disparity_range: Union[None, str, Tuple[int, int]] = None
   max_network_pixels: Optional[int] = 2_000_000
 
 
@@ -285,7 +287,11 @@ def build_unmixer(config: PredictorConfig) -> Unmixer:
     mixtures.get_mixture(config.mixture)  # ValueError listing the valid names.
   if config.method != 'model' and config.restore_colour is not None:
     raise ValueError("PredictorConfig.restore_colour applies to method 'model' only.")
-  if config.disparity_range is not None and not (
+  if isinstance(config.disparity_range, str):
+    if config.disparity_range != disparity_range.NETWORK:
+      raise ValueError(f'PredictorConfig.disparity_range={config.disparity_range!r}; give '
+                       f'(MIN, MAX), None or {disparity_range.NETWORK!r}.')
+  elif config.disparity_range is not None and not (
       config.disparity_range[0] < config.disparity_range[1]):
     raise ValueError(f'PredictorConfig.disparity_range needs MIN < MAX, got '
                      f'{config.disparity_range}.')

@@ -16,7 +16,7 @@ shift, scale, seconds).
 """
 
 import time
-from typing import Callable, Dict, Optional, Sequence, Tuple
+from typing import Callable, Dict, Optional, Sequence, Tuple, Union
 
 from absl import logging
 import numpy as np
@@ -34,7 +34,7 @@ from mixstereo_tf.baselines import matcher
 AUTO = 'auto'
 # A named encoding the detector contradicts with at least this confidence is warned about.
 WARN_CONFIDENCE = 0.9
-Range = Optional[Tuple[int, int]]
+Range = Union[None, str, Tuple[int, int]]  # disparity_range.parse's values.
 
 
 def resolve_mixture(image: np.ndarray, requested: str,
@@ -71,8 +71,10 @@ def resolve_mixture(image: np.ndarray, requested: str,
 
 def estimate_range(image: np.ndarray, name: str, requested: Range,
                    default: Tuple[int, int]) -> Tuple[int, int]:
-  """The range asked for; else, for anaglyphs, estimated from the eye channels; else
-  `default`."""
+  """The range asked for; the method's `default` for disparity_range.NETWORK and for
+  mixtures that are not anaglyphs; else estimated from the anaglyph's eye channels."""
+  if requested == disparity_range.NETWORK:
+    return default
   if requested is not None:
     return requested
   if not mixtures.get_mixture(name).is_anaglyph:

@@ -8,6 +8,7 @@ from mixstereo_tf import disparity_range
 
 def test_parse():
   assert disparity_range.parse('auto') is None
+  assert disparity_range.parse(' Network ') == disparity_range.NETWORK
   assert disparity_range.parse(' AUTO ') is None
   assert disparity_range.parse('-40,120') == (-40, 120)
   for bad in ('5,5', '10,2', 'a,b', '1,2,3', '7'):

@@ -10,6 +10,7 @@ import sys
 import pytest
 import tensorflow as tf
 
+from mixstereo_tf import disparity_range
 from mixstereo_tf import inference
 from mixstereo_tf import models
 from mixstereo_tf import runs
@@ -169,9 +170,11 @@ def test_cli_middlebury_and_flag_errors(run_dir, tmp_path):
 
 
 def _sample_rows_in_process(run_dir, restore_colour):
-  """The sample protocol's rows for the run, evaluated in this process (the reference)."""
+  """The sample protocol's rows for the run, evaluated in this process (the reference):
+  the CLI feeds a model the images as they are (disparity_range.NETWORK)."""
   unmixer = inference.build_unmixer(inference.PredictorConfig(
-      checkpoint=run_dir, restore_colour=restore_colour))
+      checkpoint=run_dir, restore_colour=restore_colour,
+      disparity_range=disparity_range.NETWORK))
   config = EvalConfig('sample', unmixer.mixture, heldout_scenes=1,
                       max_disparity=int(unmixer.max_disparity))
   return runner.evaluate(config, unmixer).rows

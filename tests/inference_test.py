@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import tensorflow as tf
 
+from mixstereo_tf import disparity_range
 from mixstereo_tf import inference
 from mixstereo_tf import models
 from mixstereo_tf import runs
@@ -51,12 +52,16 @@ def test_pad_to_multiple_replicates_edges_and_crop_inverts():
 
 def test_unmixer_odd_size_equals_padded_model_output(run):
   path, model, _ = run
-  # The range the network's levels cover: no shift, no scaling around it.
+  # The network's own range (named, or given as [0, D - 1]): no shift, no scaling.
   unmixer = inference.build_unmixer(inference.PredictorConfig(
+      checkpoint=path, restore_colour=False, disparity_range=disparity_range.NETWORK))
+  explicit = inference.build_unmixer(inference.PredictorConfig(
       checkpoint=path, restore_colour=False, disparity_range=(0, TINY.max_disparity - 1)))
   assert (unmixer.method, unmixer.mixture, unmixer.max_disparity) == ('model', 'anaglyph', 4)
   image = np.random.RandomState(0).randint(0, 256, (97, 131, 3)).astype(np.uint8)
   out = unmixer(image)
+  np.testing.assert_array_equal(out['disparity_left'], explicit(image)['disparity_left'])
+  assert out['info']['shift'] == 0 and out['info']['scale'] == 1.0
   assert out['left'].shape == out['right'].shape == (97, 131, 3)
   assert out['left'].dtype == np.uint8
   assert out['disparity_left'].shape == out['disparity_right'].shape == (97, 131)

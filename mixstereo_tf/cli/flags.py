@@ -94,9 +94,10 @@ def define_predictor() -> None:
                        "Rebuild the views' exact channels from the mixture and disparities "
                        '(paper 4.2); default: on for channel anaglyphs. --method=model only.')
   flags.DEFINE_alias('restore_colors', 'restore_colour')
-  flags.DEFINE_string('disparity_range', 'auto', "'auto' (estimated per image) or MIN,MAX: "
+  flags.DEFINE_string('disparity_range', 'auto', "'auto' (estimated per image), MIN,MAX: "
                       'the signed disparities to search, pixels of the input (negative = in '
-                      'front of the screen).')
+                      "front of the screen), or 'network': a model's own levels [0, D - 1] "
+                      "with the image as it is (evaluate's default for models).")
   flags.DEFINE_integer('max_network_pixels', defaults.max_network_pixels,
                        "A model's input is reduced to at most this many pixels.",
                        lower_bound=1)
