@@ -187,8 +187,10 @@ class VideoWriter:
                        f'{self.path}')
     pad = ((0, self._stream.height - image.shape[0]), (0, self._stream.width - image.shape[1]),
            (0, 0))
-    frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(np.pad(image, pad, 'edge')),
-                                       format='rgb24')
+    # `padded` must outlive the encode call: PyAV may wrap the array without copying it.
+    padded = np.ascontiguousarray(np.pad(image, pad, 'edge'))
+    frame = av.VideoFrame.from_ndarray(padded, format='rgb24')
+    frame = frame.reformat(format=self.settings.pix_fmt)  # Here, not in a shared converter.
     pts = round(Fraction(time) / self.time_base)
     if self._last_pts is not None:
       pts = max(pts, self._last_pts + 1)
