@@ -43,7 +43,12 @@ class EncoderSettings:
 
 # H.264 at constant quality 18 (visually lossless for x264) in 4:2:0, which every player
 # decodes; AVI gets Motion JPEG at the best quantiser (AVI holds no B-frame timing).
-_H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'medium')))
+# x264's macroblock-tree rate control is off (mbtree=0): on CPUs with AVX-512 its AVX-512
+# code encodes identical frames differently from run to run (seen with libx264 core 165
+# whenever the width in macroblocks is not a multiple of 16, e.g. 96 or 1920 px), and a
+# resumed video job must re-encode its segments exactly as an uninterrupted run does.
+_H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'medium'),
+                                               ('x264-params', 'mbtree=0')))
 ENCODERS: Dict[str, EncoderSettings] = {
     '.mp4': _H264, '.mov': _H264, '.mkv': _H264,
     '.avi': EncoderSettings('mjpeg', 'yuvj420p', (('qmin', '1'), ('qmax', '2'))),
@@ -190,7 +195,7 @@ class VideoWriter:
     # `padded` must outlive the encode call: PyAV may wrap the array without copying it.
     padded = np.ascontiguousarray(np.pad(image, pad, 'edge'))
     frame = av.VideoFrame.from_ndarray(padded, format='rgb24')
-    frame = frame.reformat(format=self.settings.pix_fmt)  # Here, not in a shared converter.
+    frame = frame.reformat(format=self.settings.pix_fmt)  # The encoder's pixel format.
     pts = round(Fraction(time) / self.time_base)
     if self._last_pts is not None:
       pts = max(pts, self._last_pts + 1)
