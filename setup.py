@@ -35,6 +35,9 @@ setuptools.setup(
         # alone would take 17 GB. Compiled once (~10 CPU-s), then loaded from numba's disk
         # cache (~0.5 CPU-s per process).
         'numba>=0.60',
+        # mixstereo_tf/video_io.py: FFmpeg's libraries in-process (PyAV >= 14 for
+        # add_stream_from_template; the wheels bundle FFmpeg with libx264).
+        'av>=14',
         'absl-py>=1.0',
         # tf.summary's writers live in tensorboard, which recent TF no longer pulls in.
         'tensorboard>=2.18',

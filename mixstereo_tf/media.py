@@ -1,8 +1,7 @@
 """Reading inputs and writing results of the unmix tool: images, videos, disparity files.
 
 Images are uint8 RGB `[H, W, 3]` (docs/DESIGN.md reader convention); disparities float32
-`[H, W]` in pixels, positive. Video goes through OpenCV (`cv2.VideoCapture` /
-`cv2.VideoWriter` with the 'mp4v' codec, which the opencv-python-headless wheels can write).
+`[H, W]` in pixels, positive. Video files are read and written by `video_io` (PyAV).
 """
 
 import collections
@@ -21,8 +20,6 @@ LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
                     '.tiff', '.webp')
 VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv')
-# Frame rate written when a video does not report one.
-DEFAULT_FPS = 25.0
 
 
 def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
@@ -210,68 +207,3 @@ def iter_inputs(spec: str) -> Iterator[MediaItem]:
 def read_image(path: str) -> np.ndarray:
   """uint8 RGB [H, W, 3] (gray and alpha images converted); ValueError naming bad files."""
   return image_io.read_image(path)
-
-
-def video_frames(path: str) -> Tuple[float, Optional[int], Iterator[np.ndarray]]:
-  """Opens a video: (frames per second, frame count, iterator over uint8 RGB frames).
-
-  Frames are [H, W, 3]. The count is the container's (None when it does not say); the
-  iterator yields what actually decodes.
-
-  Raises:
-    ValueError: the file cannot be opened or holds no decodable frame.
-  """
-  capture = cv2.VideoCapture(path)
-  if not capture.isOpened():
-    raise ValueError(f'Cannot open video file: {path}')
-  ok, first = capture.read()
-  if not ok:
-    capture.release()
-    raise ValueError(f'No decodable frame in video file: {path}')
-  fps = capture.get(cv2.CAP_PROP_FPS)
-  fps = fps if fps and np.isfinite(fps) and fps > 0 else DEFAULT_FPS
-  count = capture.get(cv2.CAP_PROP_FRAME_COUNT)
-  count = int(count) if count and np.isfinite(count) and count > 0 else None
-
-  def frames():
-    frame, grabbed = first, True
-    try:
-      while grabbed:
-        yield np.ascontiguousarray(frame[:, :, ::-1])
-        grabbed, frame = capture.read()
-    finally:
-      capture.release()
-
-  return fps, count, frames()
-
-
-class VideoWriter:
-  """Writes uint8 RGB frames to an 'mp4v' video; the size comes from the first frame."""
-
-  def __init__(self, path: str, fps: float):
-    self.path, self.fps = path, fps
-    self._writer = None
-    self._size = None
-
-  def write(self, frame: np.ndarray) -> None:
-    size = (frame.shape[1], frame.shape[0])
-    if self._writer is None:
-      self._writer = cv2.VideoWriter(self.path, cv2.VideoWriter_fourcc(*'mp4v'), self.fps,
-                                     size)
-      if not self._writer.isOpened():
-        raise ValueError(f'Cannot write video file: {self.path}')
-      self._size = size
-    elif size != self._size:
-      raise ValueError(f'Frame size {size} differs from {self._size} in {self.path}')
-    self._writer.write(np.ascontiguousarray(frame[:, :, ::-1]))
-
-  def close(self) -> None:
-    if self._writer is not None:
-      self._writer.release()
-      self._writer = None
-
-  def __enter__(self):
-    return self
-
-  def __exit__(self, *exc):
-    self.close()

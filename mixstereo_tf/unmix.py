@@ -7,12 +7,15 @@ Inputs: an image, a folder of images, a glob pattern or a video (.mp4 .avi .mov 
 An input that cannot be read, unmixed or written is reported with the reason and skipped;
 the others still run, and the exit status is non-zero if any failed. A progress bar with
 the measured frames per second is drawn on stderr when it is a terminal (logged otherwise).
-Outputs are described in mixstereo_tf/unmix_files.py.
+Videos keep their container, frame rate, timestamps, rotation and audio (copied), and are
+written resumably: after Ctrl-C or a crash, the same command continues from the last
+finished segment. Outputs are described in mixstereo_tf/unmix_files.py.
 """
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
 
-import sys  # pylint: disable=g-bad-import-order
+import dataclasses  # pylint: disable=g-bad-import-order
+import sys
 
 from absl import app
 from absl import flags
@@ -21,6 +24,7 @@ from absl import logging
 from mixstereo_tf import inference
 from mixstereo_tf import media
 from mixstereo_tf import unmix_files
+from mixstereo_tf import video_job
 from mixstereo_tf.cli import flags as cli_flags
 
 FLAGS = flags.FLAGS
@@ -33,6 +37,10 @@ flags.DEFINE_enum('layout', 'separate', media.LAYOUTS,
                   'half width (sbs_half) or top-bottom (tb).')
 flags.DEFINE_float('max_display_disparity', None, 'Disparity (pixels) shown brightest in '
                    "the colour maps, fixed for the run (default: the predictor's range).")
+flags.DEFINE_integer('segment_frames', video_job.VideoConfig.segment_frames,
+                     'Videos are written in resumable segments of this many frames: '
+                     'running the same command again after an interruption continues '
+                     'from the last finished segment.')
 
 
 def main(argv):
@@ -45,7 +53,9 @@ def main(argv):
     unmixer = inference.build_unmixer(config)
     report = unmix_files.unmix_inputs(unmixer, FLAGS.input, FLAGS.output_dir, FLAGS.layout,
                                       FLAGS.max_display_disparity,
-                                      progress_stream=sys.stderr)
+                                      progress_stream=sys.stderr,
+                                      video_config=video_job.VideoConfig(FLAGS.segment_frames),
+                                      settings=dataclasses.asdict(config))
   except ValueError as e:
     raise cli_flags.usage_error(e) from None
   logging.info('%d input(s) done, %d failed; %d frame(s) in %.2f s: %.2f frames/s '

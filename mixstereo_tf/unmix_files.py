@@ -7,8 +7,11 @@ Outputs per input `<name>` in the output folder, where `<name>` is the file stem
 range found, or a fixed one), KITTI-style `<name>_disparity16.png` (uint16, d * 256; only
 when every disparity lies in 0..255.996 px) and float32 signed pixels
 `<name>_disparity.npy`, and a side-car `<name>_info.json` (mixture used and detected,
-range searched, scale, method, seconds; `write_info`). Per video: the layout as `<name>_<layout>.mp4` (or `_left` /
-`_right`) and `<name>_disparity.mp4`. Progress (`progress.ProgressBar`) is shown for several
+range searched, scale, method, seconds; `write_info`). Per video, in the input's container
+(`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps, rotation and audio streams
+(copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`), `<name>_disparity<ext>`
+and `<name>_info.json` (the first unmixed frame's info, frames, frame rate, rotation, audio
+streams, files). Videos are written resumably (`video_job`). Progress (`progress.ProgressBar`) is shown for several
 inputs and for every video's frames.
 """
 
@@ -26,6 +29,8 @@ from mixstereo_tf import colormap
 from mixstereo_tf import inference
 from mixstereo_tf import media
 from mixstereo_tf import progress
+from mixstereo_tf import video_io
+from mixstereo_tf import video_job
 
 
 @dataclasses.dataclass
@@ -61,37 +66,63 @@ def _reason(error: Exception) -> str:
 
 
 # What one input may raise without stopping the others: unreadable or malformed files
-# (ValueError, cv2.error), failures inside TensorFlow (e.g. an image too large for memory)
-# and file-system errors while reading or writing.
-_INPUT_ERRORS = (ValueError, cv2.error, tf.errors.OpError, OSError)
+# (ValueError, cv2.error, FFmpeg's errors), failures inside TensorFlow (e.g. an image too
+# large for memory) and file-system errors while reading or writing.
+_INPUT_ERRORS = (ValueError, cv2.error, video_io.FFmpegError, tf.errors.OpError, OSError)
 
 
-def _unmix_video(unmixer: inference.Unmixer, item: media.MediaItem, output_dir: str, layout: str,
-                 max_disparity: float, report: UnmixReport,
-                 progress_stream: Optional[TextIO]) -> int:
-  """Unmixes every frame of a video into layout and disparity videos; returns frames."""
-  fps, total, frames = media.video_frames(item.path)
-  suffixes = ['left', 'right'] if layout == 'separate' else [layout]
-  writers = {s: media.VideoWriter(os.path.join(output_dir, f'{item.name}_{s}.mp4'), fps)
-             for s in suffixes + ['disparity']}
-  bar = progress.ProgressBar(total, os.path.basename(item.path), progress_stream)
-  count = 0
+def _video_settings(unmixer: inference.Unmixer) -> Dict[str, object]:
+  """What identifies an unmixer in a video job's manifest when the caller gives nothing."""
+  return {'method': unmixer.method, 'mixture': unmixer.mixture,
+          'max_disparity': unmixer.max_disparity, 'restore_colour': unmixer.restore_colour}
+
+
+def _unmix_video(unmixer: inference.Unmixer, item: media.MediaItem, output_dir: str,
+                 layout: str, max_disparity: float, settings: Dict[str, object],
+                 video_config: video_job.VideoConfig, progress_stream: Optional[TextIO],
+                 report: UnmixReport) -> int:
+  """Unmixes every frame of a video into layout and disparity videos (resumable, see
+  `video_job`), writes `<name>_info.json`; returns the frames unmixed in this run."""
+  start = time.perf_counter()
+  extension = os.path.splitext(item.path)[1].lower()
+  keys = (['left', 'right'] if layout == 'separate' else [layout]) + ['disparity']
+  outputs = {key: os.path.join(output_dir, f'{item.name}_{key}{extension}') for key in keys}
+  state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
+
+  def on_start(info, done):
+    state['bar'] = progress.ProgressBar(info.frame_count, os.path.basename(item.path),
+                                        progress_stream)
+    state['done'] = done
+
+  def render(frame):
+    unmix_start = time.perf_counter()
+    result = unmixer(frame)
+    report.unmix_seconds += time.perf_counter() - unmix_start
+    if state['info'] is None:
+      state['info'] = dict(result.get('info', {}))
+    images = dict(media.layout_images(result['left'], result['right'], layout))
+    images['disparity'] = colormap.colorize(result['disparity_left'], max_disparity)
+    state['rendered'] += 1
+    state['bar'].update(state['done'] + state['rendered'], state['rendered'])
+    return images
+
+  job = video_job.VideoJob(item.path, outputs,
+                           dict(settings, layout=layout, max_disparity=max_disparity),
+                           video_config)
   try:
-    for frame in frames:
-      start = time.perf_counter()
-      outputs = unmixer(frame)
-      report.unmix_seconds += time.perf_counter() - start
-      for suffix, image in media.layout_images(outputs['left'], outputs['right'], layout):
-        writers[suffix].write(image)
-      writers['disparity'].write(colormap.colorize(outputs['disparity_left'], max_disparity))
-      count += 1
-      bar.update(count)
-    bar.update(count, force=True)  # The container's frame count may be wrong or missing.
+    done = video_job.run(job, render, on_start)
+    # The container's frame count may be wrong or missing.
+    state['bar'].update(done['frames'], state['rendered'], force=True)
   finally:
-    bar.close()
-    for writer in writers.values():
-      writer.close()
-  return count
+    if state['bar']:
+      state['bar'].close()
+  info = done['info']
+  write_info(output_dir, item, dict(
+      state['info'] or {}, frames=done['frames'], resumed_frames=done['resumed_frames'],
+      frame_rate=str(info.frame_rate), rotation=info.rotation,
+      audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
+      files=[os.path.basename(path) for path in outputs.values()]))
+  return state['rendered']
 
 
 def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object]) -> str:
@@ -106,11 +137,18 @@ def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object]) 
 
 def unmix_inputs(unmixer: inference.Unmixer, input_spec: str, output_dir: str,
                  layout: str = 'separate', max_display_disparity: Optional[float] = None,
-                 progress_stream: Optional[TextIO] = None) -> UnmixReport:
+                 progress_stream: Optional[TextIO] = None,
+                 video_config: video_job.VideoConfig = video_job.VideoConfig(),
+                 settings: Optional[Dict[str, object]] = None) -> UnmixReport:
   """Unmixes every image / video of `input_spec` (see `media.iter_inputs`).
 
   An input that cannot be read, unmixed or written is logged with its path and the reason,
   recorded in `UnmixReport.failures` and skipped; the others still run.
+
+  Videos are written in resumable segments (`video_job`, `video_config`): re-running the
+  same call after an interruption continues from the last finished segment, as long as
+  the input and `settings` (a JSON-serialisable description of the unmixer; default its
+  method, mixture and range) are unchanged.
 
   `max_display_disparity` fixes the colour maps to 0..that many pixels; by default each
   image's map spans the disparities found (videos: the unmixer's range). Each image also
@@ -136,8 +174,9 @@ def unmix_inputs(unmixer: inference.Unmixer, input_spec: str, output_dir: str,
       if item.is_video:
         if bar:
           bar.clear()  # The video draws its own frame progress.
-        frames = _unmix_video(unmixer, item, output_dir, layout, max_disparity, report,
-                              progress_stream)
+        frames = _unmix_video(unmixer, item, output_dir, layout, max_disparity,
+                              settings or _video_settings(unmixer), video_config,
+                              progress_stream, report)
       else:
         image = media.read_image(item.path)
         unmix_start = time.perf_counter()

@@ -1,5 +1,6 @@
 """Tests for unmixing files: images, folders, globs and videos (mixstereo_tf.unmix_files)."""
 
+import dataclasses
 import io
 import json
 import os
@@ -9,13 +10,17 @@ import numpy as np
 import pytest
 import tensorflow as tf
 
+from mixstereo_tf import colormap
+from mixstereo_tf import image_range
 from mixstereo_tf import inference
 from mixstereo_tf import media
+from mixstereo_tf import mixtures
 from mixstereo_tf import models
-from mixstereo_tf import colormap
 from mixstereo_tf import runs
 from mixstereo_tf import unmix_files
+from mixstereo_tf import video_job
 from tests import inference_test
+from tests import video_io_test
 
 INFO = runs.RunInfo('anaglyph', 64, 128, inference_test.TINY)
 
@@ -103,22 +108,91 @@ def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
   assert '1 of 1 input(s) failed' in unmix_files.failure_message(report)
 
 
-def test_video(setup, tmp_path):
-  path = str(tmp_path / 'clip.avi')
-  with media.VideoWriter(path, fps=10.0) as writer:
-    for seed in range(3):
-      writer.write(np.random.RandomState(seed).randint(0, 256, (64, 96, 3)).astype(np.uint8))
+def _anaglyph_clip(path, mixture, frames=24):
+  """A stereo clip (a textured plane 3 px behind a box 6 px, both moving) encoded as
+  `mixture` anaglyph frames, with a sine audio track; returns the path."""
+  texture = cv2.resize(np.random.RandomState(4).rand(20, 60, 3).astype(np.float32), (240, 64),
+                       interpolation=cv2.INTER_CUBIC)
+  images = []
+  for index in range(frames):
+    shift = 2 * index
+    left = texture[:, shift + 20:shift + 116].copy()
+    right = texture[:, shift + 23:shift + 119].copy()  # Right x shows left x + 3.
+    left[20:44, 30:60] = right[20:44, 24:54] = texture[:24, 100 - shift:130 - shift]
+    left_u8, right_u8 = (image_range.unit_to_u8(np.clip(v, 0, 1)) for v in (left, right))
+    mixed = mixtures.mix(mixture, image_range.u8_to_signed(left_u8),
+                         image_range.u8_to_signed(right_u8))
+    images.append(image_range.signed_to_u8(mixed.numpy()))
+  return video_io_test.make_video(path, images)
+
+
+class Interrupted(Exception):
+  """Stands in for Ctrl-C or a crash while unmixing."""
+
+
+def _failing_after(unmixer, frames):
+  """The unmixer, raising Interrupted once it has unmixed `frames` frames."""
+  count = [0]
+
+  def unmix(image):
+    if count[0] == frames:
+      raise Interrupted()
+    count[0] += 1
+    return unmixer(image)
+  return dataclasses.replace(unmixer, fn=unmix)
+
+
+@pytest.mark.parametrize('mixture, extension, layout', [('anaglyph', '.mp4', 'tb'),
+                                                        ('gray', '.mkv', 'separate')])
+def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extension, layout):
+  source = _anaglyph_clip(tmp_path / f'clip{extension}', mixture)
+  unmixer = inference.build_unmixer(inference.PredictorConfig(
+      'classical', mixture=mixture, disparity_range=(0, 8)))
+  config = video_job.VideoConfig(segment_frames=10)
+  keys = ['left', 'right'] if layout == 'separate' else [layout]
+  names = [f'clip_{key}{extension}' for key in keys + ['disparity']]
   terminal = _Terminal()
-  report = unmix_files.unmix_inputs(setup, path, str(tmp_path / 'out'), 'tb',
-                                 progress_stream=terminal)
-  assert (report.processed, report.frames) == (1, 3) and report.frames_per_second > 0
-  # One video: only its frame bar, whose total is the container's frame count.
-  assert terminal.getvalue().startswith('\rclip.avi  [###') and terminal.getvalue().endswith('\n')
-  assert 'clip.avi  [##########] 3/3  ' in terminal.getvalue()
-  for name, shape in (('clip_tb.mp4', (128, 96, 3)), ('clip_disparity.mp4', (64, 96, 3))):
-    fps, _, frames = media.video_frames(str(tmp_path / 'out' / name))
-    frames = list(frames)
-    assert len(frames) == 3 and frames[0].shape == shape and fps == pytest.approx(10.0)
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'once'), layout,
+                                    progress_stream=terminal, video_config=config)
+  assert (report.processed, report.frames, report.failures) == (1, 24, [])
+  assert f'clip{extension}  [##########] 24/24  ' in terminal.getvalue() or (
+      extension == '.mkv')  # Matroska gives no frame count: '24 done'.
+  assert sorted(os.listdir(tmp_path / 'once')) == sorted(names + ['clip_info.json'])
+  source_info, _ = video_io_test.read_all(source)
+  for name in names:
+    info, frames = video_io_test.read_all(tmp_path / 'once' / name)
+    assert len(frames) == 24 and info.frame_rate == source_info.frame_rate == 12
+    assert frames[0].image.shape == ((128, 96, 3) if name.endswith(f'tb{extension}')
+                                     else (64, 96, 3))
+    np.testing.assert_array_equal(video_io_test.audio_samples(tmp_path / 'once' / name),
+                                  video_io_test.audio_samples(source))
+  info = json.loads((tmp_path / 'once' / 'clip_info.json').read_text())
+  assert (info['frames'], info['frame_rate'], info['audio_streams']) == (24, '12', 1)
+  assert info['method'] == 'classical' and info['files'] == names
+  # Interrupted after 13 frames: nothing under a final name; the re-run resumes at 10.
+  with pytest.raises(Interrupted):
+    unmix_files.unmix_inputs(_failing_after(unmixer, 13), source, str(tmp_path / 'again'),
+                             layout, video_config=config)
+  assert not any(os.path.exists(tmp_path / 'again' / name) for name in names)
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'again'), layout,
+                                    video_config=config)
+  assert (report.processed, report.frames) == (1, 14)
+  assert json.loads((tmp_path / 'again' / 'clip_info.json').read_text())['resumed_frames'] == 10
+  assert sorted(os.listdir(tmp_path / 'again')) == sorted(names + ['clip_info.json'])
+  for name in names:
+    _, once = video_io_test.read_all(tmp_path / 'once' / name)
+    _, again = video_io_test.read_all(tmp_path / 'again' / name)
+    assert [f.time for f in once] == [f.time for f in again]
+    for a, b in zip(once, again):
+      np.testing.assert_array_equal(a.image, b.image)
+
+
+def test_unreadable_video_is_named(setup, tmp_path):
+  (tmp_path / 'broken.mp4').write_bytes(b'not a video' * 100)
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'broken.mp4'), str(tmp_path / 'out'))
+  assert report.processed == 0 and report.failures[0][0] == str(tmp_path / 'broken.mp4')
+  assert report.failures[0][1].startswith('ValueError: Cannot open video file ')
+  assert 'broken.mp4' in report.failures[0][1]
 
 
 def test_classical_method(tmp_path):

@@ -1,0 +1,303 @@
+"""Video files through PyAV (FFmpeg's libraries in-process): decode, encode, remux.
+
+    info, frames = open_video('in.mp4')        # VideoInfo, iterator of Frame (uint8 RGB)
+    with VideoWriter('part.mp4', info.frame_rate) as writer:
+      writer.write(image, time)               # time: exact Fraction seconds
+    assemble([Part('part.mp4')], 'out.mp4', info.frame_rate, info.time_base,
+             audio_source='in.mp4', rotation=info.rotation)
+
+Times are exact `Fraction` seconds (a frame's pts times its stream's time base), so frame
+rates like 30000/1001 and variable frame rates survive. The encoder follows the output
+extension (`encoder_for`). `assemble` concatenates encoded parts packet by packet and copies
+the audio packets of the source unchanged (no re-encode). Rotation (the display matrix) is
+read from the decoded frames; FFmpeg's libraries take it into a file only through the
+stream's side data, which PyAV cannot set, so `assemble` adds it with a stream-copy pass of
+imageio-ffmpeg's ffmpeg binary when that package is installed (else it is logged as lost).
+"""
+
+import dataclasses
+import fractions
+import heapq
+import itertools
+import os
+from typing import Dict, Iterator, Optional, Sequence, Tuple
+
+from absl import logging
+import av
+import numpy as np
+
+Fraction = fractions.Fraction
+# What PyAV raises for unreadable or unwritable media.
+FFmpegError = av.FFmpegError
+# Frame rate assumed when a video does not report one.
+DEFAULT_FRAME_RATE = Fraction(25)
+
+
+@dataclasses.dataclass(frozen=True)
+class EncoderSettings:
+  """How a container is encoded: codec, pixel format and codec options."""
+  codec: str
+  pix_fmt: str
+  options: Tuple[Tuple[str, str], ...] = ()
+
+
+# H.264 at constant quality 18 (visually lossless for x264) in 4:2:0, which every player
+# decodes; AVI gets Motion JPEG at the best quantiser (AVI holds no B-frame timing).
+# x264's macroblock-tree rate control is off (mbtree=0): on CPUs with AVX-512 its AVX-512
+# code encodes identical frames differently from run to run (seen with libx264 core 165
+# whenever the width in macroblocks is not a multiple of 16, e.g. 96 or 1920 px), and a
+# resumed video job must re-encode its segments exactly as an uninterrupted run does.
+_H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'medium'),
+                                               ('x264-params', 'mbtree=0')))
+ENCODERS: Dict[str, EncoderSettings] = {
+    '.mp4': _H264, '.mov': _H264, '.mkv': _H264,
+    '.avi': EncoderSettings('mjpeg', 'yuvj420p', (('qmin', '1'), ('qmax', '2'))),
+}
+
+
+def encoder_for(path: str) -> EncoderSettings:
+  """The encoder of a video path's extension (ENCODERS); ValueError naming the path."""
+  extension = os.path.splitext(path)[1].lower()
+  if extension not in ENCODERS:
+    raise ValueError(f'Cannot write video {path}: extension must be one of '
+                     f'{" ".join(ENCODERS)}.')
+  return ENCODERS[extension]
+
+
+@dataclasses.dataclass(frozen=True)
+class VideoInfo:
+  """What `open_video` found.
+
+  Attributes:
+    width, height: frame size in pixels (as stored, before any rotation).
+    frame_rate: frames per second, exact (the stream's average rate; DEFAULT_FRAME_RATE
+      when it reports none).
+    time_base: the video stream's time base (the unit of its timestamps).
+    frame_count: the container's count, None when it does not say.
+    rotation: degrees counter-clockwise a player turns the frames (display matrix), 0 if none.
+    audio_streams: how many audio streams the file holds.
+  """
+  width: int
+  height: int
+  frame_rate: Fraction
+  time_base: Fraction
+  frame_count: Optional[int]
+  rotation: int
+  audio_streams: int
+
+
+@dataclasses.dataclass(frozen=True)
+class Frame:
+  """One decoded frame: `image` uint8 RGB [H, W, 3] (None when skipped), `time` in exact
+  seconds from the stream's timestamps, `index` from 0 in decoding order."""
+  image: Optional[np.ndarray]
+  time: Fraction
+  index: int
+
+
+def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFrame],
+            rate: Fraction, skip: int) -> Iterator[Frame]:
+  """Frames of `decoded`; those before `skip` are not converted to RGB.
+
+  Times come from the frames' pts (when missing: the previous time + 1 / rate) and are
+  made strictly increasing, as every encoder needs. Closes the container at the end.
+  """
+  previous = None
+  try:
+    for index, frame in enumerate(decoded):
+      if frame.pts is not None and frame.time_base:
+        time = frame.pts * Fraction(frame.time_base)
+      else:
+        time = Fraction(0) if previous is None else previous + 1 / rate
+      if previous is not None and time <= previous:
+        time = previous + 1 / rate
+      previous = time
+      image = frame.to_ndarray(format='rgb24') if index >= skip else None
+      yield Frame(image, time, index)
+  finally:
+    container.close()
+
+
+def open_video(path: str, skip: int = 0) -> Tuple[VideoInfo, Iterator[Frame]]:
+  """Opens a video: its VideoInfo and an iterator over its frames (`Frame`).
+
+  Args:
+    path: a video file.
+    skip: the first `skip` frames are decoded but yield no image (resuming a job).
+
+  Raises:
+    ValueError: the file cannot be opened, has no video stream or no decodable frame;
+      the message names the path.
+  """
+  try:
+    container = av.open(path)
+  except (av.FFmpegError, OSError) as e:
+    raise ValueError(f'Cannot open video file {path}: {e}') from None
+  try:
+    stream = container.streams.video[0]
+    stream.thread_type = 'AUTO'
+    decoded = container.decode(stream)
+    first = next(decoded)
+  except (IndexError, StopIteration, av.FFmpegError) as e:
+    container.close()
+    reason = 'no video stream' if isinstance(e, IndexError) else 'no decodable frame'
+    raise ValueError(f'Cannot read video file {path}: {reason}') from None
+  rate = Fraction(stream.average_rate or stream.guessed_rate or DEFAULT_FRAME_RATE)
+  # FFmpeg >= 7 attaches the stream's display matrix to every decoded frame (PyAV >= 15
+  # reads its angle); older muxers wrote a 'rotate' tag.
+  rotation = round(getattr(first, 'rotation', 0)) or int(float(stream.metadata.get('rotate', 0)))
+  info = VideoInfo(first.width, first.height, rate, Fraction(stream.time_base or 1 / rate),
+                   stream.frames or None, rotation,
+                   len(container.streams.audio))
+  return info, _frames(container, itertools.chain([first], decoded), rate, skip)
+
+
+class VideoWriter:
+  """Encodes uint8 RGB frames [H, W, 3] into a video-only file (default encoder: the
+  path's, `encoder_for`).
+
+  The size comes from the first frame; odd sizes are padded by one row / column of edge
+  replication (4:2:0 chroma needs even sizes). Timestamps are `time / time_base` rounded
+  and kept strictly increasing; AVI always counts frames (time base 1 / frame_rate).
+  """
+
+  def __init__(self, path: str, frame_rate: Fraction, time_base: Optional[Fraction] = None,
+               encoder: Optional[EncoderSettings] = None):
+    self.path = path
+    self.settings = encoder or encoder_for(path)
+    self.frame_rate = Fraction(frame_rate)
+    frame_index = self.settings.codec == 'mjpeg' or not time_base
+    self.time_base = 1 / self.frame_rate if frame_index else Fraction(time_base)
+    self._container = self._stream = self._size = None
+    self._last_pts = None
+
+  def _open(self, size: Tuple[int, int]) -> None:
+    try:
+      self._container = av.open(self.path, 'w')
+    except (av.FFmpegError, OSError) as e:
+      raise ValueError(f'Cannot write video file {self.path}: {e}') from None
+    stream = self._container.add_stream(self.settings.codec, rate=self.frame_rate,
+                                        options=dict(self.settings.options))
+    stream.width, stream.height = (size[1] + 1) // 2 * 2, (size[0] + 1) // 2 * 2
+    stream.pix_fmt = self.settings.pix_fmt
+    stream.time_base = stream.codec_context.time_base = self.time_base
+    self._stream, self._size = stream, size
+
+  def write(self, image: np.ndarray, time: Fraction) -> None:
+    """Encodes one frame shown at `time` seconds."""
+    if self._container is None:
+      self._open(image.shape[:2])
+    elif image.shape[:2] != self._size:
+      raise ValueError(f'Frame size {image.shape[:2]} differs from {self._size} in '
+                       f'{self.path}')
+    pad = ((0, self._stream.height - image.shape[0]), (0, self._stream.width - image.shape[1]),
+           (0, 0))
+    # `padded` must outlive the encode call: PyAV may wrap the array without copying it.
+    padded = np.ascontiguousarray(np.pad(image, pad, 'edge'))
+    frame = av.VideoFrame.from_ndarray(padded, format='rgb24')
+    frame = frame.reformat(format=self.settings.pix_fmt)  # The encoder's pixel format.
+    pts = round(Fraction(time) / self.time_base)
+    if self._last_pts is not None:
+      pts = max(pts, self._last_pts + 1)
+    frame.pts, frame.time_base, self._last_pts = pts, self.time_base, pts
+    for packet in self._stream.encode(frame):
+      self._container.mux(packet)
+
+  def close(self) -> None:
+    """Flushes the encoder and finishes the file (no file when no frame was written)."""
+    if self._container is not None:
+      try:
+        for packet in self._stream.encode(None):
+          self._container.mux(packet)
+      finally:
+        self._container.close()
+        self._container = None
+
+  def __enter__(self):
+    return self
+
+  def __exit__(self, *exc):
+    self.close()
+
+
+@dataclasses.dataclass(frozen=True)
+class Part:
+  """An encoded video file and the seconds added to its timestamps in `assemble`."""
+  path: str
+  start: Fraction = Fraction(0)
+
+
+def _video_packets(parts: Sequence[Part], stream) -> Iterator[Tuple[Fraction, av.Packet]]:
+  """(decode time in seconds, packet) of every part in order, shifted by part.start."""
+  for part in parts:
+    with av.open(part.path) as container:
+      source = container.streams.video[0]
+      for packet in container.demux(source):
+        if packet.size == 0:
+          continue  # The demuxer's end-of-stream marker.
+        shift = round(part.start / Fraction(packet.time_base))
+        packet.pts = None if packet.pts is None else packet.pts + shift
+        packet.dts = None if packet.dts is None else packet.dts + shift
+        packet.stream = stream
+        stamp = packet.dts if packet.dts is not None else packet.pts
+        yield stamp * Fraction(packet.time_base), packet
+
+
+def _audio_packets(container, streams: Dict[int, object]
+                   ) -> Iterator[Tuple[Fraction, av.Packet]]:
+  """(decode time in seconds, packet) of the audio streams, unchanged but re-targeted."""
+  if not streams:
+    return
+  for packet in container.demux([container.streams[i] for i in streams]):
+    if packet.size == 0:
+      continue
+    stamp = packet.dts if packet.dts is not None else packet.pts
+    stamp = 0 if stamp is None else stamp
+    packet.stream = streams[packet.stream.index]
+    yield stamp * Fraction(packet.time_base), packet
+
+
+def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
+             time_base: Optional[Fraction] = None, audio_source: Optional[str] = None,
+             rotation: int = 0) -> None:
+  """Writes the parts' video one after the other and the source's audio into `output`.
+
+  Packets are copied, not re-encoded: the parts must come from one encoder configuration
+  (same codec parameters, checked). The video stream gets `frame_rate` and `time_base`
+  (AVI: 1 / frame_rate); every audio stream of `audio_source` is copied unchanged; a
+  non-zero `rotation` (degrees counter-clockwise) becomes the display matrix (PyAV >= 18;
+  older versions log that it is lost).
+
+  Raises:
+    ValueError: no parts, or parts encoded differently.
+  """
+  if not parts:
+    raise ValueError(f'No video to write to {output}')
+  if encoder_for(output).codec == 'mjpeg' or not time_base:
+    time_base = 1 / Fraction(frame_rate)
+  with av.open(parts[0].path) as first:
+    template = first.streams.video[0]
+    extradata = template.codec_context.extradata
+    for part in parts[1:]:
+      with av.open(part.path) as other:
+        if other.streams.video[0].codec_context.extradata != extradata:
+          raise ValueError(f'{part.path} is encoded unlike {parts[0].path}; cannot join.')
+    with av.open(output, 'w') as out:
+      video = out.add_stream_from_template(template)
+      video.time_base, video.framerate = Fraction(time_base), Fraction(frame_rate)
+      if rotation and hasattr(video, 'set_display_rotation'):
+        video.set_display_rotation(rotation)
+      elif rotation:
+        logging.warning('%s: the input is rotated by %d degrees; writing rotation needs '
+                        'PyAV >= 18, so the output is shown unrotated.', output, rotation)
+      source = av.open(audio_source) if audio_source else None
+      try:
+        audio = {s.index: out.add_stream_from_template(s)
+                 for s in (source.streams.audio if source else ())}
+        merged = heapq.merge(_video_packets(parts, video), _audio_packets(source, audio),
+                             key=lambda item: item[0])
+        for _, packet in merged:
+          out.mux(packet)
+      finally:
+        if source is not None:
+          source.close()
