@@ -7,8 +7,8 @@ Protocols (mixstereo_tf/evaluation/protocols/): kitti2015 / kitti2012 (stereo tr
 sets), middlebury (scene folders), eigen (KITTI raw root + the Eigen test list; depth from
 the left disparity) and sample (the embedded held-out set, nothing to download). The
 mixture of each pair is synthesised from its true views; the tables print the paper's
-numbers beside ours. A model is fed each image as it is (--disparity_range=network, the
-paper's protocol) unless --disparity_range is given.
+numbers beside ours. Each method searches its own fixed range (--disparity_range=network:
+a model sees the image as it is, as in the paper) unless --disparity_range is given.
 """
 
 import dataclasses
@@ -65,8 +65,9 @@ def main(argv):
     raise app.UsageError(f'Unexpected arguments: {argv[1:]}')
   try:
     predictor = cli_flags.predictor_config()
-    if predictor.method == 'model' and not FLAGS['disparity_range'].present:
-      # The paper's protocols feed the network the image as it is.
+    if not FLAGS['disparity_range'].present:
+      # The paper's protocols: a network sees the image as it is, the classical method
+      # searches its own fixed range.
       predictor = dataclasses.replace(predictor, disparity_range=disparity_range.NETWORK)
     unmixer = inference.build_unmixer(predictor)
     encoding = FLAGS.encoding or unmixer.mixture

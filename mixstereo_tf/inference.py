@@ -233,8 +233,16 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
                                    config.max_network_pixels, bool(restore))
 
   fn = lambda image: unmix_image.run(as_rgb(image), requested, trained,
-                                     config.disparity_range, (0, levels - 1), 'model', solve)
+                                     config.disparity_range, lambda _: (0, levels - 1),
+                                     'model', solve)
   return Unmixer(fn, 'model', requested, levels, bool(restore))
+
+
+def _classical_range(mixture: str) -> Tuple[int, int]:
+  """The classical method's own range for a mixture (diplopia: no zero shift)."""
+  if mixture == 'diplopia':
+    return 1, baselines.max_disparity('diplopia')
+  return 0, baselines.max_disparity(mixture) - 1
 
 
 @_register('classical')
@@ -250,9 +258,8 @@ def _classical(config: PredictorConfig) -> Unmixer:
     raise ValueError(f"PredictorConfig.method='classical' does not support "
                      f'PredictorConfig.mixture={config.mixture}; supported: '
                      f'{", ".join(supported)}.')
-  default = (1, baselines.max_disparity('diplopia'))
   fn = lambda image: unmix_image.run(as_rgb(image), config.mixture, supported,
-                                     config.disparity_range, default, 'classical',
+                                     config.disparity_range, _classical_range, 'classical',
                                      unmix_image.classical_unmix)
   display = baselines.max_disparity(config.mixture if config.mixture in supported
                                     else 'anaglyph')

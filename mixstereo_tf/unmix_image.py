@@ -115,13 +115,14 @@ def classical_unmix(image: np.ndarray, name: str, search: Range) -> Dict[str, ob
 
 
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
-        requested_range: Range, default_range: Tuple[int, int], method: str,
+        requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
         solve: Callable[[np.ndarray, str, Tuple[int, int]], Dict[str, object]]
         ) -> Dict[str, object]:
-  """Steps 1-3 for one image; `solve(image, name, range)` is the method's step 3."""
+  """Steps 1-3 for one image; `default_range(encoding)` is the method's own range;
+  `solve(image, name, range)` is the method's step 3."""
   start = time.perf_counter()
   name, info = resolve_mixture(image, requested_mixture, allowed)
-  search = estimate_range(image, name, requested_range, default_range)
+  search = estimate_range(image, name, requested_range, default_range(name))
   outputs = solve(image, name, search)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),
               **outputs.get('info', {}))

@@ -55,8 +55,8 @@ class MatcherConfig:
     max_strip_mib: aggregated costs of one strip when strips = 0, MiB.
     range_width: `estimate_range` searches an area-downsampled copy this wide, pixels.
     range_fraction: `estimate_range` searches +- this fraction of that width.
-    range_percentile: `estimate_range` keeps the [p, 100 - p] percentiles of the
-      left-right consistent disparities, percent ...
+    range_density: `estimate_range` keeps the disparities d whose window [d - 2, d + 2]
+      holds at least this share of the left-right consistent pixels ...
     range_margin: ... widened by this many pixels of the downsampled copy on each side.
   """
   census_height: int = 7
@@ -73,7 +73,7 @@ class MatcherConfig:
   max_strip_mib: int = 256
   range_width: int = 320
   range_fraction: float = 1.0 / 3.0
-  range_percentile: float = 1.0
+  range_density: float = 0.01
   range_margin: float = 3.0
 
   def __post_init__(self):
@@ -95,7 +95,7 @@ class MatcherConfig:
     need(self.range_width >= 4 * self.census_width, 'range_width',
          f'>= 4 * census_width = {4 * self.census_width}')
     need(0 < self.range_fraction < 1, 'range_fraction', 'in (0, 1)')
-    need(0 <= self.range_percentile < 50, 'range_percentile', 'in [0, 50)')
+    need(0 < self.range_density < 1, 'range_density', 'in (0, 1)')
     need(self.range_margin >= 0, 'range_margin', '>= 0')
 
   def thread_count(self) -> int:
@@ -263,9 +263,10 @@ def estimate_range(left, right,
   """The disparity range of a pair from the images alone.
 
   A full search of +- config.range_fraction of the width on copies area-downsampled to
-  config.range_width px (smaller images are searched as they are); the
-  [range_percentile, 100 - range_percentile] percentiles of the left-right consistent left
-  disparities, widened by range_margin pixels of the copy, scaled back to full size.
+  config.range_width px (smaller images are searched as they are); among the left-right
+  consistent left disparities, those found whose 5-px window holds >= config.range_density
+  of them (surfaces: false matches are few and spread over the whole search), widened by
+  range_margin pixels of the copy, scaled back to full size.
 
   Args:
     left, right: as `match`.
@@ -289,10 +290,12 @@ def estimate_range(left, right,
   out = _full(left, right, -reach, reach, config)
   found = out['disparity_left'][out['consistent_left']]
   low, high = -reach, reach
-  if found.size:
-    low, high = np.percentile(found, [config.range_percentile,
-                                      100.0 - config.range_percentile])
-    low, high = low - config.range_margin, high + config.range_margin
+  counts = np.histogram(found, bins=np.arange(-reach, reach + 2))[0]
+  share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)
+  dense = np.nonzero((share >= config.range_density) & (counts > 0))[0]
+  if dense.size:
+    low = dense.min() - reach - config.range_margin
+    high = dense.max() - reach + config.range_margin
   low = max(math.floor(low * scale), 1 - w)
   high = min(math.ceil(high * scale), w - 1)
   if low >= high:  # One disparity (range_margin 0): widen to two.

@@ -96,8 +96,8 @@ def define_predictor() -> None:
   flags.DEFINE_alias('restore_colors', 'restore_colour')
   flags.DEFINE_string('disparity_range', 'auto', "'auto' (estimated per image), MIN,MAX: "
                       'the signed disparities to search, pixels of the input (negative = in '
-                      "front of the screen), or 'network': a model's own levels [0, D - 1] "
-                      "with the image as it is (evaluate's default for models).")
+                      "front of the screen), or 'network': the method's own range (a model's "
+                      "levels [0, D - 1], the image as it is; evaluate's default).")
   flags.DEFINE_integer('max_network_pixels', defaults.max_network_pixels,
                        "A model's input is reduced to at most this many pixels.",
                        lower_bound=1)
