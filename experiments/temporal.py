@@ -38,7 +38,7 @@ from mixstereo_tf.data import synthetic
 FLAGS = flags.FLAGS
 flags.DEFINE_integer('frames_per_shot', 20, 'Frames of each of the two shots.')
 flags.DEFINE_integer('speed_frames', 3, 'Frames timed at each large size.')
-flags.DEFINE_string('output', os.path.join(os.path.dirname(os.path.abspath(__file__)),
+flags.DEFINE_string('temporal_output', os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                            'results', 'temporal.md'), 'Report path.')
 
 HEIGHT, WIDTH, MAX_DISPARITY, NOISE = 180, 320, 32, 2.0
@@ -163,8 +163,8 @@ def main(argv):
     lines.append(f'| {name} | {f_d:.3f} | {f_v:.2f} | {bad:.2f} | {epe:.3f} | '
                  f'{fps_720:.2f} | {fps_1080:.2f} |')
   lines += ['', f'Total run time {time.perf_counter() - start:.0f} s.', '']
-  os.makedirs(os.path.dirname(FLAGS.output), exist_ok=True)
-  with open(FLAGS.output, 'w', encoding='utf-8') as f:
+  os.makedirs(os.path.dirname(FLAGS.temporal_output), exist_ok=True)
+  with open(FLAGS.temporal_output, 'w', encoding='utf-8') as f:
     f.write('\n'.join(lines))
   print('\n'.join(lines))
 
