@@ -152,7 +152,9 @@ class Unmixer:
 
   Called on a uint8 mixture [H, W, 3] it returns {'left', 'right': uint8 [H, W, 3],
   'disparity_left', 'disparity_right': float32 [H, W] signed pixels, 'info': what was done
-  (`unmix_image`)}; an 'oracle' returns the disparities of the clean pair.
+  (`unmix_image`)}; an 'oracle' returns the disparities of the clean pair. A video frame
+  may be given a `temporal.FrameHint` (`unmixer(frame, hint=hint)`: its shot's encoding,
+  range and prior); `fn` is then called with `hint=` as well.
 
   Attributes:
     fn: the function behind the call.
@@ -169,8 +171,8 @@ class Unmixer:
   restore_colour: bool = False
   takes_pair: bool = False
 
-  def __call__(self, *images: np.ndarray) -> Outputs:
-    return self.fn(*images)
+  def __call__(self, *images: np.ndarray, hint=None) -> Outputs:
+    return self.fn(*images) if hint is None else self.fn(*images, hint=hint)
 
 
 _BUILDERS: Dict[str, Callable[[PredictorConfig], Unmixer]] = {}
@@ -228,13 +230,15 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
   if restore is None:
     restore = any(mixtures.get_mixture(m).is_anaglyph for m in trained)
 
-  def solve(image, name, search):
+  def solve(image, name, search, hint):
+    del hint  # The network takes no prior.
     return unmix_image.model_unmix(graph, image, name, search, levels,
                                    config.max_network_pixels, bool(restore))
 
-  fn = lambda image: unmix_image.run(as_rgb(image), requested, trained,
-                                     config.disparity_range, lambda _: (0, levels - 1),
-                                     'model', solve)
+  fn = lambda image, hint=None: unmix_image.run(as_rgb(image), requested, trained,
+                                                config.disparity_range,
+                                                lambda _: (0, levels - 1), 'model', solve,
+                                                hint)
   return Unmixer(fn, 'model', requested, levels, bool(restore))
 
 
@@ -258,9 +262,10 @@ def _classical(config: PredictorConfig) -> Unmixer:
     raise ValueError(f"PredictorConfig.method='classical' does not support "
                      f'PredictorConfig.mixture={config.mixture}; supported: '
                      f'{", ".join(supported)}.')
-  fn = lambda image: unmix_image.run(as_rgb(image), config.mixture, supported,
-                                     config.disparity_range, _classical_range, 'classical',
-                                     unmix_image.classical_unmix)
+  fn = lambda image, hint=None: unmix_image.run(as_rgb(image), config.mixture, supported,
+                                                config.disparity_range, _classical_range,
+                                                'classical', unmix_image.classical_unmix,
+                                                hint)
   display = baselines.max_disparity(config.mixture if config.mixture in supported
                                     else 'anaglyph')
   return Unmixer(fn, 'classical', config.mixture, display, restore_colour=(

@@ -7,9 +7,10 @@ Inputs: an image, a folder of images, a glob pattern or a video (.mp4 .avi .mov 
 An input that cannot be read, unmixed or written is reported with the reason and skipped;
 the others still run, and the exit status is non-zero if any failed. A progress bar with
 the measured frames per second is drawn on stderr when it is a terminal (logged otherwise).
-Videos keep their container, frame rate, timestamps, rotation and audio (copied), and are
-written resumably: after Ctrl-C or a crash, the same command continues from the last
-finished segment. Outputs are described in mixstereo_tf/unmix_files.py.
+Videos keep their container, frame rate, timestamps, rotation and audio (copied), are
+unmixed shot by shot with the previous frame's disparity as a prior (--notemporal: frame by
+frame), and are written resumably: after Ctrl-C or a crash, the same command continues
+from the last finished segment. Outputs are described in mixstereo_tf/unmix_files.py.
 """
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
@@ -23,6 +24,7 @@ from absl import logging
 
 from mixstereo_tf import inference
 from mixstereo_tf import media
+from mixstereo_tf import temporal
 from mixstereo_tf import unmix_files
 from mixstereo_tf import video_job
 from mixstereo_tf.cli import flags as cli_flags
@@ -41,6 +43,11 @@ flags.DEFINE_integer('segment_frames', video_job.VideoConfig.segment_frames,
                      'Videos are written in resumable segments of this many frames: '
                      'running the same command again after an interruption continues '
                      'from the last finished segment.')
+flags.DEFINE_boolean('temporal', temporal.TemporalConfig.enabled,
+                     'Videos: decide the encoding and the disparity range once per shot '
+                     '(scene cuts found from colour histograms) and search each frame '
+                     "around the previous frame's disparity (classical method); "
+                     '--notemporal unmixes every frame alone.')
 
 
 def main(argv):
@@ -55,7 +62,9 @@ def main(argv):
                                       FLAGS.max_display_disparity,
                                       progress_stream=sys.stderr,
                                       video_config=video_job.VideoConfig(FLAGS.segment_frames),
-                                      settings=dataclasses.asdict(config))
+                                      settings=dataclasses.asdict(config),
+                                      temporal_config=temporal.TemporalConfig(
+                                          enabled=FLAGS.temporal))
   except ValueError as e:
     raise cli_flags.usage_error(e) from None
   logging.info('%d input(s) done, %d failed; %d frame(s) in %.2f s: %.2f frames/s '

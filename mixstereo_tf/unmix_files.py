@@ -11,8 +11,14 @@ range searched, scale, method, seconds; `write_info`). Per video, in the input's
 (`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps, rotation and audio streams
 (copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`), `<name>_disparity<ext>`
 and `<name>_info.json` (the first unmixed frame's info, frames, frame rate, rotation, audio
-streams, files). Videos are written resumably (`video_job`). Progress (`progress.ProgressBar`) is shown for several
+streams, the scene cuts found in this run, files). Videos are written resumably (`video_job`). Progress (`progress.ProgressBar`) is shown for several
 inputs and for every video's frames.
+
+Video frames are unmixed with temporal consistency (`temporal`, unless
+`TemporalConfig.enabled` is off): the encoding and the range are decided once per shot and
+each frame gets the previous frame's disparity as a prior. Every resumable segment starts
+a new shot, so a resumed run starts each segment from the state an uninterrupted run has
+there.
 """
 
 import dataclasses
@@ -29,6 +35,7 @@ from mixstereo_tf import colormap
 from mixstereo_tf import inference
 from mixstereo_tf import media
 from mixstereo_tf import progress
+from mixstereo_tf import temporal
 from mixstereo_tf import video_io
 from mixstereo_tf import video_job
 
@@ -80,10 +87,14 @@ def _video_settings(unmixer: inference.Unmixer) -> Dict[str, object]:
 def _unmix_video(unmixer: inference.Unmixer, item: media.MediaItem, output_dir: str,
                  layout: str, max_disparity: float, settings: Dict[str, object],
                  video_config: video_job.VideoConfig, progress_stream: Optional[TextIO],
-                 report: UnmixReport) -> int:
+                 report: UnmixReport, temporal_config: temporal.TemporalConfig) -> int:
   """Unmixes every frame of a video into layout and disparity videos (resumable, see
-  `video_job`), writes `<name>_info.json`; returns the frames unmixed in this run."""
+  `video_job`), writes `<name>_info.json`; returns the frames unmixed in this run.
+
+  With `temporal_config.enabled`, frames go through a `temporal.VideoState` (a shot's
+  encoding, range and prior); each segment's first frame starts a shot."""
   start = time.perf_counter()
+  shots = temporal.VideoState(temporal_config)
   extension = os.path.splitext(item.path)[1].lower()
   keys = (['left', 'right'] if layout == 'separate' else [layout]) + ['disparity']
   outputs = {key: os.path.join(output_dir, f'{item.name}_{key}{extension}') for key in keys}
@@ -96,7 +107,13 @@ def _unmix_video(unmixer: inference.Unmixer, item: media.MediaItem, output_dir: 
 
   def render(frame):
     unmix_start = time.perf_counter()
-    result = unmixer(frame)
+    if temporal_config.enabled:
+      index = state['done'] + state['rendered']
+      hint = shots.begin(frame, cut=index % video_config.segment_frames == 0)
+      result = unmixer(frame, hint=hint)
+      shots.end(result)
+    else:
+      result = unmixer(frame)
     report.unmix_seconds += time.perf_counter() - unmix_start
     if state['info'] is None:
       state['info'] = dict(result.get('info', {}))
@@ -107,7 +124,8 @@ def _unmix_video(unmixer: inference.Unmixer, item: media.MediaItem, output_dir: 
     return images
 
   job = video_job.VideoJob(item.path, outputs,
-                           dict(settings, layout=layout, max_disparity=max_disparity),
+                           dict(settings, layout=layout, max_disparity=max_disparity,
+                                temporal=dataclasses.asdict(temporal_config)),
                            video_config)
   try:
     done = video_job.run(job, render, on_start)
@@ -120,6 +138,8 @@ def _unmix_video(unmixer: inference.Unmixer, item: media.MediaItem, output_dir: 
   write_info(output_dir, item, dict(
       state['info'] or {}, frames=done['frames'], resumed_frames=done['resumed_frames'],
       frame_rate=str(info.frame_rate), rotation=info.rotation,
+      temporal=temporal_config.enabled,
+      scene_cuts=[state['done'] + index for index in shots.cuts],
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
       files=[os.path.basename(path) for path in outputs.values()]))
   return state['rendered']
@@ -139,7 +159,9 @@ def unmix_inputs(unmixer: inference.Unmixer, input_spec: str, output_dir: str,
                  layout: str = 'separate', max_display_disparity: Optional[float] = None,
                  progress_stream: Optional[TextIO] = None,
                  video_config: video_job.VideoConfig = video_job.VideoConfig(),
-                 settings: Optional[Dict[str, object]] = None) -> UnmixReport:
+                 settings: Optional[Dict[str, object]] = None,
+                 temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()
+                 ) -> UnmixReport:
   """Unmixes every image / video of `input_spec` (see `media.iter_inputs`).
 
   An input that cannot be read, unmixed or written is logged with its path and the reason,
@@ -148,7 +170,8 @@ def unmix_inputs(unmixer: inference.Unmixer, input_spec: str, output_dir: str,
   Videos are written in resumable segments (`video_job`, `video_config`): re-running the
   same call after an interruption continues from the last finished segment, as long as
   the input and `settings` (a JSON-serialisable description of the unmixer; default its
-  method, mixture and range) are unchanged.
+  method, mixture and range) are unchanged. `temporal_config`: a video's per-shot
+  decisions and disparity prior (`temporal`; on by default).
 
   `max_display_disparity` fixes the colour maps to 0..that many pixels; by default each
   image's map spans the disparities found (videos: the unmixer's range). Each image also
@@ -176,7 +199,7 @@ def unmix_inputs(unmixer: inference.Unmixer, input_spec: str, output_dir: str,
           bar.clear()  # The video draws its own frame progress.
         frames = _unmix_video(unmixer, item, output_dir, layout, max_disparity,
                               settings or _video_settings(unmixer), video_config,
-                              progress_stream, report)
+                              progress_stream, report, temporal_config)
       else:
         image = media.read_image(item.path)
         unmix_start = time.perf_counter()

@@ -13,6 +13,10 @@ Steps, shared by the model and the classical method:
 Outputs: 'left', 'right' uint8 [H, W, 3], 'disparity_left', 'disparity_right' float32
 [H, W] signed pixels, and 'info' (a JSON-able dict: mixture, detection, disparity range,
 shift, scale, seconds).
+
+A video frame may come with a `temporal.FrameHint`: its shot's encoding and range replace
+steps 1 and 2, and its prior (the previous frame's left disparity) goes to the solver (the
+classical matcher searches around it; the model does not use it).
 """
 
 import time
@@ -28,6 +32,7 @@ from mixstereo_tf import disparity_range
 from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
 from mixstereo_tf import restoration
+from mixstereo_tf import temporal
 from mixstereo_tf.baselines import anaglyph
 from mixstereo_tf.baselines import matcher
 
@@ -108,24 +113,35 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
   return outputs
 
 
-def classical_unmix(image: np.ndarray, name: str, search: Range) -> Dict[str, object]:
-  """The training-free method."""
-  out = baselines.unmix_classical(image, name, search)
+def classical_unmix(image: np.ndarray, name: str, search: Range,
+                    hint: Optional[temporal.FrameHint] = None) -> Dict[str, object]:
+  """The training-free method; a `hint`'s prior: a left disparity to search around in its
+  prior_window (anaglyphs)."""
+  prior = hint.prior if hint is not None else None
+  window = hint.prior_window if prior is not None else None
+  out = baselines.unmix_classical(image, name, search, prior=prior, prior_window=window)
   return {key: out[key] for key in ('left', 'right', 'disparity_left', 'disparity_right')}
 
 
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
         requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
-        solve: Callable[[np.ndarray, str, Tuple[int, int]], Dict[str, object]]
-        ) -> Dict[str, object]:
+        solve: Callable[..., Dict[str, object]],
+        hint: Optional[temporal.FrameHint] = None) -> Dict[str, object]:
   """Steps 1-3 for one image; `default_range(encoding)` is the method's own range;
-  `solve(image, name, range)` is the method's step 3."""
+  `solve(image, name, range, hint)` is the method's step 3. A `hint`'s mixture and range
+  (a video shot's) replace steps 1 and 2; `solve` may use its prior."""
   start = time.perf_counter()
-  name, info = resolve_mixture(image, requested_mixture, allowed)
-  search = estimate_range(image, name, requested_range, default_range(name))
-  outputs = solve(image, name, search)
+  hint = hint or temporal.FrameHint()
+  if hint.mixture is not None:
+    name, info = hint.mixture, dict(hint.detection or {})
+  else:
+    name, info = resolve_mixture(image, requested_mixture, allowed)
+  search = hint.disparity_range
+  if search is None:
+    search = estimate_range(image, name, requested_range, default_range(name))
+  outputs = solve(image, name, search, hint)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),
-              **outputs.get('info', {}))
+              prior=hint.prior is not None, **outputs.get('info', {}))
   info['seconds'] = round(time.perf_counter() - start, 3)
   outputs['info'] = info
   return outputs

@@ -134,11 +134,11 @@ def _failing_after(unmixer, frames):
   """The unmixer, raising Interrupted once it has unmixed `frames` frames."""
   count = [0]
 
-  def unmix(image):
+  def unmix(image, **hint):
     if count[0] == frames:
       raise Interrupted()
     count[0] += 1
-    return unmixer(image)
+    return unmixer(image, **hint)
   return dataclasses.replace(unmixer, fn=unmix)
 
 

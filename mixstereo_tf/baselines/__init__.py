@@ -7,6 +7,7 @@ encoding) and `diplopia.unmix_diplopia` (self-matching of the double image and
 least-squares layer separation; disparities positive by convention).
 """
 
+import dataclasses
 from typing import Dict, Optional, Tuple
 
 import numpy as np
@@ -21,7 +22,8 @@ SUPPORTED_MIXTURES = anaglyph.SUPPORTED_MIXTURES + ('diplopia',)
 
 def unmix_classical(mixture_u8, mixture_name: str,
                     disparity_range: Optional[Tuple[int, int]] = None,
-                    prior: Optional[np.ndarray] = None) -> Dict[str, object]:
+                    prior: Optional[np.ndarray] = None,
+                    prior_window: Optional[Tuple[int, int]] = None) -> Dict[str, object]:
   """Separates a mixture image with the classical baseline for its operator.
 
   Args:
@@ -30,6 +32,8 @@ def unmix_classical(mixture_u8, mixture_name: str,
     disparity_range: (min, max) signed pixels (anaglyphs); None: estimated from the image
       for anaglyphs, the default positive range for diplopia.
     prior: optional [H, W] left disparity to search around (anaglyphs; a previous frame's).
+    prior_window: (radius, spread) of that search (`matcher.windows_from_prior`); None:
+      MatcherConfig's prior_radius and prior_spread.
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32 [H, W],
@@ -45,7 +49,11 @@ def unmix_classical(mixture_u8, mixture_name: str,
                      'no second view to match; use a trained model.')
   if mixture_name == 'diplopia':
     return diplopia.unmix_diplopia(mixture_u8, disparity_range)
-  return anaglyph.unmix_anaglyph(mixture_u8, mixture_name, disparity_range, prior=prior)
+  config = anaglyph.AnaglyphConfig()
+  if prior_window is not None:
+    config = dataclasses.replace(config, matching=dataclasses.replace(
+        config.matching, prior_radius=prior_window[0], prior_spread=prior_window[1]))
+  return anaglyph.unmix_anaglyph(mixture_u8, mixture_name, disparity_range, config, prior)
 
 
 def max_disparity(mixture_name: str) -> int:
