@@ -27,6 +27,7 @@ import dataclasses
 from typing import Dict, Optional, Tuple
 
 import cv2
+import numba
 import numpy as np
 
 from mixstereo_tf import mixtures
@@ -141,29 +142,62 @@ def local_linear_transfer(guide: np.ndarray, target: np.ndarray, train: np.ndarr
   return np.clip(out, 0.0, 1.0)
 
 
+@numba.njit(nogil=True, cache=True, error_model='numpy')
+def _solve_unclipped(mixture, other_view, warped, consistent, prior, other, own_weighted,
+                     inverses, match_weight, prior_weight, out):
+  """out = (the per-pixel normal equations' inverse) (w_obs A_own^T (I - A_other v_other)
+  + w_match [consistent] warped + w_prior prior), fused over [H, W] (unclipped encodings)."""
+  h, w = consistent.shape
+  residual = np.empty(3, np.float32)
+  rhs = np.empty(3, np.float32)
+  for y in range(h):
+    for x in range(w):
+      for c in range(3):
+        residual[c] = mixture[y, x, c] - (other[c, 0] * other_view[y, x, 0] +
+                                          other[c, 1] * other_view[y, x, 1] +
+                                          other[c, 2] * other_view[y, x, 2])
+      matched = consistent[y, x]
+      for i in range(3):
+        rhs[i] = (own_weighted[0, i] * residual[0] + own_weighted[1, i] * residual[1] +
+                  own_weighted[2, i] * residual[2] + prior_weight * prior[y, x, i])
+        if matched:
+          rhs[i] += match_weight * warped[y, x, i]
+      inverse = inverses[1] if matched else inverses[0]
+      for i in range(3):
+        out[y, x, i] = inverse[i, 0] * rhs[0] + inverse[i, 1] * rhs[1] + inverse[i, 2] * rhs[2]
+
+
 class _ViewSolver:
   """The per-pixel normal equations of one view (module docstring)."""
 
   def __init__(self, own: np.ndarray, other: np.ndarray, clip: bool, config: RestoreConfig):
+    # float32 matrices: the per-pixel products stay in float32.
+    own, other = np.asarray(own, np.float32), np.asarray(other, np.float32)
     self.own, self.other, self.clip, self.config = own, other, clip, config
     gram = config.observation_weight * own.T @ own
     # Inverses for unmatched / matched pixels (channels never clipped).
-    self.inverse = [np.linalg.inv(gram + (config.prior_weight + c * config.match_weight) *
-                                  np.eye(3)).astype(np.float32) for c in (0, 1)]
+    pulls = [config.prior_weight + c * config.match_weight for c in (0, 1)]
+    self.inverse = np.stack([np.linalg.inv(gram + pull * np.eye(3))
+                             for pull in pulls]).astype(np.float32)
 
   def __call__(self, mixture, other_view, warped, consistent, prior):
     config = self.config
-    residual = mixture - np.einsum('ij,hwj->hwi', self.other, other_view)
-    observed = np.ones_like(mixture) if not self.clip else (
-        (mixture > 0.5 / 255) & (mixture < 254.5 / 255)).astype(np.float32)
-    c = consistent[..., None].astype(np.float32)
-    rhs = (config.observation_weight * np.einsum('ji,hwj->hwi', self.own, observed * residual)
-           + config.match_weight * c * warped + config.prior_weight * prior)
     if not self.clip:
-      solved = [np.einsum('ij,hwj->hwi', inverse, rhs) for inverse in self.inverse]
-      return np.where(c > 0.5, solved[1], solved[0])
-    gram = config.observation_weight * np.einsum('ci,hwc,cj->hwij', self.own, observed,
-                                                 self.own)
+      out = np.empty(mixture.shape, np.float32)
+      _solve_unclipped(*(np.ascontiguousarray(a, np.float32)
+                         for a in (mixture, other_view, warped)),
+                       np.ascontiguousarray(consistent, np.bool_),
+                       np.ascontiguousarray(prior, np.float32), self.other,
+                       config.observation_weight * self.own, self.inverse,
+                       np.float32(config.match_weight), np.float32(config.prior_weight), out)
+      return out
+    residual = mixture - other_view @ self.other.T  # Per pixel: mixture - A_other v.
+    observed = ((mixture > 0.5 / 255) & (mixture < 254.5 / 255)).astype(np.float32)
+    c = consistent[..., None].astype(np.float32)
+    rhs = (config.observation_weight * ((observed * residual) @ self.own)  # A_own^T r.
+           + config.match_weight * c * warped + config.prior_weight * prior)
+    gram = config.observation_weight * sum(
+        observed[..., k, None, None] * np.outer(self.own[k], self.own[k]) for k in range(3))
     pull = config.prior_weight + config.match_weight * c
     return np.linalg.solve(gram + pull[..., None] * np.eye(3), rhs[..., None])[..., 0]
 

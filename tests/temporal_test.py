@@ -9,7 +9,6 @@ from mixstereo_tf import image_range
 from mixstereo_tf import inference
 from mixstereo_tf import mixtures
 from mixstereo_tf import temporal
-from mixstereo_tf import unmix_image
 from mixstereo_tf.baselines import matcher
 from mixstereo_tf.data import synthetic
 
