@@ -260,18 +260,16 @@ def needed_share(name: str, config: DetectConfig) -> float:
 
 def choose_variant(small: np.ndarray, obs: np.ndarray, names, config: DetectConfig
                    ) -> Tuple[str, float, Dict[str, float]]:
-  """(encoding, confidence, explained shares): the smallest of `names` that explains the
-  samples, else the largest (step 2)."""
+  """(encoding, confidence, explained shares): the smallest of `names` (encodings that
+  transmit colour) that explains the samples, else the largest (step 2)."""
   ordered = sorted(names, key=_size)
   shares, closest = {}, -np.inf
   for name in ordered[:-1]:
-    gray = not mixtures.get_mixture(name).transmits_colour
     shares[name] = explained_share(small, obs, name, config)
     margin = (shares[name] - needed_share(name, config)) / config.share_softness
     if margin >= 0:
-      return name, 1.0 if gray else _logistic(margin), shares
-    if not gray:
-      closest = max(closest, margin)
+      return name, _logistic(margin), shares
+    closest = max(closest, margin)
   return ordered[-1], _logistic(-closest), shares
 
 
@@ -295,20 +293,23 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   matched = eye_match(small, odd, config)
   obs = colour_samples(small, odd, matched, config)
   names = [n for n in CANDIDATES if mixtures.get_mixture(n).family == family]
-  gray = [n for n in names if not mixtures.get_mixture(n).transmits_colour and
-          explained_share(small, obs, n, config) >= config.singular_share]
+  gray = {n: explained_share(small, obs, n, config) for n in names
+          if not mixtures.get_mixture(n).transmits_colour}
+  scores.update({n: round(v, 4) for n, v in gray.items()})
   ghost = observed_ghost(small, odd, matched, config)
   leaky = {n: float(ghost @ expected_ghost(n) / (expected_ghost(n) @ expected_ghost(n)))
            for n in names if np.abs(expected_ghost(n)).max() > 0.01}
   scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})
-  if gray:  # Equal channels are the surest sign; a leak is measured less surely.
-    names = gray
-  elif any(t >= config.ghost_fraction for t in leaky.values()):
-    names = [max(leaky, key=leaky.get)]
+  fitting = [n for n, share in gray.items() if share >= needed_share(n, config)]
+  if fitting:  # Equal channels are the surest sign; a leak is measured less surely.
+    name, variant_confidence = fitting[0], 1.0
   else:
-    names = [n for n in names if n not in leaky]
-  name, variant_confidence, shares = choose_variant(small, obs, names, config)
-  scores.update({n: round(v, 4) for n, v in shares.items()})
+    if any(t >= config.ghost_fraction for t in leaky.values()):
+      names = [max(leaky, key=leaky.get)]
+    else:
+      names = [n for n in names if n not in leaky and n not in gray]
+    name, variant_confidence, shares = choose_variant(small, obs, names, config)
+    scores.update({n: round(v, 4) for n, v in shares.items()})
   return Detection(name, family_confidence * variant_confidence,
                    f'{family} channels displaced (score {families[family]:.3f}); '
                    f'{len(obs)} colour samples: {name} is the smallest encoding that '
