@@ -81,7 +81,7 @@ def unmix_clip(unmixer, frames, config):
   state, outputs = temporal.VideoState(config), []
   for frame in frames:
     hint = state.begin(frame)
-    outputs.append(unmixer(frame, hint=hint) if config.enabled else unmixer(frame))
+    outputs.append(unmixer(frame, hint=hint))
     state.end(outputs[-1])
   return outputs, state
 

@@ -136,13 +136,18 @@ class VideoState:
 
   def begin(self, image: np.ndarray, cut: bool = False) -> FrameHint:
     """The hint for the next frame; `cut=True` starts a new shot whatever the histograms
-    say (e.g. at a resumable segment's start). With `config.enabled` off: an empty hint."""
+    say (e.g. at a resumable segment's start). With `config.enabled` off: an empty hint
+    (every frame decided alone), and no histograms are computed."""
+    if not self.config.enabled:
+      self.shot_starts.append(self.frames)
+      self.frames += 1
+      return FrameHint()
     histograms = colour_histograms(image, self.config)
     found = self._histograms is not None and (
         histogram_distance(self._histograms, histograms) > self.config.cut_threshold)
     if found:
       self.cuts.append(self.frames)
-    if cut or found or self._histograms is None or not self.config.enabled:
+    if cut or found or self._histograms is None:
       self.shot_starts.append(self.frames)
       self._shot, self._prior = {}, None
     self._histograms = histograms

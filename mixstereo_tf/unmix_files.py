@@ -91,8 +91,8 @@ def _unmix_video(unmixer: inference.Unmixer, item: media.MediaItem, output_dir: 
   """Unmixes every frame of a video into layout and disparity videos (resumable, see
   `video_job`), writes `<name>_info.json`; returns the frames unmixed in this run.
 
-  With `temporal_config.enabled`, frames go through a `temporal.VideoState` (a shot's
-  encoding, range and prior); each segment's first frame starts a shot."""
+  Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
+  encoding, range and prior; each segment's first frame starts a shot)."""
   start = time.perf_counter()
   shots = temporal.VideoState(temporal_config)
   extension = os.path.splitext(item.path)[1].lower()
@@ -107,13 +107,10 @@ def _unmix_video(unmixer: inference.Unmixer, item: media.MediaItem, output_dir: 
 
   def render(frame):
     unmix_start = time.perf_counter()
-    if temporal_config.enabled:
-      index = state['done'] + state['rendered']
-      hint = shots.begin(frame, cut=index % video_config.segment_frames == 0)
-      result = unmixer(frame, hint=hint)
-      shots.end(result)
-    else:
-      result = unmixer(frame)
+    index = state['done'] + state['rendered']
+    hint = shots.begin(frame, cut=index % video_config.segment_frames == 0)
+    result = unmixer(frame, hint=hint)
+    shots.end(result)
     report.unmix_seconds += time.perf_counter() - unmix_start
     if state['info'] is None:
       state['info'] = dict(result.get('info', {}))

@@ -86,7 +86,7 @@ def _run(frames, config=temporal.TemporalConfig(), mixture='anaglyph', search=No
   state, outputs = temporal.VideoState(config), []
   for frame in frames:
     hint = state.begin(frame)
-    outputs.append(unmixer(frame, hint=hint) if config.enabled else unmixer(frame))
+    outputs.append(unmixer(frame, hint=hint))
     state.end(outputs[-1])
   return outputs
 
