@@ -23,8 +23,6 @@ from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf import detection
 from mixstereo_tf import inference
-from mixstereo_tf.data import image_io
-from mixstereo_tf.data import sources
 from mixstereo_tf.evaluation import realworld
 
 import numpy as np
@@ -37,20 +35,6 @@ FLAGS = flags.FLAGS
 FRACTIONS = (None, 0.3, 0.7)
 ENCODINGS = ('anaglyph', 'gray', 'half_color', 'dubois_ffmpeg', 'green_magenta_half',
              'amber_blue_dubois')
-
-
-def _scenes(shared_dir):
-  config = sources.DataConfig(dataset='sample', heldout_scenes=8,
-                              max_disparity=96)
-  for record in sources.list_samples(config, 'heldout'):
-    yield record.name, sources.load_sample(record)
-  if shared_dir:
-    folder = os.path.join(shared_dir, 'sceneflow_A-0032-0006')
-    disparity = image_io.read_pfm(os.path.join(folder, 'disp_left.pfm')).astype(np.float32)
-    yield 'sceneflow_A-0032-0006', {
-        'left': image_io.read_image(os.path.join(folder, 'left.png')),
-        'right': image_io.read_image(os.path.join(folder, 'right.png')),
-        'disparity_left': disparity, 'valid_left': disparity > 0}
 
 
 def _group(name):
@@ -70,7 +54,7 @@ def _evaluate(shared_dir):
   # A model unmixes the encodings it was trained on (its own mixture), window-aligned.
   model = inference.build_unmixer(inference.PredictorConfig(
       checkpoint=FLAGS.checkpoint)) if FLAGS.checkpoint else None
-  for scene, data in _scenes(shared_dir):
+  for scene, data in realworld.scenes(shared_dir):
     base = {'scene': scene, 'group': _group(scene)}
     for fraction in FRACTIONS:
       pair = realworld.window_align(data, fraction) if fraction is not None else dict(

@@ -63,6 +63,7 @@ def _depth_caps():
 def main(argv):
   if len(argv) > 1:
     raise app.UsageError(f'Unexpected arguments: {argv[1:]}')
+  cli_flags.exit_if_listing()
   try:
     predictor = cli_flags.predictor_config()
     if not FLAGS['disparity_range'].present:

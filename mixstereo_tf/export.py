@@ -1,9 +1,16 @@
-r"""Exports a trained run as a SavedModel that unmixes uint8 images of any size.
+r"""Exports a trained model: a SavedModel that unmixes uint8 images of any size, or a
+folder in the package's pretrained format.
 
   python -m mixstereo_tf.export --checkpoint=runs/demo --export_dir=exports/demo
+  python -m mixstereo_tf.export --export_dir=exports/diplopia --pretrained=diplopia
+  python -m mixstereo_tf.export --checkpoint=runs/pretrained_anaglyph --as_pretrained \
+      --export_dir=mixstereo_tf/pretrained/anaglyph --recipe='...' --results='...'
 
 Signatures: `serving_default` (image -> left, right, disparity, disparity_right) and
-`metadata` (mixture, training crop, architecture); see mixstereo_tf/serving.py.
+`metadata` (mixture, training crop, architecture); see mixstereo_tf/serving.py. Without
+--checkpoint the shipped model (`--pretrained`, default: the one for --mixture) is
+exported. A hybrid refiner has no SavedModel: its first stage is the classical method,
+which is not a TensorFlow graph.
 """
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
@@ -13,6 +20,7 @@ from absl import flags
 from absl import logging
 
 from mixstereo_tf import inference
+from mixstereo_tf import pretrained
 from mixstereo_tf import runs
 from mixstereo_tf import serving
 from mixstereo_tf.cli import flags as cli_flags
@@ -20,15 +28,44 @@ from mixstereo_tf.cli import flags as cli_flags
 FLAGS = flags.FLAGS
 
 cli_flags.define_checkpoint()
+cli_flags.define_mixture()
+cli_flags.define_pretrained()
 flags.DEFINE_string('export_dir', None, 'Where to write the SavedModel (must be new).',
                     required=True)
-flags.mark_flag_as_required('checkpoint')
+flags.DEFINE_boolean('as_pretrained', False, 'Write --checkpoint in the pretrained format '
+                     '(mixstereo_tf/pretrained/NAME: float16 weights and info.json) instead '
+                     'of a SavedModel.')
+flags.DEFINE_string('recipe', '', 'With --as_pretrained: the command that retrains it.')
+flags.DEFINE_string('results', '', 'With --as_pretrained: its held-out numbers.')
+
+
+def _model_and_info():
+  """(model, RunInfo) of --checkpoint, else of the shipped model."""
+  if FLAGS.checkpoint:
+    if FLAGS.pretrained:
+      raise ValueError('Give --checkpoint or --pretrained, not both.')
+    return runs.load_run(FLAGS.checkpoint)
+  entry = pretrained.choose(FLAGS.pretrained, FLAGS.mixture)
+  if entry.kind != 'joint':
+    raise ValueError(f'The shipped model {entry.name!r} is a {entry.kind}: its first stage '
+                     'is the classical method, which a SavedModel cannot hold; use it through '
+                     'mixstereo-unmix / mixstereo-eval (or mixstereo_tf.inference).')
+  model = pretrained.load_model(entry)
+  return model, runs.RunInfo(entry.mixture, entry.crop[0], entry.crop[1], model.model_config)
 
 
 def main(argv):
   del argv
+  cli_flags.exit_if_listing()
   try:
-    model, run_info = runs.load_run(FLAGS.checkpoint)
+    if FLAGS.as_pretrained:
+      if not FLAGS.checkpoint:
+        raise ValueError('--as_pretrained needs --checkpoint (the run to package).')
+      entry = pretrained.from_run(FLAGS.checkpoint, FLAGS.export_dir, FLAGS.recipe,
+                                  FLAGS.results)
+      logging.info('Wrote the %s %s model to %s.', entry.kind, entry.mixture, entry.folder)
+      return
+    model, run_info = _model_and_info()
     serving.export_saved_model(inference.serving_function(model), model.variables, run_info,
                                FLAGS.export_dir)
   except ValueError as e:

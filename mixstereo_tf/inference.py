@@ -7,8 +7,9 @@ content, so disparities keep their units (pixels of the input image).
 
 The `Unmixer` is the one predictor object every tool uses (unmix, evaluate, benchmarks);
 `build_unmixer` makes one from a `PredictorConfig` through a registry of methods:
-  * 'model': a trained network, from a run directory / checkpoint prefix (`runs`) or a
-    SavedModel (`serving`), run around each image's disparity range (`unmix_image`);
+  * 'model': a trained network, from a run directory / checkpoint prefix (`runs`), a
+    SavedModel (`serving`) or, with neither, a model shipped with the package
+    (`pretrained`), run around each image's disparity range (`unmix_image`);
   * 'classical': the training-free baseline (`baselines`);
   * 'oracle': the stereo module of a trained run on the clean pair (the paper's diplopia
     reference); it takes (left, right) instead of a mixture.
@@ -25,9 +26,11 @@ from mixstereo_tf import disparity_range
 from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
 from mixstereo_tf import models
+from mixstereo_tf import pretrained
 from mixstereo_tf import runs
 from mixstereo_tf import serving
 from mixstereo_tf import unmix_image
+from mixstereo_tf.models import refiner
 
 Outputs = Dict[str, np.ndarray]
 
@@ -136,6 +139,8 @@ class PredictorConfig:
     disparity_range: (min, max) signed pixels of the input; None: estimated per image;
       disparity_range.NETWORK: the method's own (a network's [0, D - 1], input as is).
     max_network_pixels: a model's input is reduced to at most this many pixels.
+    pretrained: a shipped model's name or folder ('model' without checkpoint and
+      saved_model; None: the first shipped model for the mixture, `pretrained.choose`).
   """
   method: str = 'model'
   checkpoint: Optional[str] = None
@@ -144,6 +149,7 @@ class PredictorConfig:
   restore_colour: Optional[bool] = None
   disparity_range: Union[None, str, Tuple[int, int]] = None
   max_network_pixels: Optional[int] = 2_000_000
+  pretrained: Optional[str] = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -213,6 +219,11 @@ def _check_mixture(config: PredictorConfig, trained: Sequence[str]) -> str:
 
 @_register('model')
 def _model(config: PredictorConfig) -> Unmixer:
+  if config.pretrained and (config.checkpoint or config.saved_model):
+    raise ValueError('PredictorConfig.pretrained excludes PredictorConfig.checkpoint and '
+                     'PredictorConfig.saved_model.')
+  if not config.checkpoint and not config.saved_model:
+    return pretrained_unmixer(pretrained.choose(config.pretrained, config.mixture), config)
   if config.checkpoint and not config.saved_model:  # Checked before the model is built.
     _check_mixture(config, runs.read_run_info(
         runs.resolve_checkpoint(config.checkpoint)[0]).mixtures)
@@ -240,6 +251,30 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
                                                 lambda _: (0, levels - 1), 'model', solve,
                                                 hint)
   return Unmixer(fn, 'model', requested, levels, bool(restore))
+
+
+def pretrained_unmixer(entry: pretrained.Pretrained,
+                       config: PredictorConfig = PredictorConfig()) -> Unmixer:
+  """The 'model' Unmixer of a shipped model (`pretrained`): a joint network runs like a
+  trained run; a refiner runs on the classical method's result (`unmix_image`)."""
+  model = pretrained.load_model(entry)
+  if entry.kind == 'joint':
+    run_info = runs.RunInfo(entry.mixture, entry.crop[0], entry.crop[1], model.model_config)
+    graph = tf.function(serving_function(model),
+                        input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)])
+    return model_unmixer(graph, run_info, config)
+  trained = entry.mixtures
+  requested = _check_mixture(config, trained)
+  network = tf.function(lambda x: model(x, training=False),
+                        input_signature=[tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)])
+  solve = lambda image, name, search, hint: unmix_image.refiner_unmix(
+      network, model.size_multiple, image, name, search, hint)
+  fn = lambda image, hint=None: unmix_image.run(as_rgb(image), requested, trained,
+                                                config.disparity_range, _classical_range,
+                                                'model', solve, hint)
+  display = baselines.max_disparity(trained[0] if trained[0] in baselines.SUPPORTED_MIXTURES
+                                    else 'anaglyph')
+  return Unmixer(fn, 'model', requested, display, restore_colour=True)
 
 
 def _classical_range(mixture: str) -> Tuple[int, int]:
@@ -297,6 +332,8 @@ def build_unmixer(config: PredictorConfig) -> Unmixer:
                      f'{", ".join(METHODS)}.')
   if config.mixture not in (None, unmix_image.AUTO):
     mixtures.get_mixture(config.mixture)  # ValueError listing the valid names.
+  if config.method != 'model' and config.pretrained:
+    raise ValueError("PredictorConfig.pretrained applies to method 'model' only.")
   if config.method != 'model' and config.restore_colour is not None:
     raise ValueError("PredictorConfig.restore_colour applies to method 'model' only.")
   if isinstance(config.disparity_range, str):

@@ -18,13 +18,16 @@ from absl import flags
 from absl import logging
 
 from mixstereo_tf import models
+from mixstereo_tf.models import refiner
 from mixstereo_tf import objective
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.data import pipeline
+from mixstereo_tf.data import refiner_data
 from mixstereo_tf.data import sources
 from mixstereo_tf.training import config as config_lib
 from mixstereo_tf.training import loop
 from mixstereo_tf.training import optimizers
+from mixstereo_tf.training import refiner_loop
 
 FLAGS = flags.FLAGS
 _DATA = cli_flags.defaults(sources.DataConfig)
@@ -113,6 +116,12 @@ flags.DEFINE_boolean('realistic_scenes', _DATA['realistic_scenes'], '`sample` tr
 flags.DEFINE_boolean('degrade', _PIPE['degrade'], 'Degrade each mixture like a real file '
                      '(noise, blur, JPEG, vignetting, channel imbalance; not in the paper).')
 
+flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner'), "joint: the paper's "
+                  'network; refiner: the hybrid that refines the classical result '
+                  '(models/refiner.py; trained on cached `sample` examples with ground truth, '
+                  'from --sample_scenes, --sample_height/width, --max_disparity, --mixture, '
+                  '--texture_dir, --degrade; not in the paper).')
+
 _RENAMED = {'DataConfig.split_list': 'train_list'}
 
 
@@ -165,8 +174,34 @@ def _train_config(num_steps: int) -> config_lib.TrainConfig:
       seed=FLAGS.seed)
 
 
+def _train_refiner() -> None:
+  """--architecture=refiner: `training/refiner_loop.py` on the flags it reads."""
+  if FLAGS.num_steps is None:
+    raise app.UsageError('--architecture=refiner needs --num_steps.')
+  try:
+    shard_size = refiner_loop.RefinerTrainConfig.shard_size
+    examples = refiner_data.ExampleConfig(
+        mixtures=FLAGS.mixture or 'anaglyphs', height=FLAGS.sample_height or FLAGS.crop_height,
+        width=FLAGS.sample_width or FLAGS.crop_width, max_disparity=FLAGS.max_disparity,
+        degrade=FLAGS.degrade, texture_dir=FLAGS.texture_dir)
+    config = refiner_loop.RefinerTrainConfig(
+        model_dir=FLAGS.model_dir, num_shards=-(-FLAGS.sample_scenes // shard_size),
+        crop_height=FLAGS.crop_height, crop_width=FLAGS.crop_width,
+        batch_size=FLAGS.batch_size, learning_rate=FLAGS.learning_rate,
+        num_steps=FLAGS.num_steps, checkpoint_every=FLAGS.checkpoint_every,
+        log_every=FLAGS.log_every, seed=FLAGS.seed)
+  except ValueError as e:
+    raise cli_flags.usage_error(e) from None
+  logging.info('Training the refiner on %d examples for %d steps.',
+               config.num_shards * shard_size, config.num_steps)
+  refiner_loop.train(config, examples, refiner.RefinerConfig(), FLAGS.flags_into_string())
+
+
 def main(argv):
   del argv
+  if FLAGS.architecture == 'refiner':
+    _train_refiner()
+    return
   if (FLAGS.num_steps is None) == (FLAGS.num_epochs is None):
     raise app.UsageError('Give exactly one of --num_steps and --num_epochs.')
   try:

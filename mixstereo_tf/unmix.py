@@ -52,6 +52,7 @@ flags.DEFINE_boolean('temporal', temporal.TemporalConfig.enabled,
 
 def main(argv):
   del argv
+  cli_flags.exit_if_listing()
   try:
     config = cli_flags.predictor_config()
     if config.method == 'oracle':

@@ -33,8 +33,10 @@ from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
 from mixstereo_tf import restoration
 from mixstereo_tf import temporal
+from mixstereo_tf import tiling
 from mixstereo_tf.baselines import anaglyph
 from mixstereo_tf.baselines import matcher
+from mixstereo_tf.data import refiner_data
 
 AUTO = 'auto'
 # A named encoding the detector contradicts with at least this confidence is warned about.
@@ -110,6 +112,27 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
         image_range.u8_to_unit(outputs['right']))
     outputs.update({k: image_range.unit_to_u8(views[k]) for k in ('left', 'right')})
   outputs['info'] = {'shift': chosen.shift, 'scale': round(chosen.scale, 4)}
+  return outputs
+
+
+def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, name: str,
+                  search: Range, hint: Optional[temporal.FrameHint] = None) -> Dict[str, object]:
+  """The hybrid (`models/refiner.py`): the classical method, the refiner on its result
+  (in tiles), then, for anaglyphs, both views restored from the refined disparities with the
+  refined views as the prior."""
+  classical = classical_unmix(image, name, search, hint)
+  refined = tiling.apply(network, refiner_data.network_input(
+      image, classical['left'], classical['right'], classical['disparity_left'],
+      classical['disparity_right']), multiple)
+  outputs = {key: image_range.signed_to_u8(refined[key]) for key in ('left', 'right')}
+  for key in ('disparity_left', 'disparity_right'):
+    outputs[key] = refined[key][..., 0]
+  if mixtures.get_mixture(name).is_anaglyph:
+    views = restoration.restore_views(
+        image_range.u8_to_unit(image), name, outputs['disparity_left'],
+        outputs['disparity_right'], image_range.u8_to_unit(outputs['left']),
+        image_range.u8_to_unit(outputs['right']))
+    outputs.update({k: image_range.unit_to_u8(views[k]) for k in ('left', 'right')})
   return outputs
 
 

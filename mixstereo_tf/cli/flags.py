@@ -9,6 +9,7 @@ config dataclasses. Library code raises errors naming config fields
 import dataclasses
 import functools
 import re
+import sys
 from typing import Any, Dict, Optional, Sequence, Tuple
 
 from absl import app
@@ -18,6 +19,7 @@ from mixstereo_tf import disparity_range
 from mixstereo_tf import inference
 from mixstereo_tf import mixtures
 from mixstereo_tf import models
+from mixstereo_tf import pretrained
 
 FLAGS = flags.FLAGS
 
@@ -101,6 +103,23 @@ def define_predictor() -> None:
   flags.DEFINE_integer('max_network_pixels', defaults.max_network_pixels,
                        "A model's input is reduced to at most this many pixels.",
                        lower_bound=1)
+  define_pretrained()
+
+
+@functools.lru_cache(maxsize=None)
+def define_pretrained() -> None:
+  """--pretrained: a shipped model by name, or 'list'."""
+  flags.DEFINE_string('pretrained', None, "A model shipped with the package (--method=model "
+                      "without --checkpoint / --saved_model; default: the first that unmixes "
+                      "the mixture), a folder in its format, or 'list' to list them.")
+
+
+def exit_if_listing() -> None:
+  """--pretrained=list: prints the shipped models (name, mixtures, recipe, held-out
+  numbers) and exits."""
+  if FLAGS.pretrained == pretrained.LIST:
+    print(pretrained.describe())
+    sys.exit(0)
 
 
 @functools.lru_cache(maxsize=None)
@@ -123,7 +142,7 @@ def predictor_config() -> inference.PredictorConfig:
   return inference.PredictorConfig(
       method=FLAGS.method, checkpoint=FLAGS.checkpoint, saved_model=FLAGS.saved_model,
       mixture=FLAGS.mixture, restore_colour=FLAGS.restore_colour, disparity_range=search,
-      max_network_pixels=FLAGS.max_network_pixels)
+      max_network_pixels=FLAGS.max_network_pixels, pretrained=FLAGS.pretrained)
 
 
 def middlebury_scales() -> Tuple[Tuple[str, float], ...]:

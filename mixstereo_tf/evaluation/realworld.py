@@ -13,16 +13,37 @@ the range is negative (in front of the screen). Luma PSNR compares Y = 0.299 R +
 0.114 B (`mixtures.LUMA`), the one thing a gray anaglyph transmits.
 """
 
-from typing import Dict
+import os
+from typing import Dict, Iterator, Optional, Tuple
 
 import numpy as np
 
 from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
+from mixstereo_tf.data import image_io
+from mixstereo_tf.data import sources
 from mixstereo_tf.evaluation import ffmpeg_encoder
 from mixstereo_tf.evaluation import metrics
 
 ENCODERS = ('ffmpeg', 'ours')
+SCENEFLOW_FRAME = 'sceneflow_A-0032-0006'
+
+
+def scenes(shared_dir: Optional[str],
+           max_disparity: int = 96) -> Iterator[Tuple[str, Dict[str, np.ndarray]]]:
+  """(name, data) of the scenes with ground truth: the 8 `sample` held-out scenes and
+  Motorcycle (made for `max_disparity`), then the SceneFlow frame of `shared_dir` when
+  given. data: 'left', 'right' uint8, 'disparity_left' float32, 'valid_left' bool."""
+  config = sources.DataConfig(dataset='sample', heldout_scenes=8, max_disparity=max_disparity)
+  for record in sources.list_samples(config, 'heldout'):
+    yield record.name, sources.load_sample(record)
+  if shared_dir:
+    folder = os.path.join(shared_dir, SCENEFLOW_FRAME)
+    disparity = image_io.read_pfm(os.path.join(folder, 'disp_left.pfm')).astype(np.float32)
+    yield SCENEFLOW_FRAME, {
+        'left': image_io.read_image(os.path.join(folder, 'left.png')),
+        'right': image_io.read_image(os.path.join(folder, 'right.png')),
+        'disparity_left': disparity, 'valid_left': disparity > 0}
 
 
 def window_shift(disparity: np.ndarray, valid: np.ndarray, fraction: float) -> int:

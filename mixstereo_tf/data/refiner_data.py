@@ -1,0 +1,151 @@
+"""Training examples of the hybrid refiner: realistic scenes, published-style mixtures and
+the classical method's result on them, computed once and kept in shards.
+
+One example (`make_example`):
+  1. a `sample` training scene with real-scene structures (`synthetic.render_scene`,
+     `realistic=True`; textures from scikit-image's training photographs or a
+     `texture_dir`), rendered `max_disparity` px wider than kept;
+  2. window alignment with probability `window_probability`: the right view moves so a
+     fraction U[0, 0.7] of the disparity range becomes negative (every disparity d - s);
+  3. one encoding of `mixtures`, drawn uniformly, then `degrade.degrade` (noise, blur,
+     JPEG, vignetting, channel imbalance) and 8-bit quantisation;
+  4. `baselines.unmix_classical` on it with the range estimated from the image, as at
+     inference.
+Seeds: example i draws everything from seed i (scenes: the `sample` training seeds; the
+held-out scenes use other textures and seeds 2^31 + i). Shards `shard_<k>.npz` of
+`shard_size` examples each are written atomically, so an interrupted build resumes.
+"""
+
+import dataclasses
+import os
+from typing import Dict, Optional
+
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf import baselines
+from mixstereo_tf import image_range
+from mixstereo_tf import mixtures
+from mixstereo_tf.data import degrade
+from mixstereo_tf.data import synthetic
+
+KEYS = ('mixture', 'classical_left', 'classical_right', 'classical_disparity_left',
+        'classical_disparity_right', 'left', 'right', 'disparity_left', 'disparity_right')
+
+
+@dataclasses.dataclass(frozen=True)
+class ExampleConfig:
+  """How refiner training examples are made.
+
+  Attributes:
+    mixtures: encodings drawn from (comma-separated names for `mixtures.parse_names`).
+    height, width: example size in pixels.
+    max_disparity: scene depth range (`synthetic.SceneConfig.max_disparity`), pixels.
+    window_probability: chance of a window-aligned (signed) example.
+    degrade: pass each mixture through `degrade.degrade`.
+    texture_dir: a folder of photographs for the scenes (None: scikit-image's).
+  """
+  mixtures: str = 'anaglyphs'
+  height: int = 160
+  width: int = 320
+  max_disparity: int = 64
+  window_probability: float = 0.7
+  degrade: bool = True
+  texture_dir: Optional[str] = None
+
+  def __post_init__(self):
+    mixtures.parse_names(self.mixtures)  # ValueError naming an unknown encoding.
+    synthetic.SceneConfig(self.max_disparity, self.height, self.width + self.max_disparity)
+    if not 0.0 <= self.window_probability <= 1.0:
+      raise ValueError(f'ExampleConfig.window_probability must be in [0, 1], got '
+                       f'{self.window_probability}.')
+
+
+def _textures(config: ExampleConfig) -> synthetic.TextureAtlas:
+  if config.texture_dir:
+    return synthetic.load_texture_dir(config.texture_dir)
+  return synthetic.load_textures('train')
+
+
+def _window_aligned(scene: Dict[str, np.ndarray], shift: int, width: int):
+  """Left columns [shift, shift + width), right [0, width) of a scene rendered wider:
+  every disparity becomes d - shift (left x' = x - shift matches right x - d)."""
+  return {'left': scene['left'][:, shift:shift + width],
+          'right': scene['right'][:, :width],
+          'disparity_left': scene['disparity_left'][:, shift:shift + width] - shift,
+          'disparity_right': scene['disparity_right'][:, :width] - shift}
+
+
+def make_example(index: int, config: ExampleConfig,
+                 textures: synthetic.TextureAtlas) -> Dict[str, np.ndarray]:
+  """Example `index` (module docstring): uint8 images, float32 disparities, str 'name'."""
+  rng = np.random.default_rng(index)
+  scene_config = synthetic.SceneConfig(config.max_disparity, config.height,
+                                       config.width + config.max_disparity, realistic=True)
+  scene = synthetic.render_scene(index, scene_config, textures)
+  shift = 0
+  if rng.uniform() < config.window_probability:
+    low, high = np.percentile(scene['disparity_left'], [1.0, 99.0])
+    shift = int(round(low + rng.uniform(0.0, 0.7) * (high - low)))
+  pair = _window_aligned(scene, shift, config.width)
+  names = mixtures.parse_names(config.mixtures)
+  name = names[rng.integers(len(names))]
+  mixed = mixtures.mix(name, image_range.u8_to_signed(pair['left']),
+                       image_range.u8_to_signed(pair['right']))
+  mixed = image_range.signed_to_unit(mixed)
+  if config.degrade:
+    mixed = degrade.degrade(mixed, tf.constant([index, 7], tf.int32))
+  mixture = image_range.unit_to_u8(np.asarray(mixed))
+  classical = baselines.unmix_classical(mixture, name)
+  return {'name': name, 'mixture': mixture,
+          'classical_left': classical['left'], 'classical_right': classical['right'],
+          'classical_disparity_left': classical['disparity_left'].astype(np.float32),
+          'classical_disparity_right': classical['disparity_right'].astype(np.float32),
+          'left': pair['left'], 'right': pair['right'],
+          'disparity_left': pair['disparity_left'].astype(np.float32),
+          'disparity_right': pair['disparity_right'].astype(np.float32)}
+
+
+def _shard_path(folder: str, shard: int) -> str:
+  return os.path.join(folder, f'shard_{shard:04d}.npz')
+
+
+def build_shard(folder: str, shard: int, shard_size: int, config: ExampleConfig) -> str:
+  """Writes shard `shard` (examples shard * shard_size ...) unless it exists; its path."""
+  path = _shard_path(folder, shard)
+  if os.path.exists(path):
+    return path
+  textures = _textures(config)
+  examples = [make_example(i, config, textures)
+              for i in range(shard * shard_size, (shard + 1) * shard_size)]
+  arrays = {key: np.stack([e[key] for e in examples]) for key in KEYS}
+  arrays['name'] = np.array([e['name'] for e in examples])
+  os.makedirs(folder, exist_ok=True)
+  partial = path + '.partial.npz'
+  np.savez(partial, **arrays)
+  os.replace(partial, path)
+  return path
+
+
+def load_shards(folder: str, count: int) -> Dict[str, np.ndarray]:
+  """The first `count` shards of `folder`, concatenated per key.
+
+  Raises:
+    ValueError: fewer than `count` shards exist.
+  """
+  paths = [_shard_path(folder, k) for k in range(count)]
+  missing = [p for p in paths if not os.path.exists(p)]
+  if missing:
+    raise ValueError(f'Missing refiner example shards: {missing[:3]} ({len(missing)} of '
+                     f'{count}); build them first (`build_shard`).')
+  loaded = [np.load(p) for p in paths]
+  return {key: np.concatenate([l[key] for l in loaded]) for key in KEYS + ('name',)}
+
+
+def network_input(mixture, left, right, d_left, d_right) -> np.ndarray:
+  """The refiner's [..., H, W, 11] float32 input from uint8 images and float disparities."""
+  images = [image_range.u8_to_signed(np.asarray(i)).astype(np.float32)
+            for i in (mixture, left, right)]
+  disparities = [np.asarray(d, np.float32)[..., None] for d in (d_left, d_right)]
+  return np.concatenate(images + disparities, axis=-1)
+

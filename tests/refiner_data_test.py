@@ -1,0 +1,70 @@
+"""Tests for mixstereo_tf.data.refiner_data: examples with the classical result, shards."""
+
+import os
+
+import numpy as np
+import pytest
+
+from mixstereo_tf import baselines
+from mixstereo_tf import mixtures
+from mixstereo_tf.data import refiner_data
+from mixstereo_tf.data import synthetic
+
+SMALL = refiner_data.ExampleConfig(mixtures='gray,anaglyph', height=48, width=64,
+                                   max_disparity=16, window_probability=1.0, degrade=False)
+
+
+@pytest.fixture(scope='module')
+def textures():
+  return refiner_data._textures(SMALL)  # pylint: disable=protected-access
+
+
+def test_window_aligned_example_matches_its_ground_truth(textures):
+  example = refiner_data.make_example(5, SMALL, textures)
+  assert example['name'] in ('gray', 'anaglyph')
+  assert example['mixture'].shape == (48, 64, 3) and example['mixture'].dtype == np.uint8
+  d = example['disparity_left']
+  assert d.min() < 0 < d.max()  # Window-aligned: the disparities straddle zero.
+  # The left view is the right one sampled at x - d (the scene's own convention).
+  rows, cols = np.mgrid[0:48, 0:64]
+  source = np.round(cols - d).astype(int)
+  inside = (source >= 0) & (source < 64)
+  diff = np.abs(example['left'][inside].astype(float) -
+                example['right'][rows[inside], source[inside]].astype(float))
+  assert np.median(diff) < 8
+  # Undegraded: the mixture is the encoding of the views, and the classical result is
+  # what baselines gives on it.
+  expected = mixtures.mix(example['name'], example['left'] / 127.5 - 1,
+                          example['right'] / 127.5 - 1).numpy()
+  assert np.abs((expected + 1) * 127.5 - example['mixture']).max() <= 1
+  again = baselines.unmix_classical(example['mixture'], example['name'])
+  np.testing.assert_array_equal(again['disparity_left'], example['classical_disparity_left'])
+
+
+def test_shards_are_built_once_and_loaded_in_order(tmp_path, textures):
+  del textures
+  folder = str(tmp_path)
+  path = refiner_data.build_shard(folder, 1, 2, SMALL)
+  stamp = os.path.getmtime(path)
+  assert refiner_data.build_shard(folder, 1, 2, SMALL) == path
+  assert os.path.getmtime(path) == stamp
+  with pytest.raises(ValueError, match='Missing refiner example shards'):
+    refiner_data.load_shards(folder, 2)
+  refiner_data.build_shard(folder, 0, 2, SMALL)
+  data = refiner_data.load_shards(folder, 2)
+  assert data['mixture'].shape == (4, 48, 64, 3)
+  first = refiner_data.make_example(2, SMALL, synthetic.load_textures('train'))
+  np.testing.assert_array_equal(data['left'][2], first['left'])
+  inputs = refiner_data.network_input(data['mixture'], data['classical_left'],
+                                      data['classical_right'],
+                                      data['classical_disparity_left'],
+                                      data['classical_disparity_right'])
+  assert inputs.shape == (4, 48, 64, 11) and inputs.dtype == np.float32
+  np.testing.assert_array_equal(inputs[..., 9], data['classical_disparity_left'])
+
+
+def test_config_checks():
+  with pytest.raises(ValueError, match='window_probability'):
+    refiner_data.ExampleConfig(window_probability=2.0)
+  with pytest.raises(ValueError):
+    refiner_data.ExampleConfig(mixtures='nothing')
