@@ -35,6 +35,7 @@ from mixstereo_tf import restoration
 from mixstereo_tf import temporal
 from mixstereo_tf import tiling
 from mixstereo_tf.baselines import anaglyph
+from mixstereo_tf.baselines import diplopia
 from mixstereo_tf.baselines import matcher
 from mixstereo_tf.data import refiner_data
 
@@ -79,11 +80,14 @@ def resolve_mixture(image: np.ndarray, requested: str,
 def estimate_range(image: np.ndarray, name: str, requested: Range,
                    default: Tuple[int, int]) -> Tuple[int, int]:
   """The range asked for; the method's `default` for disparity_range.NETWORK and for
-  mixtures that are not anaglyphs; else estimated from the anaglyph's eye channels."""
+  monocular mixtures; else estimated from the image (an anaglyph's eye channels, a double
+  image's self-matching)."""
   if requested == disparity_range.NETWORK:
     return default
   if requested is not None:
     return requested
+  if name == 'diplopia':
+    return diplopia.estimate_range(image)
   if not mixtures.get_mixture(name).is_anaglyph:
     return default
   left_eye, right_eye = anaglyph.eye_images(image_range.u8_to_unit(image), name)

@@ -41,4 +41,5 @@ def test_usage_error_names_flags_instead_of_config_fields():
 def test_defaults_come_from_the_config_dataclass():
   assert cli_flags.defaults(inference.PredictorConfig) == {
       'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,
-      'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000}
+      'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000,
+          'pretrained': None}

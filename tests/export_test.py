@@ -9,6 +9,7 @@ import textwrap
 import numpy as np
 import pytest
 
+from mixstereo_tf import disparity_range
 from mixstereo_tf import inference
 from mixstereo_tf import models
 from mixstereo_tf import runs
@@ -79,8 +80,9 @@ def test_plain_tensorflow_loads_the_export_and_matches_keras(exported, tmp_path)
   assert meta['size_multiple'] == 32
   assert models.ModelConfig.from_dict(json.loads(meta['model_config'])) == info.model_config
 
-  unmixer = inference.build_unmixer(inference.PredictorConfig(checkpoint=run_dir,
-                                                              restore_colour=False))
+  unmixer = inference.build_unmixer(inference.PredictorConfig(
+      checkpoint=run_dir, restore_colour=False,
+      disparity_range=disparity_range.NETWORK))  # The image as it is, as the graph sees it.
   with np.load(tmp_path / 'out.npz') as served:
     for key, image in images.items():
       expected = unmixer(image)

@@ -105,8 +105,6 @@ def test_unmixer_restores_the_anaglyph_channels(run, tmp_path):
 
 def test_build_unmixer_checks_its_arguments(tmp_path):
   build = lambda **kwargs: inference.build_unmixer(inference.PredictorConfig(**kwargs))
-  with pytest.raises(ValueError, match='exactly one of PredictorConfig.saved_model'):
-    build()
   with pytest.raises(ValueError, match='exactly one'):
     build(saved_model='a', checkpoint='b')
   with pytest.raises(ValueError, match='takes neither'):

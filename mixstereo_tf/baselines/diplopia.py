@@ -28,6 +28,7 @@ disparities are positive (the left camera is on the left) decides which layer is
 """
 
 import dataclasses
+import math
 from typing import Dict, Optional, Tuple
 
 import cv2
@@ -218,6 +219,40 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
   right = (1 - frac) * gather(x0) + frac * gather(x0 + 1)
   return {'left': np.clip(wide[:, :w], 0, 1).astype(np.float32),
           'right': np.clip(right, 0, 1).astype(np.float32)}
+
+
+def estimate_range(mixture, config: Optional[DiplopiaConfig] = None, width: int = 320,
+                   fraction: float = 1 / 3, density: float = 0.01,
+                   margin: int = 3) -> Tuple[int, int]:
+  """The (positive) disparity range of a double image from the image alone.
+
+  The self-matching of steps 2 (module docstring) over lags [1, fraction * width] on a
+  copy area-downsampled to `width` px; among the left-right consistent disparities, those
+  whose 5-lag window holds >= `density` of them (surfaces; false matches spread over the
+  search), widened by `margin` px of the copy and scaled back (as
+  `matcher.estimate_range` does for anaglyphs).
+
+  Returns:
+    (min, max) ints with 1 <= min < max: the whole search when nothing is consistent.
+  """
+  config = config or DiplopiaConfig()
+  gray = image_range.as_unit_float(mixture, 'mixture').mean(axis=-1) * 255.0
+  full_width = gray.shape[1]
+  scale = max(1.0, full_width / width)
+  if scale > 1.0:
+    gray = cv2.resize(gray, (width, max(1, round(gray.shape[0] / scale))),
+                      interpolation=cv2.INTER_AREA)
+  reach = max(2, round(fraction * gray.shape[1]))
+  config = dataclasses.replace(config, matching=dataclasses.replace(
+      config.matching, min_disparity=1, max_disparity=reach))
+  matched = sgm.match_volume(self_matching_volume(gray, config), config.matching)
+  found = matched['disparity_left'][matched['consistent_left']]
+  counts = np.histogram(found, bins=np.arange(1, reach + 2))[0]  # counts[i]: lag i + 1.
+  share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)
+  dense = np.nonzero((share >= density) & (counts > 0))[0] + 1
+  low, high = (dense.min() - margin, dense.max() + margin) if dense.size else (1, reach)
+  low = max(1, math.floor(low * scale))
+  return low, max(low + 1, min(math.ceil(high * scale), full_width - 1))
 
 
 def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
