@@ -1,7 +1,8 @@
-"""A 12-megapixel (4000x3000) anaglyph through `unmix --method=classical --mixture=auto`:
-seconds per stage and the process' peak resident memory (issue 13).
+"""A 12-megapixel (4000x3000) anaglyph through `unmix --mixture=auto`, the classical method
+or the shipped model: seconds and the process' peak resident memory (issues 13 and 15).
 
-    python experiments/photo_12mp.py [--photo_encoding=anaglyph]
+    python experiments/photo_12mp.py [--photo_encoding=anaglyph] [--photo_method=model]
+        [--photo_size=1242x375]
 
 The pair is scikit-image's Motorcycle (Middlebury 2014, 2964x2000) resized to 4000x3000,
 so its disparities reach ~360 px; the anaglyph is FFmpeg's when imageio-ffmpeg is there.
@@ -21,6 +22,9 @@ from mixstereo_tf import inference
 from mixstereo_tf.evaluation import realworld
 
 flags.DEFINE_string('photo_encoding', 'anaglyph', 'The anaglyph encoding to make and unmix.')
+flags.DEFINE_enum('photo_method', 'classical', ('classical', 'model'),
+                  'classical, or model: the shipped model (no model flag).')
+flags.DEFINE_string('photo_size', '4000x3000', 'WIDTHxHEIGHT of the photo.')
 FLAGS = flags.FLAGS
 
 
@@ -31,20 +35,21 @@ def _peak_gib() -> float:
 def main(argv):
   del argv
   left, right, _ = skimage.data.stereo_motorcycle()
-  left, right = (cv2.resize(v, (4000, 3000), interpolation=cv2.INTER_CUBIC)
-                 for v in (left, right))
+  size = tuple(int(v) for v in FLAGS.photo_size.split('x'))
+  left, right = (cv2.resize(v, size, interpolation=cv2.INTER_CUBIC) for v in (left, right))
   try:
     image = realworld.make_anaglyph({'left': left, 'right': right}, FLAGS.photo_encoding, 'ffmpeg')
   except ImportError:
     image = realworld.make_anaglyph({'left': left, 'right': right}, FLAGS.photo_encoding, 'ours')
   del left, right
   before = _peak_gib()
-  unmixer = inference.build_unmixer(inference.PredictorConfig('classical', mixture='auto'))
+  unmixer = inference.build_unmixer(inference.PredictorConfig(FLAGS.photo_method,
+                                                              mixture='auto'))
   start, cpu = time.perf_counter(), time.process_time()
   out = unmixer(image)
   wall, cpu = time.perf_counter() - start, time.process_time() - cpu
   info = out['info']
-  print(f'4000x3000 {FLAGS.photo_encoding}: detected {info["detected"]} '
+  print(f'{FLAGS.photo_size} {FLAGS.photo_encoding}, {FLAGS.photo_method}: detected {info["detected"]} '
         f'({info["confidence"]:.2f}), range {info["disparity_range"]}, '
         f'{wall:.1f} s wall, {cpu:.1f} CPU-s, peak RSS {_peak_gib():.2f} GiB '
         f'({before:.2f} GiB before the unmix: input images and TensorFlow)')

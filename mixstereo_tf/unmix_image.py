@@ -122,8 +122,10 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
 def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, name: str,
                   search: Range, hint: Optional[temporal.FrameHint] = None) -> Dict[str, object]:
   """The hybrid (`models/refiner.py`): the classical method, the refiner on its result
-  (in tiles), then, for anaglyphs, both views restored from the refined disparities with the
-  refined views as the prior."""
+  (in tiles), then, for anaglyphs, both views restored from the refined disparities with,
+  as the prior where the views do not match, the mean of the refined views and the
+  classical colour transfer (each alone was worse on some encodings:
+  experiments/results/pretrained_ablations.md)."""
   classical = classical_unmix(image, name, search, hint)
   refined = tiling.apply(network, refiner_data.network_input(
       image, classical['left'], classical['right'], classical['disparity_left'],
@@ -132,10 +134,11 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
   for key in ('disparity_left', 'disparity_right'):
     outputs[key] = refined[key][..., 0]
   if mixtures.get_mixture(name).is_anaglyph:
-    views = restoration.restore_views(
-        image_range.u8_to_unit(image), name, outputs['disparity_left'],
-        outputs['disparity_right'], image_range.u8_to_unit(outputs['left']),
-        image_range.u8_to_unit(outputs['right']))
+    mixture01 = image_range.u8_to_unit(image)
+    disparities = outputs['disparity_left'], outputs['disparity_right']
+    transfer = restoration.restore_views(mixture01, name, *disparities)
+    prior = [(image_range.u8_to_unit(outputs[k]) + transfer[k]) / 2 for k in ('left', 'right')]
+    views = restoration.restore_views(mixture01, name, *disparities, *prior)
     outputs.update({k: image_range.unit_to_u8(views[k]) for k in ('left', 'right')})
   return outputs
 

@@ -20,6 +20,10 @@ def test_the_wheel_ships_the_split_lists_as_package_data(tmp_path):
     assert f'mixstereo_tf/data_lists/kitti/{name}' in names
   assert 'mixstereo_tf/evaluation/protocols/eigen.py' in names
   assert 'mixstereo_tf/cli/flags.py' in names
+  shipped = {n for n in names if n.startswith('mixstereo_tf/pretrained/')}
+  for model in ('anaglyph', 'diplopia'):
+    assert {f'mixstereo_tf/pretrained/{model}/info.json',
+            f'mixstereo_tf/pretrained/{model}/weights.npz'} <= shipped
   # Installed (the wheel unpacked, no repository around it): the Eigen protocol's default
   # list resolves to the packaged copy, all 697 test frames.
   site = tmp_path / 'site'
@@ -27,14 +31,18 @@ def test_the_wheel_ships_the_split_lists_as_package_data(tmp_path):
   script = ('import os\n'
             'from mixstereo_tf.data import split_lists\n'
             'from mixstereo_tf.evaluation import protocols\n'
+            'from mixstereo_tf import pretrained\n'
             "path = split_lists.resolve(protocols.get('eigen').default_split_list)\n"
-            'print(path, sum(1 for _ in open(path)))\n')
+            "entry = pretrained.choose(None, 'auto')\n"
+            'pretrained.load_model(entry)\n'
+            'print(path, sum(1 for _ in open(path)), entry.folder)\n')
   outside = tmp_path / 'elsewhere'
   outside.mkdir()
   env = dict(os.environ, PYTHONPATH=str(site))
   result = subprocess.run([sys.executable, '-c', script], cwd=str(outside), env=env,
                           capture_output=True, text=True, timeout=300, check=False)
   assert result.returncode == 0, result.stderr[-3000:]
-  path, count = result.stdout.split()
+  path, count, model = result.stdout.split()
   assert path.startswith(str(site)) and path.endswith('eigen_test_files.txt')
   assert count == '697'
+  assert model.startswith(str(site))  # The shipped model loads from the installed package.

@@ -19,8 +19,10 @@ def test_loss_in_pixels_and_unit_range():
              'left': tf.zeros([1, 2, 2, 3]) + 0.5, 'right': tf.zeros([1, 2, 2, 3])}
   batch = {'disparity_left': zeros, 'disparity_right': zeros + 1.0,
            'left': tf.zeros([1, 2, 2, 3]), 'right': tf.zeros([1, 2, 2, 3])}
-  losses = refiner_loop.refiner_loss(outputs, batch, view_weight=10.0)
+  losses = refiner_loop.refiner_loss(outputs, batch, view_weight=10.0, disparity_clip=5.0)
   assert float(losses['disparity']) == pytest.approx(3.0)
+  clipped = refiner_loop.refiner_loss(outputs, batch, view_weight=0.0, disparity_clip=1.5)
+  assert float(clipped['loss']) == pytest.approx(1.5 + 1.0)
   # 0.5 on [-1, 1] is 0.25 on [0, 1], in one view of two.
   assert float(losses['views']) == pytest.approx(0.125)
   assert float(losses['loss']) == pytest.approx(3.0 + 1.25)

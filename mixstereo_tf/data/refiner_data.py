@@ -5,12 +5,15 @@ One example (`make_example`):
   1. a `sample` training scene with real-scene structures (`synthetic.render_scene`,
      `realistic=True`; textures from scikit-image's training photographs or a
      `texture_dir`), rendered `max_disparity` px wider than kept;
-  2. window alignment with probability `window_probability`: the right view moves so a
-     fraction U[0, 0.7] of the disparity range becomes negative (every disparity d - s);
-  3. one encoding of `mixtures`, drawn uniformly, then `degrade.degrade` (noise, blur,
-     JPEG, vignetting, channel imbalance) and 8-bit quantisation;
-  4. `baselines.unmix_classical` on it with the range estimated from the image, as at
-     inference.
+  2. one encoding of `mixtures`, drawn uniformly;
+  3. for anaglyphs, window alignment with probability `window_probability`: the right view
+     moves so a fraction U[0, 0.7] of the disparity range becomes negative (every
+     disparity d - s); a double image's views stay ordered by positive disparity;
+  4. the mixture, `degrade.degrade` (noise, blur, JPEG, vignetting, channel imbalance)
+     and 8-bit quantisation;
+  5. `baselines.unmix_classical` on it with the range estimated from the image, as at
+     inference (`matcher.estimate_range` inside the anaglyph method,
+     `diplopia.estimate_range` for a double image).
 Seeds: example i draws everything from seed i (scenes: the `sample` training seeds; the
 held-out scenes use other textures and seeds 2^31 + i). Shards `shard_<k>.npz` of
 `shard_size` examples each are written atomically, so an interrupted build resumes.
@@ -26,6 +29,7 @@ import tensorflow as tf
 from mixstereo_tf import baselines
 from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
+from mixstereo_tf.baselines import diplopia
 from mixstereo_tf.data import degrade
 from mixstereo_tf.data import synthetic
 
@@ -83,20 +87,21 @@ def make_example(index: int, config: ExampleConfig,
   scene_config = synthetic.SceneConfig(config.max_disparity, config.height,
                                        config.width + config.max_disparity, realistic=True)
   scene = synthetic.render_scene(index, scene_config, textures)
+  names = mixtures.parse_names(config.mixtures)
+  name = names[rng.integers(len(names))]
   shift = 0
-  if rng.uniform() < config.window_probability:
+  if rng.uniform() < config.window_probability and mixtures.get_mixture(name).is_anaglyph:
     low, high = np.percentile(scene['disparity_left'], [1.0, 99.0])
     shift = int(round(low + rng.uniform(0.0, 0.7) * (high - low)))
   pair = _window_aligned(scene, shift, config.width)
-  names = mixtures.parse_names(config.mixtures)
-  name = names[rng.integers(len(names))]
   mixed = mixtures.mix(name, image_range.u8_to_signed(pair['left']),
                        image_range.u8_to_signed(pair['right']))
   mixed = image_range.signed_to_unit(mixed)
   if config.degrade:
     mixed = degrade.degrade(mixed, tf.constant([index, 7], tf.int32))
   mixture = image_range.unit_to_u8(np.asarray(mixed))
-  classical = baselines.unmix_classical(mixture, name)
+  search = diplopia.estimate_range(mixture) if name == 'diplopia' else None
+  classical = baselines.unmix_classical(mixture, name, search)
   return {'name': name, 'mixture': mixture,
           'classical_left': classical['left'], 'classical_right': classical['right'],
           'classical_disparity_left': classical['disparity_left'].astype(np.float32),

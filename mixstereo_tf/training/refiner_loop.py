@@ -2,8 +2,13 @@
 (`data/refiner_data.py`), supervised by the synthetic scenes' ground truth.
 
 Loss (not in the paper; the paper's losses need no ground truth, these scenes have it):
-  mean |d_L - d_L*| + mean |d_R - d_R*|  (pixels, every pixel: the scenes' disparities are
-  defined everywhere)  +  view_weight * mean |views - views*| (RGB on [0, 1]).
+  mean min(|d_L - d_L*|, c) + mean min(|d_R - d_R*|, c)  (pixels, every pixel: the scenes'
+  disparities are defined everywhere; c = disparity_clip)
+  + view_weight * mean |views - views*| (RGB on [0, 1]).
+The clip: a fifth of the classical disparities on the training examples are off by more
+than 8 px and carry 80 % of the plain L1; no local correction can reach them, and the
+plain L1 traded accurate pixels for them (held-out bad-1 up from 28.7 % to 34.2 % after
+500 steps). Clipped, the loss counts only errors a correction can fix, as bad-1 does.
 Batches: `batch_size` random crops of random examples, each flipped upside down with
 probability 1/2 (a vertical flip keeps the epipolar geometry). Every draw of step s comes
 from the seed (seed, s), so a resumed run sees the batches an uninterrupted one would.
@@ -41,6 +46,7 @@ class RefinerTrainConfig:
       network; docs/DESIGN.md).
     num_steps: optimizer steps to reach (a resumed run continues to this total).
     view_weight: weight of the view L1 against the disparity L1 (pixels).
+    disparity_clip: per-pixel disparity errors count up to this many pixels.
     checkpoint_every, log_every: steps between checkpoints / log lines.
     seed: seed of the initialisation and of every batch draw.
   """
@@ -53,6 +59,7 @@ class RefinerTrainConfig:
   learning_rate: float = 1e-3
   num_steps: int = 6000
   view_weight: float = 10.0
+  disparity_clip: float = 4.0
   checkpoint_every: int = 500
   log_every: int = 100
   seed: int = 0
@@ -65,13 +72,13 @@ class RefinerTrainConfig:
       if getattr(self, field) <= 0:
         raise ValueError(f'RefinerTrainConfig.{field} must be positive, got '
                          f'{getattr(self, field)}.')
-    if not self.learning_rate > 0 or self.view_weight < 0:
-      raise ValueError('RefinerTrainConfig.learning_rate must be positive and view_weight '
-                       'non-negative.')
+    if not self.learning_rate > 0 or self.view_weight < 0 or not self.disparity_clip > 0:
+      raise ValueError('RefinerTrainConfig.learning_rate and disparity_clip must be positive '
+                       'and view_weight non-negative.')
 
 
 def refiner_loss(outputs: Mapping[str, tf.Tensor], batch: Mapping[str, tf.Tensor],
-                 view_weight: float) -> Dict[str, tf.Tensor]:
+                 view_weight: float, disparity_clip: float) -> Dict[str, tf.Tensor]:
   """The module docstring's loss.
 
   Args:
@@ -79,11 +86,12 @@ def refiner_loss(outputs: Mapping[str, tf.Tensor], batch: Mapping[str, tf.Tensor
       'disparity_left', 'disparity_right' [B, H, W, 1] signed pixels).
     batch: the true values under the same keys and units.
     view_weight: weight of the view term.
+    disparity_clip: the largest error a disparity pixel counts, pixels.
 
   Returns:
-    'disparity' (pixels), 'views' (on [0, 1]) and 'loss'.
+    'disparity' (clipped, pixels), 'views' (on [0, 1]) and 'loss'.
   """
-  disparity = sum(tf.reduce_mean(tf.abs(outputs[k] - batch[k]))
+  disparity = sum(tf.reduce_mean(tf.minimum(tf.abs(outputs[k] - batch[k]), disparity_clip))
                   for k in ('disparity_left', 'disparity_right'))
   # Views are on [-1, 1]: half their L1 is the L1 on [0, 1].
   views = sum(tf.reduce_mean(tf.abs(outputs[k] - batch[k])) for k in ('left', 'right')) / 4.0
@@ -140,7 +148,8 @@ def train(config: RefinerTrainConfig, examples: refiner_data.ExampleConfig,
   @tf.function(reduce_retracing=True)
   def train_step(batch):
     with tf.GradientTape() as tape:
-      losses = refiner_loss(model(batch['inputs'], training=True), batch, config.view_weight)
+      losses = refiner_loss(model(batch['inputs'], training=True), batch, config.view_weight,
+                            config.disparity_clip)
     grads = tape.gradient(losses['loss'], model.trainable_variables)
     optimizer.apply_gradients(zip(grads, model.trainable_variables))
     return losses
