@@ -5,8 +5,8 @@ import os
 import numpy as np
 import pytest
 
-from mixstereo_tf import baselines
 from mixstereo_tf import mixtures
+from mixstereo_tf.baselines import anaglyph
 from mixstereo_tf.data import refiner_data
 from mixstereo_tf.data import synthetic
 
@@ -37,7 +37,8 @@ def test_window_aligned_example_matches_its_ground_truth(textures):
   expected = mixtures.mix(example['name'], example['left'] / 127.5 - 1,
                           example['right'] / 127.5 - 1).numpy()
   assert np.abs((expected + 1) * 127.5 - example['mixture']).max() <= 1
-  again = baselines.unmix_classical(example['mixture'], example['name'])
+  again = anaglyph.unmix_anaglyph(example['mixture'], example['name'], None,
+                                  refiner_data.ONE_STRIP)
   np.testing.assert_array_equal(again['disparity_left'], example['classical_disparity_left'])
 
 

@@ -29,10 +29,15 @@ import tensorflow as tf
 from mixstereo_tf import baselines
 from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
+from mixstereo_tf.baselines import anaglyph
 from mixstereo_tf.baselines import diplopia
+from mixstereo_tf.baselines import matcher
 from mixstereo_tf.data import degrade
 from mixstereo_tf.data import synthetic
 
+# One SGM strip: the matcher's strips otherwise follow the core count, and so would the
+# examples (the aggregation differs near strip borders).
+ONE_STRIP = anaglyph.AnaglyphConfig(matching=matcher.MatcherConfig(strips=1))
 KEYS = ('mixture', 'classical_left', 'classical_right', 'classical_disparity_left',
         'classical_disparity_right', 'left', 'right', 'disparity_left', 'disparity_right')
 
@@ -87,12 +92,14 @@ def make_example(index: int, config: ExampleConfig,
   scene_config = synthetic.SceneConfig(config.max_disparity, config.height,
                                        config.width + config.max_disparity, realistic=True)
   scene = synthetic.render_scene(index, scene_config, textures)
+  window = rng.uniform() < config.window_probability
+  fraction = rng.uniform(0.0, 0.7) if window else 0.0
   names = mixtures.parse_names(config.mixtures)
   name = names[rng.integers(len(names))]
   shift = 0
-  if rng.uniform() < config.window_probability and mixtures.get_mixture(name).is_anaglyph:
+  if window and mixtures.get_mixture(name).is_anaglyph:
     low, high = np.percentile(scene['disparity_left'], [1.0, 99.0])
-    shift = int(round(low + rng.uniform(0.0, 0.7) * (high - low)))
+    shift = int(round(low + fraction * (high - low)))
   pair = _window_aligned(scene, shift, config.width)
   mixed = mixtures.mix(name, image_range.u8_to_signed(pair['left']),
                        image_range.u8_to_signed(pair['right']))
@@ -100,8 +107,10 @@ def make_example(index: int, config: ExampleConfig,
   if config.degrade:
     mixed = degrade.degrade(mixed, tf.constant([index, 7], tf.int32))
   mixture = image_range.unit_to_u8(np.asarray(mixed))
-  search = diplopia.estimate_range(mixture) if name == 'diplopia' else None
-  classical = baselines.unmix_classical(mixture, name, search)
+  if name == 'diplopia':
+    classical = baselines.unmix_classical(mixture, name, diplopia.estimate_range(mixture))
+  else:
+    classical = anaglyph.unmix_anaglyph(mixture, name, None, ONE_STRIP)
   return {'name': name, 'mixture': mixture,
           'classical_left': classical['left'], 'classical_right': classical['right'],
           'classical_disparity_left': classical['disparity_left'].astype(np.float32),
