@@ -7,7 +7,9 @@ The clip: two procedural scenes of `data/synthetic.py` (held-out textures), each
 camera panning right (2 px per frame over scene A, 1 px over scene B, integer shifts so the
 ground truth moves exactly), with a cut between them; each frame is a red-cyan anaglyph with
 Gaussian noise (sigma 2 levels, new every frame, as a camera's). Every variant unmixes the
-frames in order with the classical method and `--mixture=auto`:
+frames in order with `--mixture=auto`, by the classical method and by the shipped model
+(`mixstereo_tf/pretrained`, the refiner on the classical result, so the prior reaches it
+through its classical stage; per frame and per shot + prior only):
   * per frame: today's behaviour (encoding, range and disparity of each frame alone);
   * per shot: encoding and range once per shot (`temporal.VideoState`), no prior;
   * per shot + prior: also the previous frame's disparity as the matcher's prior, with
@@ -51,6 +53,7 @@ VARIANTS = (
      temporal.TemporalConfig(prior_radius=4, prior_spread=4)),
 )
 TIMED = (0, 2)  # The variants timed at SIZES: per frame and the default.
+METHODS = ('classical', 'model')  # The model runs the TIMED variants only.
 SIZES = ((1280, 720), (1920, 1080))
 
 
@@ -127,24 +130,28 @@ def main(argv):
   start = time.perf_counter()
   clip = make_clip(FLAGS.frames_per_shot)
   frames = [c[0] for c in clip]
-  unmixer = inference.build_unmixer(inference.PredictorConfig('classical', mixture='auto'))
   planted = FLAGS.frames_per_shot
-  unmix_clip(unmixer, frames[:2], temporal.TemporalConfig())  # Compiles the kernels.
   rows = []
-  for timed, (name, config) in enumerate(VARIANTS):
-    outputs, state = unmix_clip(unmixer, frames, config)
-    detected = sorted({o['info']['mixture'] for o in outputs})
-    row = [name, *flicker(clip, outputs), *accuracy(clip, outputs)]
-    for size in SIZES:
-      row.append(speed(unmixer, frames[:FLAGS.speed_frames], config, size)
-                 if timed in TIMED else float('nan'))
-    rows.append(row)
-    print(name, row[1:], 'encodings', detected, 'shot starts', state.shot_starts, flush=True)
+  for method in METHODS:
+    unmixer = inference.build_unmixer(inference.PredictorConfig(method, mixture='auto'))
+    unmix_clip(unmixer, frames[:2], temporal.TemporalConfig())  # Compiles the kernels.
+    for timed, (name, config) in enumerate(VARIANTS):
+      if method == 'model' and timed not in TIMED:
+        continue
+      outputs, state = unmix_clip(unmixer, frames, config)
+      detected = sorted({o['info']['mixture'] for o in outputs})
+      row = [f'{method}: {name}', *flicker(clip, outputs), *accuracy(clip, outputs)]
+      for size in SIZES:
+        row.append(speed(unmixer, frames[:FLAGS.speed_frames], config, size)
+                   if timed in TIMED else float('nan'))
+      rows.append(row)
+      print(row, 'encodings', detected, 'shot starts', state.shot_starts, flush=True)
   cuts = temporal.find_cuts(frames)
   lines = [
       '# Temporal consistency (synthetic anaglyph clip)', '',
       f'`PYTHONPATH=. python experiments/temporal.py --frames_per_shot={FLAGS.frames_per_shot}'
-      f' --speed_frames={FLAGS.speed_frames}`; classical method, `--mixture=auto`. Two '
+      f' --speed_frames={FLAGS.speed_frames}`; classical method and shipped model, '
+      '`--mixture=auto`. Two '
       f'procedural scenes (held-out textures), {WIDTH}x{HEIGHT}, disparities up to '
       f'{synthetic.SceneConfig(MAX_DISPARITY).near_limit:.1f} px, '
       f'{FLAGS.frames_per_shot} frames each (camera '

@@ -23,7 +23,7 @@ for path in sys.argv[1:]:
                'model': model.to_dict(), 'loss': dataclasses.asdict(loss),
                'num_steps': flags.FLAGS.num_steps, 'num_epochs': flags.FLAGS.num_epochs,
                'mode': flags.FLAGS.mode, 'init_checkpoint': flags.FLAGS.init_checkpoint,
-               'optimizer': flags.FLAGS.optimizer}
+               'optimizer': flags.FLAGS.optimizer, 'architecture': flags.FLAGS.architecture}
 print(json.dumps(out))
 '''
 
@@ -45,7 +45,7 @@ def test_every_flagfile_builds_valid_configs():
           'middlebury_anaglyph_finetune.flags'} <= set(parsed)
   for name, run in parsed.items():
     assert (run['num_steps'] is None) != (run['num_epochs'] is None), name
-    if name == 'demo.flags':
+    if name == 'demo.flags' or run['architecture'] == 'refiner':
       continue
     # Paper configuration: 96 levels, batch 1, the paper's loss weights, full widths.
     assert run['model']['max_disparity'] == 96, name
@@ -58,6 +58,11 @@ def test_every_flagfile_builds_valid_configs():
   assert parsed['kitti_anaglyph.flags']['pipeline']['crop_width'] == 512
   assert parsed['middlebury_anaglyph_finetune.flags']['pipeline']['crop_height'] == 384
   assert parsed['eigen_monocular.flags']['pipeline']['mixture'] == 'monocular'
+  # The shipped models' recipes: the hybrid refiner (not the paper's network).
+  for name, mixture in (('pretrained_anaglyph.flags', 'anaglyphs'),
+                        ('pretrained_diplopia.flags', 'diplopia')):
+    assert parsed[name]['architecture'] == 'refiner'
+    assert parsed[name]['pipeline']['mixture'] == mixture
   assert parsed['eigen_monocular.flags']['num_epochs'] == 10
   assert parsed['kitti_anaglyph_separation_only.flags']['mode'] == 'separation_only'
 

@@ -1,5 +1,6 @@
 """Tests for the unmix binary (mixstereo_tf.unmix)."""
 
+import json
 import os
 import subprocess
 import sys
@@ -86,3 +87,28 @@ def test_bad_input_is_named(tmp_path):
                  f'--input={tmp_path}/gray.png'], tmp_path)
   assert result.returncode != 0
   assert '--disparity_range: disparity range needs MIN < MAX' in result.stderr
+
+
+def test_unmix_with_no_model_flag_uses_the_shipped_model(tmp_path):
+  """`mixstereo-unmix --input --output_dir` alone: the shipped anaglyph model, detected
+  encoding; `--pretrained=list` names the shipped models and their recipes."""
+  left = np.random.RandomState(3).randint(0, 256, (96, 128, 3)).astype(np.uint8)
+  left = (left // 64 * 64).repeat(2, axis=0)[:96]  # Blocky texture: matchable.
+  right = np.roll(left, -4, axis=1)
+  gray = lambda view: (view @ np.array([0.299, 0.587, 0.114])).round().astype(np.uint8)
+  image = np.stack([gray(left), gray(right), gray(right)], -1)  # A gray anaglyph.
+  media.write_image(str(tmp_path / 'photo.png'), image)
+  env = dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2')
+  run = lambda *args: subprocess.run([sys.executable, '-m', 'mixstereo_tf.unmix', *args],
+                                     capture_output=True, text=True, env=env,
+                                     cwd=str(tmp_path), timeout=300, check=False)
+  result = run('--input=photo.png', '--output_dir=out')
+  assert result.returncode == 0, result.stderr[-3000:]
+  info = json.loads((tmp_path / 'out' / 'photo_info.json').read_text())
+  assert info['method'] == 'model' and info['mixture'] == 'gray'
+  disparity = np.load(tmp_path / 'out' / 'photo_disparity.npy')
+  assert np.median(disparity) == pytest.approx(4, abs=0.5)
+  listing = run('--pretrained=list')
+  assert listing.returncode == 0
+  assert 'anaglyph: refiner model for anaglyph' in listing.stdout
+  assert 'diplopia' in listing.stdout and 'recipe: python -m mixstereo_tf.train' in listing.stdout
