@@ -265,10 +265,15 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
     return model_unmixer(graph, run_info, config)
   trained = entry.mixtures
   requested = _check_mixture(config, trained)
-  network = tf.function(lambda x: model(x, training=False),
-                        input_signature=[tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)])
-  solve = lambda image, name, search, hint: unmix_image.refiner_unmix(
-      network, model.size_multiple, image, name, search, hint)
+  signature = [tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)]
+  network = tf.function(lambda x: model(x, training=False), input_signature=signature)
+
+  def solve(image, name, search, hint):
+    outputs = unmix_image.refiner_unmix(network, model.size_multiple, image, name, search,
+                                        hint)
+    outputs['info'] = {'pretrained': entry.name}
+    return outputs
+
   fn = lambda image, hint=None: unmix_image.run(as_rgb(image), requested, trained,
                                                 config.disparity_range, _classical_range,
                                                 'model', solve, hint)
