@@ -32,8 +32,8 @@ FLAGS = flags.FLAGS
 
 cli_flags.define_predictor()
 cli_flags.define_data()
-flags.DEFINE_enum('protocol', None, protocols.names(), 'Benchmark to evaluate on.',
-                  required=True)
+flags.DEFINE_enum('protocol', None, protocols.names(), 'Benchmark to evaluate on.')
+cli_flags.require_unless_listing('protocol')
 flags.DEFINE_enum('encoding', None, mixtures.MIXTURE_NAMES,
                   'The mixture the pairs are mixed with (default: --mixture, or with '
                   "--mixture=auto the model's); the predictor sees only the mixed image.")

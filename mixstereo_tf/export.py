@@ -30,8 +30,8 @@ FLAGS = flags.FLAGS
 cli_flags.define_checkpoint()
 cli_flags.define_mixture()
 cli_flags.define_pretrained()
-flags.DEFINE_string('export_dir', None, 'Where to write the SavedModel (must be new).',
-                    required=True)
+flags.DEFINE_string('export_dir', None, 'Where to write the SavedModel (must be new).')
+cli_flags.require_unless_listing('export_dir')
 flags.DEFINE_boolean('as_pretrained', False, 'Write --checkpoint in the pretrained format '
                      '(mixstereo_tf/pretrained/NAME: float16 weights and info.json) instead '
                      'of a SavedModel.')

@@ -256,7 +256,8 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
 def pretrained_unmixer(entry: pretrained.Pretrained,
                        config: PredictorConfig = PredictorConfig()) -> Unmixer:
   """The 'model' Unmixer of a shipped model (`pretrained`): a joint network runs like a
-  trained run; a refiner runs on the classical method's result (`unmix_image`)."""
+  trained run; a refiner runs on the classical method's result (`unmix_image`), on the
+  encoding detected in each image when no mixture is given and it knows several."""
   model = pretrained.load_model(entry)
   if entry.kind == 'joint':
     run_info = runs.RunInfo(entry.mixture, entry.crop[0], entry.crop[1], model.model_config)
@@ -264,6 +265,8 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
                         input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)])
     return model_unmixer(graph, run_info, config)
   trained = entry.mixtures
+  if config.mixture is None and len(trained) > 1:  # Several encodings: detect each image's.
+    config = dataclasses.replace(config, mixture=unmix_image.AUTO)
   requested = _check_mixture(config, trained)
   signature = [tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)]
   network = tf.function(lambda x: model(x, training=False), input_signature=signature)

@@ -32,8 +32,9 @@ from mixstereo_tf.cli import flags as cli_flags
 FLAGS = flags.FLAGS
 
 cli_flags.define_predictor()
-flags.DEFINE_string('input', None, 'Image, folder, glob pattern or video.', required=True)
+flags.DEFINE_string('input', None, 'Image, folder, glob pattern or video.')
 cli_flags.define_output_dir()
+cli_flags.require_unless_listing('input', 'output_dir')
 flags.DEFINE_enum('layout', 'separate', media.LAYOUTS,
                   'Views as two files (separate), side by side (sbs), side by side at '
                   'half width (sbs_half) or top-bottom (tb).')

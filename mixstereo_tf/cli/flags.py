@@ -60,9 +60,8 @@ def define_max_disparity() -> None:
 
 @functools.lru_cache(maxsize=None)
 def define_output_dir() -> None:
-  """--output_dir (required by every tool that declares it)."""
+  """--output_dir (each tool says whether it is required)."""
   flags.DEFINE_string('output_dir', None, 'Where to write the results.')
-  flags.mark_flag_as_required('output_dir')
 
 
 @functools.lru_cache(maxsize=None)
@@ -112,6 +111,17 @@ def define_pretrained() -> None:
   flags.DEFINE_string('pretrained', None, "A model shipped with the package (--method=model "
                       "without --checkpoint / --saved_model; default: the first that unmixes "
                       "the mixture), a folder in its format, or 'list' to list them.")
+
+
+def require_unless_listing(*names: str) -> None:
+  """Makes flags required, except with --pretrained=list (which only lists the models)."""
+  define_pretrained()
+  for name in names:
+    flags.register_multi_flags_validator(
+        [name, 'pretrained'],
+        lambda values, name=name: (values[name] is not None or
+                                   values['pretrained'] == pretrained.LIST),
+        message=f'Flag --{name} must have a value other than None.')
 
 
 def exit_if_listing() -> None:

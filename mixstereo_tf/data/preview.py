@@ -19,6 +19,7 @@ from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.data import sample
 
 cli_flags.define_output_dir()
+flags.mark_flag_as_required('output_dir')
 cli_flags.define_mixture()
 cli_flags.define_max_disparity()
 FLAGS = flags.FLAGS
