@@ -16,7 +16,7 @@ import tensorflow as tf
 
 from experiments import bench_data
 from mixstereo_tf import baselines
-from mixstereo_tf import inference
+from mixstereo_tf import graphs
 from mixstereo_tf import mixtures
 from mixstereo_tf import models
 from mixstereo_tf import image_range
@@ -253,7 +253,7 @@ def export(export_dir: str) -> dict:
   model = models.build_model(model_config)
   run_info = runs.RunInfo('anaglyph', 256, 512, model_config)
   start = time.perf_counter()
-  serving.export_saved_model(inference.serving_function(model), model.variables, run_info,
+  serving.export_saved_model(graphs.serving_function(model), model.variables, run_info,
                              export_dir)
   return {'seconds': time.perf_counter() - start}
 

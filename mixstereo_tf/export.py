@@ -19,7 +19,7 @@ from absl import app  # pylint: disable=g-bad-import-order
 from absl import flags
 from absl import logging
 
-from mixstereo_tf import inference
+from mixstereo_tf import graphs
 from mixstereo_tf import pretrained
 from mixstereo_tf import runs
 from mixstereo_tf import serving
@@ -66,7 +66,7 @@ def main(argv):
       logging.info('Wrote the %s %s model to %s.', entry.kind, entry.mixture, entry.folder)
       return
     model, run_info = _model_and_info()
-    serving.export_saved_model(inference.serving_function(model), model.variables, run_info,
+    serving.export_saved_model(graphs.serving_function(model), model.variables, run_info,
                                FLAGS.export_dir)
   except ValueError as e:
     raise cli_flags.usage_error(e) from None

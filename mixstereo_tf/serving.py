@@ -6,7 +6,7 @@ The exported SavedModel loads with plain `tf.saved_model.load` (no mixstereo_tf 
     `disparity` float32 [H, W] (left-referenced, pixels, positive: left pixel x matches
     right pixel x - d), `disparity_right` float32 [H, W] (right pixel x matches left x + d).
     Padding to the network's multiple (edge replication, bottom / right) and cropping back
-    happen inside the graph (`inference.serving_function` builds it).
+    happen inside the graph (`graphs.serving_function` builds it).
   * signature `metadata`: no inputs -> `mixture` (string), `crop_height`, `crop_width`,
     `max_disparity`, `size_multiple` (int32) and `model_config` (JSON string).
   * the same values as attributes of the loaded object (`loaded.mixture` etc., variables)
@@ -64,7 +64,7 @@ def export_saved_model(unmix: UnmixGraph, variables: Sequence[tf.Variable],
   """Writes the SavedModel described in the module docstring to `export_dir`.
 
   Args:
-    unmix: the uint8 graph function (`inference.serving_function(model)`).
+    unmix: the uint8 graph function (`graphs.serving_function(model)`).
     variables: the model's variables `unmix` reads (saved with the graph).
     run_info: the run's mixture, training crop and architecture.
     export_dir: output directory (created; must not already hold a SavedModel).

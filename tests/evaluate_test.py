@@ -11,6 +11,7 @@ import pytest
 import tensorflow as tf
 
 from mixstereo_tf import disparity_range
+from mixstereo_tf import graphs
 from mixstereo_tf import inference
 from mixstereo_tf import models
 from mixstereo_tf import runs
@@ -209,7 +210,7 @@ def test_cli_sample_protocol_on_a_checkpoint(run_dir, tmp_path):
 
 def test_cli_sample_protocol_on_a_saved_model(run_dir, tmp_path):
   model, info = runs.load_run(run_dir)
-  export_dir = serving.export_saved_model(inference.serving_function(model), model.variables,
+  export_dir = serving.export_saved_model(graphs.serving_function(model), model.variables,
                                           info, str(tmp_path / 'export'))
   csv_path = tmp_path / 'rows.csv'
   done = _cli('--protocol=sample', f'--saved_model={export_dir}', '--heldout_scenes=1',

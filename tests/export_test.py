@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from mixstereo_tf import disparity_range
+from mixstereo_tf import graphs
 from mixstereo_tf import inference
 from mixstereo_tf import models
 from mixstereo_tf import runs
@@ -117,7 +118,7 @@ def test_saved_model_unmixer_reads_the_metadata(exported):
 def test_export_errors(exported, tmp_path):
   model, info, export_dir, _ = exported
   with pytest.raises(ValueError, match='already holds'):
-    serving.export_saved_model(inference.serving_function(model), model.variables, info,
+    serving.export_saved_model(graphs.serving_function(model), model.variables, info,
                                export_dir)
   with pytest.raises(ValueError, match='No SavedModel'):
     serving.load_saved_model(str(tmp_path))

@@ -7,6 +7,7 @@ import pytest
 import tensorflow as tf
 
 from mixstereo_tf import disparity_range
+from mixstereo_tf import graphs
 from mixstereo_tf import inference
 from mixstereo_tf import models
 from mixstereo_tf import runs
@@ -40,14 +41,14 @@ def run(tmp_path_factory):
 
 def test_pad_to_multiple_replicates_edges_and_crop_inverts():
   image = np.arange(2 * 3 * 1).reshape(2, 3, 1)
-  padded = inference.pad_to_multiple(image, 4).numpy()
+  padded = graphs.pad_to_multiple(image, 4).numpy()
   expected = np.array([[0, 1, 2, 2], [3, 4, 5, 5], [3, 4, 5, 5], [3, 4, 5, 5]])
   np.testing.assert_array_equal(padded[..., 0], expected)
-  np.testing.assert_array_equal(inference.crop_to(padded, 2, 3), image)
-  batched = inference.pad_to_multiple(np.zeros((2, 32, 33, 3), np.uint8), 32)
+  np.testing.assert_array_equal(graphs.crop_to(padded, 2, 3), image)
+  batched = graphs.pad_to_multiple(np.zeros((2, 32, 33, 3), np.uint8), 32)
   assert batched.shape == (2, 32, 64, 3) and batched.dtype == tf.uint8
   with pytest.raises(ValueError):
-    inference.pad_to_multiple(image, 0)
+    graphs.pad_to_multiple(image, 0)
 
 
 def test_unmixer_odd_size_equals_padded_model_output(run):
@@ -140,7 +141,7 @@ def test_pair_function_pads_runs_the_stereo_module_and_crops():
                               stereo_residual_blocks=1, stereo_3d_widths=(4,),
                               max_disparity=8)
   model = models.build_model(config)
-  predict = inference.pair_function(model)
+  predict = graphs.pair_function(model)
   rng = np.random.RandomState(1)
   left, right = (rng.randint(0, 256, (32, 64, 3)).astype(np.uint8) for _ in range(2))
   out = predict(left, right)

@@ -11,6 +11,7 @@ import pytest
 import tensorflow as tf
 
 from mixstereo_tf import colormap
+from mixstereo_tf import graphs
 from mixstereo_tf import image_range
 from mixstereo_tf import inference
 from mixstereo_tf import media
@@ -33,7 +34,7 @@ def model():
 
 @pytest.fixture(scope='module')
 def setup(model):
-  graph = tf.function(inference.serving_function(model))
+  graph = tf.function(graphs.serving_function(model))
   return inference.model_unmixer(graph, INFO, inference.PredictorConfig(
       mixture='anaglyph', disparity_range=(0, 7)))
 

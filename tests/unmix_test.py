@@ -12,7 +12,7 @@ import skimage.data
 import tensorflow as tf
 
 from mixstereo_tf import colormap
-from mixstereo_tf import inference
+from mixstereo_tf import graphs
 from mixstereo_tf import media
 from mixstereo_tf import mixtures
 from mixstereo_tf import models
@@ -39,7 +39,7 @@ def _image(path, shape, seed=0):
 
 def test_unmix_binary_on_a_saved_model(model, tmp_path):
   export_dir = str(tmp_path / 'export')
-  serving.export_saved_model(inference.serving_function(model), model.variables, INFO,
+  serving.export_saved_model(graphs.serving_function(model), model.variables, INFO,
                              export_dir)
   folder = tmp_path / 'in'
   folder.mkdir()
