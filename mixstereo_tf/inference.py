@@ -169,11 +169,18 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
     return unmix_image.model_unmix(graph, image, name, search, levels,
                                    config.max_network_pixels, bool(restore))
 
-  fn = lambda image, hint=None: unmix_image.run(as_rgb(image), requested, trained,
-                                                config.disparity_range,
-                                                lambda _: (0, levels - 1), 'model', solve,
-                                                hint)
-  return Unmixer(fn, 'model', requested, levels, bool(restore))
+  return _image_unmixer('model', requested, trained, config, lambda _: (0, levels - 1),
+                        solve, levels, bool(restore))
+
+
+def _image_unmixer(method: str, requested: str, allowed: Sequence[str],
+                   config: PredictorConfig, default_range: Callable[[str], Tuple[int, int]],
+                   solve: Callable[..., Outputs], display: float, restore: bool) -> Unmixer:
+  """An Unmixer of mixture images: `unmix_image.run`'s steps around `solve`."""
+  fn = lambda image, hint=None: unmix_image.run(as_rgb(image), requested, allowed,
+                                                config.disparity_range, default_range,
+                                                method, solve, hint)
+  return Unmixer(fn, method, requested, display, restore)
 
 
 def pretrained_unmixer(entry: pretrained.Pretrained,
@@ -200,12 +207,14 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
     outputs['info'] = {'pretrained': entry.name}
     return outputs
 
-  fn = lambda image, hint=None: unmix_image.run(as_rgb(image), requested, trained,
-                                                config.disparity_range, _classical_range,
-                                                'model', solve, hint)
-  display = baselines.max_disparity(trained[0] if trained[0] in baselines.SUPPORTED_MIXTURES
-                                    else 'anaglyph')
-  return Unmixer(fn, 'model', requested, display, restore_colour=True)
+  return _image_unmixer('model', requested, trained, config, _classical_range, solve,
+                        _classical_display(trained[0]), True)
+
+
+def _classical_display(mixture: str) -> int:
+  """The classical method's display range for a mixture name or 'auto'."""
+  return baselines.max_disparity(mixture if mixture in baselines.SUPPORTED_MIXTURES
+                                 else 'anaglyph')
 
 
 def _classical_range(mixture: str) -> Tuple[int, int]:
@@ -228,14 +237,10 @@ def _classical(config: PredictorConfig) -> Unmixer:
     raise ValueError(f"PredictorConfig.method='classical' does not support "
                      f'PredictorConfig.mixture={config.mixture}; supported: '
                      f'{", ".join(supported)}.')
-  fn = lambda image, hint=None: unmix_image.run(as_rgb(image), config.mixture, supported,
-                                                config.disparity_range, _classical_range,
-                                                'classical', unmix_image.classical_unmix,
-                                                hint)
-  display = baselines.max_disparity(config.mixture if config.mixture in supported
-                                    else 'anaglyph')
-  return Unmixer(fn, 'classical', config.mixture, display, restore_colour=(
-      config.mixture == unmix_image.AUTO or mixtures.get_mixture(config.mixture).is_anaglyph))
+  return _image_unmixer(
+      'classical', config.mixture, supported, config, _classical_range,
+      unmix_image.classical_unmix, _classical_display(config.mixture),
+      config.mixture == unmix_image.AUTO or mixtures.get_mixture(config.mixture).is_anaglyph)
 
 
 @_register('oracle')

@@ -152,8 +152,11 @@ def load_shards(folder: str, count: int) -> Dict[str, np.ndarray]:
   if missing:
     raise ValueError(f'Missing refiner example shards: {missing[:3]} ({len(missing)} of '
                      f'{count}); build them first (`build_shard`).')
-  loaded = [np.load(p) for p in paths]
-  return {key: np.concatenate([l[key] for l in loaded]) for key in KEYS + ('name',)}
+  parts = []
+  for path in paths:
+    with np.load(path) as shard:
+      parts.append({key: shard[key] for key in KEYS + ('name',)})
+  return {key: np.concatenate([p[key] for p in parts]) for key in KEYS + ('name',)}
 
 
 def network_input(mixture, left, right, d_left, d_right) -> np.ndarray:
