@@ -208,7 +208,8 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
     return outputs
 
   return _image_unmixer('model', requested, trained, config, _classical_range, solve,
-                        _classical_display(trained[0]), True)
+                        _classical_display(trained[0]),
+                        any(mixtures.get_mixture(m).is_anaglyph for m in trained))
 
 
 def _classical_display(mixture: str) -> int:

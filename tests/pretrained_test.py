@@ -77,7 +77,8 @@ def test_untrained_refiner_unmixes_like_the_classical_method(tmp_path):
   ours, theirs = model(image), classical(image)
   np.testing.assert_allclose(ours['disparity_left'], theirs['disparity_left'], atol=1e-4)
   np.testing.assert_allclose(ours['disparity_right'], theirs['disparity_right'], atol=1e-4)
-  assert ours['info']['method'] == 'model'
+  assert ours['info']['method'] == 'model' and model.restore_colour
+  assert not inference.build_unmixer(inference.PredictorConfig(mixture='diplopia')).restore_colour
   with pytest.raises(ValueError, match='trained on'):
     inference.build_unmixer(inference.PredictorConfig(pretrained=entry.folder,
                                                       mixture='diplopia'))
