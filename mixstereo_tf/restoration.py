@@ -23,13 +23,16 @@ left pixel x matches the right pixel x - d_L, the right pixel x matches the left
 NumPy and OpenCV only: this runs on every video frame.
 """
 
+import concurrent.futures
 import dataclasses
+import os
 from typing import Dict, Optional, Tuple
 
 import cv2
 import numba
 import numpy as np
 
+from mixstereo_tf import colour_transfer
 from mixstereo_tf import mixtures
 
 
@@ -45,6 +48,7 @@ class RestoreConfig:
     relaxation: over-relaxation factor of each alternation (1 = plain Gauss-Seidel).
     lr_threshold: largest accepted |d_L(x) - d_R(x - d_L(x))|, pixels.
     transfer_radius: window radius of the colour transfer, pixels.
+    threads: threads of the solve (row blocks); 0 = every CPU this process may use.
   """
   observation_weight: float = 30.0
   match_weight: float = 1.0
@@ -53,6 +57,7 @@ class RestoreConfig:
   relaxation: float = 1.5
   lr_threshold: float = 1.0
   transfer_radius: int = 7
+  threads: int = 0
 
 
 def sample_horizontal(image: np.ndarray, offset: np.ndarray) -> np.ndarray:
@@ -81,125 +86,119 @@ def lr_consistency(d_left: np.ndarray, d_right: np.ndarray,
   return ok_left, ok_right
 
 
-def _box(image: np.ndarray, radius: int) -> np.ndarray:
-  size = 2 * radius + 1
-  return cv2.boxFilter(image, -1, (size, size), normalize=False,
-                       borderType=cv2.BORDER_CONSTANT)
+@numba.njit(error_model='numpy')
+def _linear_taps(width, x, offset):
+  """(x0, x1, f): a row of `width` pixels sampled linearly at clamp(x + offset, 0,
+  width - 1) is (1 - f) row[x0] + f row[x1] (`sample_horizontal` without OpenCV's
+  1/32-px rounding of the position)."""
+  last = width - 1
+  position = min(max(np.float32(x) + offset, np.float32(0.0)), np.float32(last))
+  x0 = min(int(position), last)
+  return x0, min(x0 + 1, last), position - np.float32(x0)
 
 
-def local_linear_transfer(guide: np.ndarray, target: np.ndarray, train: np.ndarray,
-                          radius: int = 7, eps: float = 1e-3,
-                          prior_count: float = 10.0) -> np.ndarray:
-  """Predicts `target` from `guide` with a guided-filter-style local linear model.
-
-  In every (2r + 1)^2 window, target = a . guide + b is fitted by ridge least squares on
-  the `train` pixels (He et al. 2013); every window's moments are blended with the
-  image-wide ones as if `prior_count` extra pixels had them (windows with few training
-  pixels lean on the global fit); coefficients are averaged over the windows covering a
-  pixel and applied everywhere.
-
-  Args:
-    guide: float [H, W, K], K = 1 or 2, [0, 1].
-    target: float [H, W, M]; read only where `train`.
-    train: bool [H, W].
-    radius, eps, prior_count: window radius (pixels), ridge, global-moment weight.
-
-  Returns:
-    float32 [H, W, M] in [0, 1]; with no training pixel, the guide's mean per pixel.
-  """
-  guide, target = np.asarray(guide, np.float32), np.asarray(target, np.float32)
-  k, m = guide.shape[-1], target.shape[-1]
-  if k not in (1, 2):
-    raise ValueError(f'local_linear_transfer takes 1 or 2 guide channels, got {k}.')
-  if not train.any():
-    return np.repeat(guide.mean(-1, keepdims=True), m, axis=-1)
-  weight = train.astype(np.float32)
-  count, total = _box(weight, radius), float(weight.sum())
-
-  def moment(feature):
-    weighted = feature * weight
-    image_mean = float(weighted.sum(dtype=np.float64) / total)
-    return (_box(weighted, radius) + prior_count * image_mean) / (count + prior_count)
-
-  g = [moment(guide[..., i]) for i in range(k)]
-  t = [moment(target[..., j]) for j in range(m)]
-  var = [[moment(guide[..., i] * guide[..., j]) - g[i] * g[j] + (eps if i == j else 0.0)
-          for j in range(k)] for i in range(k)]
-  cov = [[moment(guide[..., i] * target[..., j]) - g[i] * t[j] for j in range(m)]
-         for i in range(k)]
-  if k == 1:
-    coeff = [[cov[0][j] / var[0][0] for j in range(m)]]
-  else:
-    det = var[0][0] * var[1][1] - var[0][1] * var[0][1]
-    coeff = [[(var[1][1] * cov[0][j] - var[0][1] * cov[1][j]) / det for j in range(m)],
-             [(var[0][0] * cov[1][j] - var[0][1] * cov[0][j]) / det for j in range(m)]]
-  windows = _box(np.ones(weight.shape, np.float32), radius)
-  out = np.empty(target.shape[:2] + (m,), np.float32)
-  for j in range(m):
-    offset = t[j] - sum(g[i] * coeff[i][j] for i in range(k))
-    out[..., j] = _box(offset, radius) / windows + sum(
-        guide[..., i] * (_box(coeff[i][j], radius) / windows) for i in range(k))
-  return np.clip(out, 0.0, 1.0)
+@numba.njit(error_model='numpy')
+def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
+                 own_weighted, inverses, copied, match_weight, prior_weight, omega):
+  """One over-relaxed step of row y of one view, in place: the per-pixel normal equations'
+  solution of w_obs A_own^T (m - A_other v_other) + w_match [consistent] v_other(x +
+  offset) + w_prior prior; channels the mixture copies (copied[i] >= 0) set to it."""
+  residual = np.empty(3, np.float32)
+  rhs = np.empty(3, np.float32)
+  for x in range(view.shape[1]):
+    for c in range(3):
+      residual[c] = mixture[y, x, c] - (other[c, 0] * other_view[y, x, 0] +
+                                        other[c, 1] * other_view[y, x, 1] +
+                                        other[c, 2] * other_view[y, x, 2])
+    matched = consistent[y, x]
+    x0, x1, f = _linear_taps(view.shape[1], x, offset[y, x])
+    for i in range(3):
+      rhs[i] = (own_weighted[0, i] * residual[0] + own_weighted[1, i] * residual[1] +
+                own_weighted[2, i] * residual[2] + prior_weight * prior[y, x, i])
+      if matched:
+        rhs[i] += match_weight * ((np.float32(1.0) - f) * other_view[y, x0, i] +
+                                  f * other_view[y, x1, i])
+    k = 1 if matched else 0
+    for i in range(3):
+      if copied[i] >= 0:
+        view[y, x, i] = mixture[y, x, copied[i]]
+      else:
+        solved = (inverses[k, i, 0] * rhs[0] + inverses[k, i, 1] * rhs[1] +
+                  inverses[k, i, 2] * rhs[2])
+        view[y, x, i] += omega * (solved - view[y, x, i])
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
-def _solve_unclipped(mixture, other_view, warped, consistent, prior, other, own_weighted,
-                     inverses, match_weight, prior_weight, out):
-  """out = (the per-pixel normal equations' inverse) (w_obs A_own^T (I - A_other v_other)
-  + w_match [consistent] warped + w_prior prior), fused over [H, W] (unclipped encodings)."""
-  h, w = consistent.shape
-  residual = np.empty(3, np.float32)
-  rhs = np.empty(3, np.float32)
-  for y in range(h):
-    for x in range(w):
-      for c in range(3):
-        residual[c] = mixture[y, x, c] - (other[c, 0] * other_view[y, x, 0] +
-                                          other[c, 1] * other_view[y, x, 1] +
-                                          other[c, 2] * other_view[y, x, 2])
-      matched = consistent[y, x]
-      for i in range(3):
-        rhs[i] = (own_weighted[0, i] * residual[0] + own_weighted[1, i] * residual[1] +
-                  own_weighted[2, i] * residual[2] + prior_weight * prior[y, x, i])
-        if matched:
-          rhs[i] += match_weight * warped[y, x, i]
-      inverse = inverses[1] if matched else inverses[0]
-      for i in range(3):
-        out[y, x, i] = inverse[i, 0] * rhs[0] + inverse[i, 1] * rhs[1] + inverse[i, 2] * rhs[2]
+def _solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, others,
+                own_weighted, inverses, copied, match_weight, prior_weight, omega, left,
+                right):
+  """`iterations` alternations of both views over rows [y0, y1), in place (unclipped
+  encodings). Index 0 of each pair is the left view's, 1 the right's; offsets = (-d_L,
+  d_R), where each view's pixel finds the other view. Rows are independent (the warps
+  are horizontal), so row blocks run in parallel and each stays in cache."""
+  for y in range(y0, y1):
+    for _ in range(iterations):
+      _update_view(y, left, right, mixture, offsets[0], consistent[0], priors[0], others[0],
+                   own_weighted[0], inverses[0], copied[0], match_weight, prior_weight,
+                   omega)
+      _update_view(y, right, left, mixture, offsets[1], consistent[1], priors[1], others[1],
+                   own_weighted[1], inverses[1], copied[1], match_weight, prior_weight,
+                   omega)
 
 
-class _ViewSolver:
-  """The per-pixel normal equations of one view (module docstring)."""
+def _thread_count(config: RestoreConfig) -> int:
+  if config.threads:
+    return config.threads
+  if hasattr(os, 'sched_getaffinity'):  # Linux: the affinity mask, not the machine.
+    return len(os.sched_getaffinity(0))
+  return os.cpu_count() or 1
 
-  def __init__(self, own: np.ndarray, other: np.ndarray, clip: bool, config: RestoreConfig):
-    # float32 matrices: the per-pixel products stay in float32.
-    own, other = np.asarray(own, np.float32), np.asarray(other, np.float32)
-    self.own, self.other, self.clip, self.config = own, other, clip, config
+
+def _solve_fused(mixture, spec, offsets, consistent, priors, config, start):
+  """`_solve` for unclipped encodings: `_solve_rows` on row blocks, in threads (the kernel
+  releases the GIL)."""
+  matrices = (np.asarray(spec.left_matrix, np.float32),
+              np.asarray(spec.right_matrix, np.float32))
+  inverses, copied = [], []
+  for own, channels in zip(matrices, (spec.left_channels, spec.right_channels)):
     gram = config.observation_weight * own.T @ own
-    # Inverses for unmatched / matched pixels (channels never clipped).
-    pulls = [config.prior_weight + c * config.match_weight for c in (0, 1)]
-    self.inverse = np.stack([np.linalg.inv(gram + pull * np.eye(3))
-                             for pull in pulls]).astype(np.float32)
+    # Unmatched / matched pixels (channels never clipped).
+    inverses.append(np.stack([np.linalg.inv(gram + (config.prior_weight + c *
+                                                     config.match_weight) * np.eye(3))
+                              for c in (0, 1)]).astype(np.float32))
+    copied.append(np.array([channels.get(i, -1) for i in range(3)], np.int64))
+  left, right = (np.array(view, np.float32, order='C') for view in start)
+  contiguous = lambda arrays, dtype: tuple(np.ascontiguousarray(a, dtype) for a in arrays)
+  arguments = (config.iterations, np.ascontiguousarray(mixture, np.float32),
+               contiguous(offsets, np.float32), contiguous(consistent, np.bool_),
+               contiguous(priors, np.float32), matrices[::-1],
+               tuple(config.observation_weight * m for m in matrices), tuple(inverses),
+               tuple(copied), np.float32(config.match_weight),
+               np.float32(config.prior_weight), np.float32(config.relaxation), left, right)
+  height = mixture.shape[0]
+  bounds = np.linspace(0, height, min(height, 4 * _thread_count(config)) + 1).astype(int)
+  blocks = list(zip(bounds[:-1], bounds[1:]))
+  if len(blocks) == 1 or _thread_count(config) == 1:
+    _solve_rows(0, height, *arguments)
+  else:
+    with concurrent.futures.ThreadPoolExecutor(_thread_count(config)) as pool:
+      list(pool.map(lambda block: _solve_rows(int(block[0]), int(block[1]), *arguments),
+                    blocks))
+  return np.clip(left, 0, 1), np.clip(right, 0, 1)
 
-  def __call__(self, mixture, other_view, warped, consistent, prior):
-    config = self.config
-    if not self.clip:
-      out = np.empty(mixture.shape, np.float32)
-      _solve_unclipped(*(np.ascontiguousarray(a, np.float32)
-                         for a in (mixture, other_view, warped)),
-                       np.ascontiguousarray(consistent, np.bool_),
-                       np.ascontiguousarray(prior, np.float32), self.other,
-                       config.observation_weight * self.own, self.inverse,
-                       np.float32(config.match_weight), np.float32(config.prior_weight), out)
-      return out
-    residual = mixture - other_view @ self.other.T  # Per pixel: mixture - A_other v.
-    observed = ((mixture > 0.5 / 255) & (mixture < 254.5 / 255)).astype(np.float32)
-    c = consistent[..., None].astype(np.float32)
-    rhs = (config.observation_weight * ((observed * residual) @ self.own)  # A_own^T r.
-           + config.match_weight * c * warped + config.prior_weight * prior)
-    gram = config.observation_weight * sum(
-        observed[..., k, None, None] * np.outer(self.own[k], self.own[k]) for k in range(3))
-    pull = config.prior_weight + config.match_weight * c
-    return np.linalg.solve(gram + pull[..., None] * np.eye(3), rhs[..., None])[..., 0]
+
+def _clipped_solution(own, other, mixture, other_view, warped, consistent, prior, config):
+  """The per-pixel normal equations of one view where clipped channels (0 or 255) of a
+  Dubois mixture are not observations."""
+  residual = mixture - other_view @ other.T  # Per pixel: mixture - A_other v.
+  observed = ((mixture > 0.5 / 255) & (mixture < 254.5 / 255)).astype(np.float32)
+  c = consistent[..., None].astype(np.float32)
+  rhs = (config.observation_weight * ((observed * residual) @ own)  # A_own^T r.
+         + config.match_weight * c * warped + config.prior_weight * prior)
+  gram = config.observation_weight * sum(
+      observed[..., k, None, None] * np.outer(own[k], own[k]) for k in range(3))
+  pull = config.prior_weight + config.match_weight * c
+  return np.linalg.solve(gram + pull[..., None] * np.eye(3), rhs[..., None])[..., 0]
 
 
 def _copy_channels(view: np.ndarray, mixture: np.ndarray, copied) -> np.ndarray:
@@ -210,18 +209,23 @@ def _copy_channels(view: np.ndarray, mixture: np.ndarray, copied) -> np.ndarray:
 
 
 def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
-  solvers = (_ViewSolver(np.asarray(spec.left_matrix), np.asarray(spec.right_matrix),
-                         spec.clip, config),
-             _ViewSolver(np.asarray(spec.right_matrix), np.asarray(spec.left_matrix),
-                         spec.clip, config))
+  """`config.iterations` over-relaxed alternations between the views from `start`;
+  returns both views clipped to [0, 1]."""
+  if not spec.clip:
+    return _solve_fused(mixture, spec, (-d_left, d_right), consistent, priors, config,
+                        start)
+  left_matrix = np.asarray(spec.left_matrix, np.float32)
+  right_matrix = np.asarray(spec.right_matrix, np.float32)
   left, right = start
   omega = config.relaxation
   for _ in range(config.iterations):
-    solved = solvers[0](mixture, right, sample_horizontal(right, -d_left), consistent[0],
-                        priors[0])
+    solved = _clipped_solution(left_matrix, right_matrix, mixture, right,
+                               sample_horizontal(right, -d_left), consistent[0], priors[0],
+                               config)
     left = _copy_channels(left + omega * (solved - left), mixture, spec.left_channels)
-    solved = solvers[1](mixture, left, sample_horizontal(left, d_right), consistent[1],
-                        priors[1])
+    solved = _clipped_solution(right_matrix, left_matrix, mixture, left,
+                               sample_horizontal(left, d_right), consistent[1], priors[1],
+                               config)
     right = _copy_channels(right + omega * (solved - right), mixture, spec.right_channels)
   return np.clip(left, 0, 1).astype(np.float32), np.clip(right, 0, 1).astype(np.float32)
 
@@ -259,7 +263,7 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
     gray = tuple(np.repeat(mixture[..., list(eye)].mean(-1, keepdims=True), 3, axis=-1)
                  for eye in spec.eye_channels)
     first = _solve(mixture, spec, d_left, d_right, consistent, gray, config, gray)
-    priors = tuple(local_linear_transfer(mixture[..., list(eye)], view, ok,
+    priors = tuple(colour_transfer.local_linear_transfer(mixture[..., list(eye)], view, ok,
                                          config.transfer_radius)
                    for eye, view, ok in zip(spec.eye_channels, first, consistent))
     left, right = _solve(mixture, spec, d_left, d_right, consistent, priors, config, first)

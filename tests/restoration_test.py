@@ -80,13 +80,45 @@ def test_the_network_prior_fills_what_nothing_else_fixes():
   np.testing.assert_allclose(out['left'][occluded][:, 1:], 0.5, atol=0.02)
 
 
-def test_local_linear_transfer_recovers_an_affine_channel():
-  rng = np.random.default_rng(1)
-  guide = rng.uniform(0.2, 0.8, (24, 24, 1))
-  target = 0.5 * guide + 0.1
-  train = rng.uniform(size=(24, 24)) < 0.5
-  predicted = restoration.local_linear_transfer(guide, target, train, radius=3, eps=1e-6)
-  np.testing.assert_allclose(predicted, target, atol=2e-3)
+def _reference_solve(mixture, spec, d_left, d_right, consistent, priors, config):
+  """The module docstring's alternation, transcribed with NumPy solves per pixel."""
+  left, right = (p.copy() for p in priors)
+  matrices = np.asarray(spec.left_matrix), np.asarray(spec.right_matrix)
+  for _ in range(config.iterations):
+    for index in (0, 1):
+      own, other = matrices[index], matrices[1 - index]
+      view, other_view = (left, right) if index == 0 else (right, left)
+      offset = -d_left if index == 0 else d_right
+      c = consistent[index][..., None].astype(np.float64)
+      rhs = (config.observation_weight * (mixture - other_view @ other.T) @ own +
+             config.match_weight * c * restoration.sample_horizontal(other_view, offset) +
+             config.prior_weight * priors[index])
+      gram = config.observation_weight * own.T @ own + (
+          config.prior_weight + config.match_weight * c[..., None]) * np.eye(3)
+      solved = np.linalg.solve(gram, rhs[..., None])[..., 0]
+      view += config.relaxation * (solved - view)
+      for view_channel, mixture_channel in (spec.left_channels if index == 0
+                                            else spec.right_channels).items():
+        view[..., view_channel] = mixture[..., mixture_channel]
+  return np.clip(left, 0, 1), np.clip(right, 0, 1)
+
+
+@pytest.mark.parametrize('name', ['anaglyph', 'half_color', 'gray'])
+@pytest.mark.parametrize('threads', [1, 3])
+def test_the_fused_solve_equals_the_equations_per_pixel(name, threads):
+  left, right, d, _ = _pair(shift=4, height=13)
+  spec = mixtures.get_mixture(name)
+  mixture = _mix(name, left, right)
+  d_left = d + np.linspace(0, 2, d.size, dtype=np.float32).reshape(d.shape).round()
+  consistent = restoration.lr_consistency(d_left, d_left, 1.0)
+  rng = np.random.default_rng(2)
+  priors = tuple(rng.uniform(size=left.shape).astype(np.float32) for _ in range(2))
+  config = restoration.RestoreConfig(iterations=3, threads=threads)
+  fused = restoration._solve(mixture, spec, d_left, d_left, consistent, priors, config,
+                             priors)
+  expected = _reference_solve(mixture, spec, d_left, d_left, consistent, priors, config)
+  for got, want in zip(fused, expected):
+    np.testing.assert_allclose(got, want, atol=3e-4)  # float32 against float64.
 
 
 def test_only_anaglyphs_are_restored():
