@@ -23,6 +23,7 @@ from typing import Callable, Dict, Optional
 
 import numpy as np
 
+from mixstereo_tf import pipelining
 from mixstereo_tf import video_io
 
 Fraction = fractions.Fraction
@@ -32,12 +33,21 @@ _VERSION = 1
 
 @dataclasses.dataclass(frozen=True)
 class VideoConfig:
-  """How video jobs are cut: `segment_frames` frames per resumable segment."""
+  """How video jobs run.
+
+  Attributes:
+    segment_frames: frames per resumable segment.
+    queue_depth: frames decoded ahead of, and frames waiting to be encoded after, the
+      one being rendered (`pipelining`).
+  """
   segment_frames: int = 60
+  queue_depth: int = 4
 
   def __post_init__(self):
     if self.segment_frames < 1:
       raise ValueError(f'VideoConfig.segment_frames must be >= 1, got {self.segment_frames}.')
+    if self.queue_depth < 1:
+      raise ValueError(f'VideoConfig.queue_depth must be >= 1, got {self.queue_depth}.')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -147,6 +157,41 @@ class _Segment:
           os.remove(writer.path)
 
 
+def _finish(job: VideoJob, manifest: Dict[str, object], segment: _Segment) -> None:
+  manifest['segments'].append(segment.finish())
+  _write_manifest(job, manifest)
+
+
+def _render_segments(job, manifest, info, frames, done, render) -> None:
+  """Renders the frames from `done` on into segments recorded in `manifest`: decoding
+  runs ahead in one thread, encoding (and the manifest's updates) follows in another,
+  in order (`pipelining`), so `manifest` is only read here after the writer has drained;
+  an unfinished segment's files are removed on any exception."""
+  segment, count, index = None, 0, len(manifest['segments'])
+  writer = pipelining.SerialWorker(job.config.queue_depth)
+  try:
+    with pipelining.Prefetcher(frames, job.config.queue_depth) as ahead:
+      for frame in ahead:
+        if frame.index < done:
+          continue
+        if segment is None:
+          segment, count = _Segment(job, index, info, frame.time), 0
+          index += 1
+        writer.submit(segment.write, frame, render(frame.image))
+        count += 1
+        if count == job.config.segment_frames:
+          writer.submit(_finish, job, manifest, segment)
+          segment = None
+    if segment is not None:
+      writer.submit(_finish, job, manifest, segment)
+      segment = None
+    writer.drain()
+  finally:
+    writer.close()
+    if segment is not None:
+      segment.abort()
+
+
 def run(job: VideoJob, render: Callable[[np.ndarray], Dict[str, np.ndarray]],
         on_start: Optional[Callable[[video_io.VideoInfo, int], None]] = None
         ) -> Dict[str, object]:
@@ -172,24 +217,7 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Dict[str, np.ndarray]],
   if on_start:
     on_start(info, done)
   if not manifest['complete']:
-    segment = None
-    try:
-      for frame in frames:
-        if frame.index < done:
-          continue
-        if segment is None:
-          segment = _Segment(job, len(manifest['segments']), info, frame.time)
-        segment.write(frame, render(frame.image))
-        if segment.frames == job.config.segment_frames:
-          manifest['segments'].append(segment.finish())
-          segment = None
-          _write_manifest(job, manifest)
-      if segment is not None:
-        manifest['segments'].append(segment.finish())
-        segment = None
-    finally:
-      if segment is not None:
-        segment.abort()
+    _render_segments(job, manifest, info, frames, done, render)
     manifest['complete'] = True
     _write_manifest(job, manifest)
   frames.close()
