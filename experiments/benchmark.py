@@ -11,7 +11,9 @@ input pipeline, SavedModel inference, the warp op against a gather-based referen
 stride-2 3D conv implementations, the paper-scale forward pass, the classical baseline
 per 375x1242 frame, where the 3D encoder-decoder's time goes (per layer and per
 stride-2 kernel), and the numba census-SGM matcher (`baselines.matcher.match`) at 1242x375,
-1280x720 (also with a video prior) and 4000x3000, against the NumPy `sgm.match`. Times are medians of repeats after warm-up, with min/max.
+1280x720 (also with a video prior) and 4000x3000, against the NumPy `sgm.match`, and
+videos (`benchmark_video`: flicker, accuracy and frames/s with and without the temporal
+prior, both methods, 720p and 1080p). Times are medians of repeats after warm-up, with min/max.
 With --baseline_json (a --json_out of an earlier run) the table gets a 'before' column.
 Not a test: the machine is shared; the load average is recorded with the results.
 """
@@ -41,7 +43,7 @@ flags.DEFINE_integer('demo_steps', 20, 'Timed train steps of the demo configurat
 flags.DEFINE_integer('timeout', 480, 'Seconds before a measurement subprocess is killed.')
 flags.DEFINE_list('sections', ['machine', 'train', 'modules', 'pipeline', 'inference',
                                'warp', 'conv3d', 'forward', 'classical', 'layers',
-                               'matcher'],
+                               'matcher', 'video'],
                   'Sections to run.')
 flags.DEFINE_string('worker', '', 'Internal: run one measurement and print its JSON.')
 flags.DEFINE_string('worker_args', '{}', 'Internal: JSON arguments of --worker.')
@@ -149,6 +151,9 @@ def collect(steps_paper: int, steps_demo: int, timeout: int, sections) -> dict:
     for case in MATCHER_CASES[:2]:
       results[f'matcher/{case}/numpy'] = run_worker('matcher', timeout, case=case,
                                                     method='numpy')
+  if 'video' in sections:
+    from experiments import benchmark_video  # pylint: disable=g-import-not-at-top
+    results.update(benchmark_video.collect(run_worker, timeout))
   return results
 
 
@@ -157,9 +162,10 @@ def run_here(name: str, args: dict) -> dict:
   # pylint: disable=g-import-not-at-top (TensorFlow only in the worker processes)
   from experiments import benchmark_matcher
   from experiments import benchmark_ops
+  from experiments import benchmark_video
   from experiments import benchmark_workers
   every = dict(benchmark_workers.WORKERS, **benchmark_ops.WORKERS,
-               **benchmark_matcher.WORKERS)
+               **benchmark_matcher.WORKERS, **benchmark_video.WORKERS)
   if name not in every:
     raise ValueError(f'--worker must be one of {sorted(every)}, got {name!r}.')
   result = every[name](**args)

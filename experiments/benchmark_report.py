@@ -2,6 +2,8 @@
 
 from typing import Optional
 
+from experiments import benchmark_video
+
 
 def _get(run: Optional[dict], key: str) -> Optional[dict]:
   return None if run is None else run['results'].get(key)
@@ -179,6 +181,8 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
     lines.append(f'| {name} ' + _cells(run, baseline, 'classical', cell))
   lines += _layer_sections(run)
   lines += _matcher_section(run)
+  if any(key.startswith('video/') for key in run['results']):
+    lines += benchmark_video.render_section(run, baseline, baseline_label, label)
   return '\n'.join(lines) + '\n'
 
 

@@ -1,0 +1,143 @@
+"""Video measurements of `benchmark.py` (section 16): flicker, accuracy and frames/s.
+
+Quality (`video_quality`): the synthetic anaglyph clip of `experiments/temporal.py` (two
+procedural scenes with ground truth, a panning camera, a cut, sensor noise; 320x180),
+unmixed by one method per frame (--notemporal) and per shot with the previous frame's
+disparity as the prior (the default): flicker (motion-compensated mean change between
+consecutive frames on static pixels) of the left disparity (px) and of the restored left
+view (levels), bad-1 and EPE on non-occluded pixels.
+
+Speed (`video_speed`): the first shot of that clip upscaled (bicubic) to 1280x720 or
+1920x1080 and written as an H.264 MP4, then unmixed by `unmix_files.unmix_inputs` exactly
+as `mixstereo-unmix --input=clip.mp4 --layout=sbs` does (decoding, unmixing, encoding the
+side-by-side and disparity videos, segments and manifest), after one warm-up frame
+(numba's cache, tf.function tracing). Frames/s = frames / wall seconds of the whole call;
+"unmix only" = frames / seconds inside the unmixer.
+"""
+
+import fractions
+import os
+import shutil
+import tempfile
+
+import cv2
+
+QUALITY_VARIANTS = (('per frame', False), ('per shot + prior', True))
+SPEED_SIZES = ((1280, 720), (1920, 1080))
+METHODS = ('classical', 'model')
+
+
+def video_quality(method: str, frames_per_shot: int = 20) -> dict:
+  """Flicker and accuracy of `method` on the clip, without and with the temporal state."""
+  # pylint: disable=g-import-not-at-top (TensorFlow only in the worker processes)
+  from experiments import temporal as clip_lib
+  from mixstereo_tf import inference
+  from mixstereo_tf import temporal
+  clip = clip_lib.make_clip(frames_per_shot)
+  frames = [c[0] for c in clip]
+  unmixer = inference.build_unmixer(inference.PredictorConfig(method, mixture='auto'))
+  clip_lib.unmix_clip(unmixer, frames[:2], temporal.TemporalConfig())  # Compiles kernels.
+  result = {}
+  for name, enabled in QUALITY_VARIANTS:
+    outputs, _ = clip_lib.unmix_clip(unmixer, frames, temporal.TemporalConfig(enabled=enabled))
+    flicker_d, flicker_v = clip_lib.flicker(clip, outputs)
+    bad1, epe = clip_lib.accuracy(clip, outputs)
+    result[name] = {'flicker_px': flicker_d, 'flicker_levels': flicker_v, 'bad1': bad1,
+                    'epe': epe}
+  return result
+
+
+def _write_clip(path: str, size, frames: int) -> None:
+  from experiments import temporal as clip_lib  # pylint: disable=g-import-not-at-top
+  from mixstereo_tf import video_io  # pylint: disable=g-import-not-at-top
+  writer = video_io.VideoWriter(path, fractions.Fraction(25))
+  for index, (image, *_) in enumerate(clip_lib.make_clip(frames)[:frames]):
+    writer.write(cv2.resize(image, size, interpolation=cv2.INTER_CUBIC),
+                 fractions.Fraction(index, 25))
+  writer.close()
+
+
+def video_speed(method: str, width: int, height: int, frames: int = 12) -> dict:
+  """Frames/s of `unmix_inputs` on a `frames`-frame clip, without and with the prior."""
+  # pylint: disable=g-import-not-at-top
+  from mixstereo_tf import inference
+  from mixstereo_tf import temporal
+  from mixstereo_tf import unmix_files
+  from mixstereo_tf import video_io
+  root = tempfile.mkdtemp()
+  try:
+    path = os.path.join(root, 'clip.mp4')
+    _write_clip(path, (width, height), frames)
+    unmixer = inference.build_unmixer(inference.PredictorConfig(method, mixture='auto'))
+    _, decoded = video_io.open_video(path)
+    unmixer(next(iter(decoded)).image)  # Warm-up: numba's cache, tracing.
+    decoded.close()
+    import mixstereo_tf  # pylint: disable=g-import-not-at-top
+    result = {'frames': frames, 'package': os.path.dirname(mixstereo_tf.__file__)}
+    for name, enabled in QUALITY_VARIANTS:
+      output_dir = os.path.join(root, name.replace(' ', '_'))
+      report = unmix_files.unmix_inputs(unmixer, path, output_dir, layout='sbs',
+                                        temporal_config=temporal.TemporalConfig(
+                                            enabled=enabled))
+      if report.failures or report.frames != frames:
+        raise RuntimeError(f'unmix_inputs: {report}')
+      result[name] = {'fps': report.frames_per_second,
+                      'unmix_fps': frames / report.unmix_seconds,
+                      'seconds': report.seconds}
+    return result
+  finally:
+    shutil.rmtree(root, ignore_errors=True)
+
+
+def collect(run_worker, timeout: int) -> dict:
+  """The section's results, one worker process per measurement."""
+  results = {}
+  for method in METHODS:
+    results[f'video/quality/{method}'] = run_worker('video_quality', timeout, method=method)
+    for width, height in SPEED_SIZES:
+      results[f'video/speed/{method}/{width}x{height}'] = run_worker(
+          'video_speed', timeout, method=method, width=width, height=height)
+  return results
+
+
+def _cell(run: dict, key: str, variant: str, field: str, fmt: str) -> str:
+  """One number of run['results'][key][variant], or why there is none."""
+  result = run['results'].get(key)
+  if result is None:
+    return 'not run'
+  if 'error' in result:
+    return f'FAILED: {result["error"]}'
+  return format(result[variant][field], fmt)
+
+
+def render_section(run: dict, baseline, baseline_label: str, label: str) -> list:
+  """Section 16 of BENCHMARKS.md; `baseline` (or None) gives the 'before' columns."""
+  runs = [(baseline_label, baseline)] if baseline else []
+  runs.append((label, run))
+  lines = ['', '## 16. Video: flicker, accuracy and frames/s (`benchmark_video.py`)', '',
+           __doc__.split('\n\n', 1)[1].strip(), '']
+  quality = (('flicker_px', '.3f', 'disparity flicker px'),
+             ('flicker_levels', '.2f', 'view flicker'), ('bad1', '.2f', 'bad-1 %'),
+             ('epe', '.3f', 'EPE px'))
+  lines += ['| method, variant | ' + ' | '.join(f'{title} ({name})' for *_, title in quality
+                                               for name, _ in runs) + ' |',
+            '|---|' + '---:|' * (len(quality) * len(runs))]
+  for method in METHODS:
+    for variant, _ in QUALITY_VARIANTS:
+      cells = [_cell(r, f'video/quality/{method}', variant, field, fmt)
+               for field, fmt, _ in quality for _, r in runs]
+      lines.append(f'| {method}, {variant} | ' + ' | '.join(cells) + ' |')
+  lines += ['', '| method, variant, size | ' + ' | '.join(
+      f'frames/s ({name}) | unmix only ({name})' for name, _ in runs) + ' |',
+            '|---|' + '---:|' * (2 * len(runs))]
+  for method in METHODS:
+    for variant, _ in QUALITY_VARIANTS:
+      for width, height in SPEED_SIZES:
+        key = f'video/speed/{method}/{width}x{height}'
+        cells = [_cell(r, key, variant, field, '.2f') for _, r in runs
+                 for field in ('fps', 'unmix_fps')]
+        lines.append(f'| {method}, {variant}, {width}x{height} | ' + ' | '.join(cells) + ' |')
+  return lines
+
+
+WORKERS = {'video_quality': video_quality, 'video_speed': video_speed}
