@@ -32,8 +32,8 @@ from typing import Optional, Tuple
 import cv2
 import numpy as np
 
+from mixstereo_tf.baselines import fast_postprocess
 from mixstereo_tf.baselines import parallel_sgm
-from mixstereo_tf.baselines import sgm
 
 
 @dataclasses.dataclass(frozen=True)
@@ -191,7 +191,7 @@ def _search(left, right, lo, widths, config: MatcherConfig) -> dict:
       config.strip_overlap if len(bounds) > 2 else 0)
   # A right pixel no window reaches gets a value the left-right check always refuses.
   d_right[np.isnan(d_right)] = float(lo.min()) - 1e4
-  return sgm.postprocess(d_left, d_right, config.lr_threshold)
+  return fast_postprocess.postprocess(d_left, d_right, config.lr_threshold)
 
 
 def _full(left, right, low: int, high: int, config: MatcherConfig) -> dict:
