@@ -48,6 +48,8 @@ class RestoreConfig:
     relaxation: over-relaxation factor of each alternation (1 = plain Gauss-Seidel).
     lr_threshold: largest accepted |d_L(x) - d_R(x - d_L(x))|, pixels.
     transfer_radius: window radius of the colour transfer, pixels.
+    transfer_subsample: the colour transfer fits on copies reduced this many times
+      (`colour_transfer.local_linear_transfer`; 1: exact).
     threads: threads of the solve (row blocks); 0 = every CPU this process may use.
   """
   observation_weight: float = 30.0
@@ -57,6 +59,7 @@ class RestoreConfig:
   relaxation: float = 1.5
   lr_threshold: float = 1.0
   transfer_radius: int = 7
+  transfer_subsample: int = 2
   threads: int = 0
 
 
@@ -98,52 +101,85 @@ def _linear_taps(width, x, offset):
 
 
 @numba.njit(error_model='numpy')
-def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
-                 own_weighted, inverses, copied, match_weight, prior_weight, omega):
+def _clipped_inverse(mixture, y, x, own, observation_weight, pull, residual, inverse):
+  """Dubois encodings: channels of the mixture clipped to 0 or 255 are no observations.
+  Zeroes their residual and writes into `inverse` [3, 3] the inverse of
+  w_obs sum_c [observed c] A_own[c]^T A_own[c] + pull I (cofactors, float64)."""
+  gram = np.zeros((3, 3), np.float64)
+  for c in range(3):
+    if not np.float32(0.5 / 255) < mixture[y, x, c] < np.float32(254.5 / 255):
+      residual[c] = 0.0
+      continue
+    for i in range(3):
+      for j in range(3):
+        gram[i, j] += observation_weight * own[c, i] * own[c, j]
+  for i in range(3):
+    gram[i, i] += pull
+  cofactor = np.empty((3, 3), np.float64)
+  for i in range(3):
+    for j in range(3):
+      a, b = (i + 1) % 3, (i + 2) % 3
+      c, d = (j + 1) % 3, (j + 2) % 3
+      cofactor[i, j] = gram[a, c] * gram[b, d] - gram[a, d] * gram[b, c]
+  determinant = gram[0, 0] * cofactor[0, 0] + gram[0, 1] * cofactor[0, 1] + (
+      gram[0, 2] * cofactor[0, 2])
+  for i in range(3):
+    for j in range(3):
+      inverse[i, j] = cofactor[j, i] / determinant
+
+
+@numba.njit(error_model='numpy')
+def _update_view(y, view, other_view, mixture, offset, consistent, prior, other, own,
+                 inverses, copied, weights, clip):
   """One over-relaxed step of row y of one view, in place: the per-pixel normal equations'
   solution of w_obs A_own^T (m - A_other v_other) + w_match [consistent] v_other(x +
-  offset) + w_prior prior; channels the mixture copies (copied[i] >= 0) set to it."""
+  offset) + w_prior prior; channels the mixture copies (copied[i] >= 0) set to it.
+  weights = (w_obs, w_match, w_prior, relaxation); inverses[k]: the normal matrix's
+  inverse for unmatched (k = 0) and matched (1) pixels, or per pixel where `clip`."""
+  observation_weight, match_weight, prior_weight, omega = weights
   residual = np.empty(3, np.float32)
   rhs = np.empty(3, np.float32)
+  inverse = np.empty((3, 3), np.float32)
   for x in range(view.shape[1]):
     for c in range(3):
       residual[c] = mixture[y, x, c] - (other[c, 0] * other_view[y, x, 0] +
                                         other[c, 1] * other_view[y, x, 1] +
                                         other[c, 2] * other_view[y, x, 2])
     matched = consistent[y, x]
+    k = 1 if matched else 0
+    if clip:
+      _clipped_inverse(mixture, y, x, own, observation_weight,
+                       prior_weight + match_weight * k, residual, inverse)
+    else:
+      inverse[:] = inverses[k]
     x0, x1, f = _linear_taps(view.shape[1], x, offset[y, x])
     for i in range(3):
-      rhs[i] = (own_weighted[0, i] * residual[0] + own_weighted[1, i] * residual[1] +
-                own_weighted[2, i] * residual[2] + prior_weight * prior[y, x, i])
+      rhs[i] = observation_weight * (own[0, i] * residual[0] + own[1, i] * residual[1] +
+                                     own[2, i] * residual[2]) + prior_weight * prior[y, x, i]
       if matched:
         rhs[i] += match_weight * ((np.float32(1.0) - f) * other_view[y, x0, i] +
                                   f * other_view[y, x1, i])
-    k = 1 if matched else 0
     for i in range(3):
       if copied[i] >= 0:
         view[y, x, i] = mixture[y, x, copied[i]]
       else:
-        solved = (inverses[k, i, 0] * rhs[0] + inverses[k, i, 1] * rhs[1] +
-                  inverses[k, i, 2] * rhs[2])
+        solved = inverse[i, 0] * rhs[0] + inverse[i, 1] * rhs[1] + inverse[i, 2] * rhs[2]
         view[y, x, i] += omega * (solved - view[y, x, i])
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
-def _solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, others,
-                own_weighted, inverses, copied, match_weight, prior_weight, omega, left,
-                right):
-  """`iterations` alternations of both views over rows [y0, y1), in place (unclipped
-  encodings). Index 0 of each pair is the left view's, 1 the right's; offsets = (-d_L,
-  d_R), where each view's pixel finds the other view. Rows are independent (the warps
-  are horizontal), so row blocks run in parallel and each stays in cache."""
+def _solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, matrices,
+                inverses, copied, weights, clip, left, right):
+  """`iterations` alternations of both views over rows [y0, y1), in place. Index 0 of
+  each pair is the left view's, 1 the right's; offsets = (-d_L, d_R), where each view's
+  pixel finds the other view; matrices = (A_L, A_R). Rows are independent (the warps are
+  horizontal), so row blocks run in parallel and each stays in cache."""
   for y in range(y0, y1):
     for _ in range(iterations):
-      _update_view(y, left, right, mixture, offsets[0], consistent[0], priors[0], others[0],
-                   own_weighted[0], inverses[0], copied[0], match_weight, prior_weight,
-                   omega)
-      _update_view(y, right, left, mixture, offsets[1], consistent[1], priors[1], others[1],
-                   own_weighted[1], inverses[1], copied[1], match_weight, prior_weight,
-                   omega)
+      _update_view(y, left, right, mixture, offsets[0], consistent[0], priors[0],
+                   matrices[1], matrices[0], inverses[0], copied[0], weights, clip)
+      _update_view(y, right, left, mixture, offsets[1], consistent[1], priors[1],
+                   matrices[0], matrices[1], inverses[1], copied[1], weights, clip)
 
 
 def _thread_count(config: RestoreConfig) -> int:
@@ -154,27 +190,29 @@ def _thread_count(config: RestoreConfig) -> int:
   return os.cpu_count() or 1
 
 
-def _solve_fused(mixture, spec, offsets, consistent, priors, config, start):
-  """`_solve` for unclipped encodings: `_solve_rows` on row blocks, in threads (the kernel
-  releases the GIL)."""
+def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
+  """`config.iterations` over-relaxed alternations between the views from `start`
+  (`_solve_rows` on row blocks, in threads: the kernel releases the GIL); returns both
+  views clipped to [0, 1]."""
+  offsets = (-d_left, d_right)
   matrices = (np.asarray(spec.left_matrix, np.float32),
               np.asarray(spec.right_matrix, np.float32))
   inverses, copied = [], []
   for own, channels in zip(matrices, (spec.left_channels, spec.right_channels)):
     gram = config.observation_weight * own.T @ own
-    # Unmatched / matched pixels (channels never clipped).
+    # Unmatched / matched pixels when no channel is clipped.
     inverses.append(np.stack([np.linalg.inv(gram + (config.prior_weight + c *
                                                      config.match_weight) * np.eye(3))
                               for c in (0, 1)]).astype(np.float32))
     copied.append(np.array([channels.get(i, -1) for i in range(3)], np.int64))
   left, right = (np.array(view, np.float32, order='C') for view in start)
   contiguous = lambda arrays, dtype: tuple(np.ascontiguousarray(a, dtype) for a in arrays)
+  weights = tuple(np.float32(w) for w in (config.observation_weight, config.match_weight,
+                                           config.prior_weight, config.relaxation))
   arguments = (config.iterations, np.ascontiguousarray(mixture, np.float32),
                contiguous(offsets, np.float32), contiguous(consistent, np.bool_),
-               contiguous(priors, np.float32), matrices[::-1],
-               tuple(config.observation_weight * m for m in matrices), tuple(inverses),
-               tuple(copied), np.float32(config.match_weight),
-               np.float32(config.prior_weight), np.float32(config.relaxation), left, right)
+               contiguous(priors, np.float32), matrices, tuple(inverses), tuple(copied),
+               weights, bool(spec.clip), left, right)
   height = mixture.shape[0]
   bounds = np.linspace(0, height, min(height, 4 * _thread_count(config)) + 1).astype(int)
   blocks = list(zip(bounds[:-1], bounds[1:]))
@@ -185,49 +223,6 @@ def _solve_fused(mixture, spec, offsets, consistent, priors, config, start):
       list(pool.map(lambda block: _solve_rows(int(block[0]), int(block[1]), *arguments),
                     blocks))
   return np.clip(left, 0, 1), np.clip(right, 0, 1)
-
-
-def _clipped_solution(own, other, mixture, other_view, warped, consistent, prior, config):
-  """The per-pixel normal equations of one view where clipped channels (0 or 255) of a
-  Dubois mixture are not observations."""
-  residual = mixture - other_view @ other.T  # Per pixel: mixture - A_other v.
-  observed = ((mixture > 0.5 / 255) & (mixture < 254.5 / 255)).astype(np.float32)
-  c = consistent[..., None].astype(np.float32)
-  rhs = (config.observation_weight * ((observed * residual) @ own)  # A_own^T r.
-         + config.match_weight * c * warped + config.prior_weight * prior)
-  gram = config.observation_weight * sum(
-      observed[..., k, None, None] * np.outer(own[k], own[k]) for k in range(3))
-  pull = config.prior_weight + config.match_weight * c
-  return np.linalg.solve(gram + pull[..., None] * np.eye(3), rhs[..., None])[..., 0]
-
-
-def _copy_channels(view: np.ndarray, mixture: np.ndarray, copied) -> np.ndarray:
-  """The channels the mixture copies are the view's, exactly (the solve leaves 1 / w_obs)."""
-  for view_channel, mixture_channel in copied.items():
-    view[..., view_channel] = mixture[..., mixture_channel]
-  return view
-
-
-def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
-  """`config.iterations` over-relaxed alternations between the views from `start`;
-  returns both views clipped to [0, 1]."""
-  if not spec.clip:
-    return _solve_fused(mixture, spec, (-d_left, d_right), consistent, priors, config,
-                        start)
-  left_matrix = np.asarray(spec.left_matrix, np.float32)
-  right_matrix = np.asarray(spec.right_matrix, np.float32)
-  left, right = start
-  omega = config.relaxation
-  for _ in range(config.iterations):
-    solved = _clipped_solution(left_matrix, right_matrix, mixture, right,
-                               sample_horizontal(right, -d_left), consistent[0], priors[0],
-                               config)
-    left = _copy_channels(left + omega * (solved - left), mixture, spec.left_channels)
-    solved = _clipped_solution(right_matrix, left_matrix, mixture, left,
-                               sample_horizontal(left, d_right), consistent[1], priors[1],
-                               config)
-    right = _copy_channels(right + omega * (solved - right), mixture, spec.right_channels)
-  return np.clip(left, 0, 1).astype(np.float32), np.clip(right, 0, 1).astype(np.float32)
 
 
 def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
@@ -264,7 +259,8 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
                  for eye in spec.eye_channels)
     first = _solve(mixture, spec, d_left, d_right, consistent, gray, config, gray)
     priors = tuple(colour_transfer.local_linear_transfer(mixture[..., list(eye)], view, ok,
-                                         config.transfer_radius)
+                                         config.transfer_radius,
+                                         subsample=config.transfer_subsample)
                    for eye, view, ok in zip(spec.eye_channels, first, consistent))
     left, right = _solve(mixture, spec, d_left, d_right, consistent, priors, config, first)
   if not spec.transmits_colour:  # Gray encodings: only brightness exists to restore.

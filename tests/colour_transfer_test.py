@@ -1,5 +1,6 @@
 """Known-answer tests of the local linear colour transfer."""
 
+import cv2
 import numpy as np
 import pytest
 
@@ -36,3 +37,16 @@ def test_three_guide_channels_are_refused():
   with pytest.raises(ValueError, match='1 or 2 guide channels'):
     colour_transfer.local_linear_transfer(np.zeros((8, 8, 3)), np.zeros((8, 8, 3)),
                                           np.ones((8, 8), bool))
+
+
+def test_the_subsampled_fit_recovers_an_affine_channel_and_stays_close_to_the_exact_one():
+  rng = np.random.default_rng(3)
+  guide = cv2.GaussianBlur(rng.uniform(0.1, 0.9, (60, 90, 1)).astype(np.float32), (0, 0), 2)
+  guide = guide[..., None]
+  target = np.concatenate([0.5 * guide + 0.2, 0.9 - 0.7 * guide], axis=-1)
+  train = rng.uniform(size=(60, 90)) < 0.6
+  fast = colour_transfer.local_linear_transfer(guide, target, train, radius=4, eps=1e-6,
+                                               subsample=2)
+  np.testing.assert_allclose(fast, target, atol=5e-3)
+  with pytest.raises(ValueError, match='subsample'):
+    colour_transfer.local_linear_transfer(guide, target, train, subsample=0)

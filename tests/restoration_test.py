@@ -90,10 +90,13 @@ def _reference_solve(mixture, spec, d_left, d_right, consistent, priors, config)
       view, other_view = (left, right) if index == 0 else (right, left)
       offset = -d_left if index == 0 else d_right
       c = consistent[index][..., None].astype(np.float64)
-      rhs = (config.observation_weight * (mixture - other_view @ other.T) @ own +
-             config.match_weight * c * restoration.sample_horizontal(other_view, offset) +
-             config.prior_weight * priors[index])
-      gram = config.observation_weight * own.T @ own + (
+      # Dubois: clipped mixture channels are no observations.
+      observed = ((mixture > 0.5 / 255) & (mixture < 254.5 / 255) if spec.clip
+                  else np.ones(mixture.shape, bool)).astype(np.float64)
+      rhs = (config.observation_weight * (observed * (mixture - other_view @ other.T)) @ own
+             + config.match_weight * c * restoration.sample_horizontal(other_view, offset)
+             + config.prior_weight * priors[index])
+      gram = config.observation_weight * np.einsum('yxc,ci,cj->yxij', observed, own, own) + (
           config.prior_weight + config.match_weight * c[..., None]) * np.eye(3)
       solved = np.linalg.solve(gram, rhs[..., None])[..., 0]
       view += config.relaxation * (solved - view)
@@ -103,7 +106,7 @@ def _reference_solve(mixture, spec, d_left, d_right, consistent, priors, config)
   return np.clip(left, 0, 1), np.clip(right, 0, 1)
 
 
-@pytest.mark.parametrize('name', ['anaglyph', 'half_color', 'gray'])
+@pytest.mark.parametrize('name', ['anaglyph', 'half_color', 'gray', 'dubois'])
 @pytest.mark.parametrize('threads', [1, 3])
 def test_the_fused_solve_equals_the_equations_per_pixel(name, threads):
   left, right, d, _ = _pair(shift=4, height=13)
@@ -118,7 +121,7 @@ def test_the_fused_solve_equals_the_equations_per_pixel(name, threads):
                              priors)
   expected = _reference_solve(mixture, spec, d_left, d_left, consistent, priors, config)
   for got, want in zip(fused, expected):
-    np.testing.assert_allclose(got, want, atol=3e-4)  # float32 against float64.
+    np.testing.assert_allclose(got, want, atol=1e-3)  # float32 against float64: 1/4 level.
 
 
 def test_only_anaglyphs_are_restored():
