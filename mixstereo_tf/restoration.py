@@ -150,8 +150,6 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
     if clip:
       _clipped_inverse(mixture, y, x, own, observation_weight,
                        prior_weight + match_weight * k, residual, inverse)
-    else:
-      inverse[:] = inverses[k]
     x0, x1, f = _linear_taps(view.shape[1], x, offset[y, x])
     for i in range(3):
       rhs[i] = observation_weight * (own[0, i] * residual[0] + own[1, i] * residual[1] +
@@ -163,7 +161,11 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
       if copied[i] >= 0:
         view[y, x, i] = mixture[y, x, copied[i]]
       else:
-        solved = inverse[i, 0] * rhs[0] + inverse[i, 1] * rhs[1] + inverse[i, 2] * rhs[2]
+        if clip:
+          solved = inverse[i, 0] * rhs[0] + inverse[i, 1] * rhs[1] + inverse[i, 2] * rhs[2]
+        else:  # Indexed, not through a view: numba counts the references of views.
+          solved = (inverses[k, i, 0] * rhs[0] + inverses[k, i, 1] * rhs[1] +
+                    inverses[k, i, 2] * rhs[2])
         view[y, x, i] += omega * (solved - view[y, x, i])
 
 
