@@ -53,6 +53,40 @@ def _area(image: np.ndarray, size) -> np.ndarray:
   return out.reshape(size[::-1] + image.shape[2:])
 
 
+def apply_reduced_fit(guide: np.ndarray, small_guide: np.ndarray, small_target: np.ndarray,
+                      small_train: np.ndarray, radius: int, eps: float = 1e-3,
+                      prior_count: float = 10.0) -> np.ndarray:
+  """The local linear model fitted on reduced copies, applied to the full-size guide.
+
+  The fits (`local_linear_transfer`'s, window radius `radius` at the reduced size) and
+  their window averages are computed on `small_guide` [h, w, K], `small_target` [h, w, M]
+  and `small_train` [h, w] (float weights in [0, 1] or bool); the averaged coefficients
+  are upsampled bilinearly and applied to `guide` [H, W, K] (He and Sun 2015's fast
+  guided filter). Returns float32 [H, W, M] in [0, 1]; with no training weight, the
+  guide's mean per pixel.
+  """
+  guide = np.asarray(guide, np.float32)
+  weight = np.asarray(small_train, np.float32)
+  m = small_target.shape[-1]
+  if not weight.any():
+    return np.repeat(guide.mean(-1, keepdims=True), m, axis=-1)
+  coeff, offsets = _averaged_coefficients(np.asarray(small_guide, np.float32),
+                                          np.asarray(small_target, np.float32), weight,
+                                          radius, eps, prior_count)
+  height, width = guide.shape[:2]
+  full = lambda x: cv2.resize(x, (width, height), interpolation=cv2.INTER_LINEAR)
+  out = np.empty((height, width, m), np.float32)
+  for j in range(m):
+    out[..., j] = full(offsets[j]) + sum(guide[..., i] * full(coeff[i][j])
+                                         for i in range(guide.shape[-1]))
+  return np.clip(out, 0.0, 1.0)
+
+
+def reduced_size(height: int, width: int, factor: int):
+  """(width, height) of a copy reduced `factor` times (OpenCV's order), at least 1."""
+  return max(1, round(width / factor)), max(1, round(height / factor))
+
+
 def local_linear_transfer(guide: np.ndarray, target: np.ndarray, train: np.ndarray,
                           radius: int = 7, eps: float = 1e-3,
                           prior_count: float = 10.0, subsample: int = 1) -> np.ndarray:
@@ -87,21 +121,15 @@ def local_linear_transfer(guide: np.ndarray, target: np.ndarray, train: np.ndarr
   if not train.any():
     return np.repeat(guide.mean(-1, keepdims=True), m, axis=-1)
   weight = train.astype(np.float32)
-  height, width = weight.shape
   if subsample == 1:
     coeff, offsets = _averaged_coefficients(guide, target, weight, radius, eps, prior_count)
-  else:
-    size = (max(1, round(width / subsample)), max(1, round(height / subsample)))
-    small_weight = _area(weight, size)
-    small_target = _area(target * weight[..., None], size) / np.maximum(
-        small_weight, 1e-6)[..., None]
-    coeff, offsets = _averaged_coefficients(
-        _area(guide, size), small_target, small_weight, max(1, round(radius / subsample)),
-        eps, prior_count)
-    full = lambda x: cv2.resize(x, (width, height), interpolation=cv2.INTER_LINEAR)
-    coeff = [[full(c) for c in row] for row in coeff]
-    offsets = [full(b) for b in offsets]
-  out = np.empty(target.shape[:2] + (m,), np.float32)
-  for j in range(m):
-    out[..., j] = offsets[j] + sum(guide[..., i] * coeff[i][j] for i in range(k))
-  return np.clip(out, 0.0, 1.0)
+    out = np.empty(target.shape[:2] + (m,), np.float32)
+    for j in range(m):
+      out[..., j] = offsets[j] + sum(guide[..., i] * coeff[i][j] for i in range(k))
+    return np.clip(out, 0.0, 1.0)
+  size = reduced_size(*weight.shape, subsample)
+  small_weight = _area(weight, size)
+  small_target = _area(target * weight[..., None], size) / np.maximum(
+      small_weight, 1e-6)[..., None]
+  return apply_reduced_fit(guide, _area(guide, size), small_target, small_weight,
+                           max(1, round(radius / subsample)), eps, prior_count)

@@ -227,6 +227,47 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
   return np.clip(left, 0, 1), np.clip(right, 0, 1)
 
 
+def _gray_priors(mixture, spec):
+  """Each view's prior before any colour is known: the mean of its own mixture channels."""
+  return tuple(np.repeat(mixture[..., list(eye)].mean(-1, keepdims=True), 3, axis=-1)
+               for eye in spec.eye_channels)
+
+
+def _classical_solve(mixture, spec, d_left, d_right, consistent, config):
+  """Both views without a network (encodings that transmit no colour: one solve with
+  the gray priors): a first solve with the gray priors, the colour transfer from each view's mixture channels fitted where the views match, and a second
+  solve with the transfer as the prior. With `config.transfer_subsample` s > 1 the first
+  solve runs on copies reduced s times (area-reduced mixture, nearest-sampled disparities
+  scaled by 1 / s, their own left-right check), whose result is all the reduced transfer
+  fit reads, and the second solve starts from it upsampled."""
+  if not spec.transmits_colour:  # No colour to transfer: one solve, gray priors.
+    gray = _gray_priors(mixture, spec)
+    return _solve(mixture, spec, d_left, d_right, consistent, gray, config, gray)
+  if config.transfer_subsample == 1:
+    gray = _gray_priors(mixture, spec)
+    first = _solve(mixture, spec, d_left, d_right, consistent, gray, config, gray)
+    priors = tuple(colour_transfer.local_linear_transfer(
+        mixture[..., list(eye)], view, ok, config.transfer_radius)
+                   for eye, view, ok in zip(spec.eye_channels, first, consistent))
+    return _solve(mixture, spec, d_left, d_right, consistent, priors, config, first)
+  size = colour_transfer.reduced_size(*d_left.shape, config.transfer_subsample)
+  scale = size[0] / d_left.shape[1]
+  small_mixture = cv2.resize(mixture, size, interpolation=cv2.INTER_AREA)
+  small_d = [cv2.resize(d, size, interpolation=cv2.INTER_NEAREST) * np.float32(scale)
+             for d in (d_left, d_right)]
+  small_consistent = lr_consistency(*small_d, config.lr_threshold * scale)
+  gray = _gray_priors(small_mixture, spec)
+  first = _solve(small_mixture, spec, *small_d, small_consistent, gray, config, gray)
+  radius = max(1, round(config.transfer_radius / config.transfer_subsample))
+  priors = tuple(colour_transfer.apply_reduced_fit(
+      mixture[..., list(eye)], small_mixture[..., list(eye)], view, ok, radius)
+                 for eye, view, ok in zip(spec.eye_channels, first, small_consistent))
+  full_size = d_left.shape[::-1]
+  start = tuple(np.clip(cv2.resize(view, full_size, interpolation=cv2.INTER_LINEAR), 0, 1)
+                for view in first)
+  return _solve(mixture, spec, d_left, d_right, consistent, priors, config, priors)
+
+
 def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
                   d_right: np.ndarray, fallback_left: Optional[np.ndarray] = None,
                   fallback_right: Optional[np.ndarray] = None,
@@ -255,16 +296,7 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
     priors = (np.asarray(fallback_left, np.float32), np.asarray(fallback_right, np.float32))
     left, right = _solve(mixture, spec, d_left, d_right, consistent, priors, config, priors)
   else:
-    # First pass with a gray prior (the mean of each view's own mixture channels); then
-    # the colour transfer from those channels, fitted where the views match, as the prior.
-    gray = tuple(np.repeat(mixture[..., list(eye)].mean(-1, keepdims=True), 3, axis=-1)
-                 for eye in spec.eye_channels)
-    first = _solve(mixture, spec, d_left, d_right, consistent, gray, config, gray)
-    priors = tuple(colour_transfer.local_linear_transfer(mixture[..., list(eye)], view, ok,
-                                         config.transfer_radius,
-                                         subsample=config.transfer_subsample)
-                   for eye, view, ok in zip(spec.eye_channels, first, consistent))
-    left, right = _solve(mixture, spec, d_left, d_right, consistent, priors, config, first)
+    left, right = _classical_solve(mixture, spec, d_left, d_right, consistent, config)
   if not spec.transmits_colour:  # Gray encodings: only brightness exists to restore.
     left, right = (np.repeat(view @ np.asarray(mixtures.LUMA, np.float32)[:, None], 3, -1)
                    for view in (left, right))
