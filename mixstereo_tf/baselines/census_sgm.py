@@ -116,8 +116,12 @@ def _cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
 
 
 @numba.njit(**_INNER)
-def _start(cost, cur, nd):
-  """First pixel of a path: cur[i + 1] = cost[i]; returns min."""
+def _start(cost_all, ci, cur_all, di, nd):
+  """First pixel of a path: cur[i + 1] = cost[i] (cost = cost_all[ci], cur = cur_all[di]);
+  returns min. Rows are passed as (2-D array, index) and taken here: a row view made by
+  the caller and passed in costs numba reference counting at every call."""
+  cost = cost_all[ci]
+  cur = cur_all[di]
   m = _BIG
   for i in range(nd):
     v = np.int32(cost[i])
@@ -128,22 +132,29 @@ def _start(cost, cur, nd):
 
 
 @numba.njit(**_INNER)
-def _step(prev, pm, shift, nprev, cost, cur, nd, p1, p2, tmp):
+def _step(prev_all, pi, pm, shift, nprev, cost_all, ci, cur_all, di, nd, p1, p2, tmp):
   """One SGM recursion L(d) = C(d) + min(L'(d), L'(d +- 1) + P1, min L' + P2) - min L'.
 
-  prev, cur: int32 [>= nd + 2] with _BIG guards at 0 and nd + 1 (index i + 1 = window
-  position i). The neighbour's window starts `shift` disparities lower and has nprev
+  prev = prev_all[pi], cur = cur_all[di]: int32 [>= nd + 2] with _BIG guards at 0 and
+  nd + 1 (index i + 1 = window position i); cost = cost_all[ci] (rows taken here, see
+  `_start`). The neighbour's window starts `shift` disparities lower and has nprev
   positions; a shifted or resized one is first copied into `tmp`, aligned with the current
   window, so the recursion is always the same branch-free loop (selects on int32
   vectorise, numba's float min does not). Returns min L.
   """
+  prev = prev_all[pi]
+  cost = cost_all[ci]
+  cur = cur_all[di]
   src = prev
   if shift != 0 or nprev != nd:
     a = min(nd + 2, max(0, 1 - shift))  # tmp[k] = prev[k + shift] for k in [a, b).
     b = max(a, min(nd + 2, nprev + 1 - shift))
-    tmp[:a] = _BIG
-    tmp[a:b] = prev[a + shift:b + shift]
-    tmp[b:nd + 2] = _BIG
+    for k in range(a):
+      tmp[k] = _BIG
+    for k in range(a, b):
+      tmp[k] = prev[k + shift]
+    for k in range(b, nd + 2):
+      tmp[k] = _BIG
     src = tmp
   lim = np.int32(pm + p2)
   m = _BIG
@@ -179,23 +190,21 @@ def _winners(s, offsets, lo, nds, y, dl, dr, best, bestd):
   """
   w = dl.shape[1]
   for x in range(w):
-    row = s[offsets[x]:offsets[x + 1]]
-    nd = nds[y, x]
+    base, nd = offsets[x], nds[y, x]
     bi = 0
     for i in range(1, nd):
-      if row[i] < row[bi]:
+      if s[base + i] < s[base + bi]:
         bi = i
     if 0 < bi < nd - 1:
-      dl[y, x] = _refined(lo[y, x] + bi, row[bi - 1], row[bi], row[bi + 1])
+      dl[y, x] = _refined(lo[y, x] + bi, s[base + bi - 1], s[base + bi], s[base + bi + 1])
     else:
       dl[y, x] = lo[y, x] + bi
   best[:] = _BIG * 8
   for x in range(w):
-    d0 = lo[y, x]
-    row = s[offsets[x]:offsets[x + 1]]
+    d0, base = lo[y, x], offsets[x]
     xr0 = x - d0  # Right pixel of window position 0; position i -> xr0 - i.
     for i in range(max(0, xr0 - w + 1), min(nds[y, x], xr0 + 1)):
-      k, v = xr0 - i, row[i]
+      k, v = xr0 - i, s[base + i]
       take = v < best[k]
       best[k] = v if take else best[k]
       bestd[k] = (d0 + i) if take else bestd[k]
@@ -241,33 +250,32 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
   vprev = np.full((w, nd + 2), _BIG, np.int32)
   vcur = np.full((w, nd + 2), _BIG, np.int32)
   vpm = np.zeros(w, np.int32)
-  t1 = np.full(nd + 2, _BIG, np.int32)
-  t2 = np.full(nd + 2, _BIG, np.int32)
+  t12 = np.full((2, nd + 2), _BIG, np.int32)
   tmp = np.full(nd + 2, _BIG, np.int32)
-  for k in range(n):  # Pass 1: left-to-right (hor), top-down (vcur), right-to-left (t1).
+  for k in range(n):  # Pass 1: left-to-right (hor), top-down (vcur), right-to-left (t12).
     y = y0 + k
     _cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
-    pm = _start(crow[0], hor[0], nds[y, 0])
+    pm = _start(crow, 0, hor, 0, nds[y, 0])
     for x in range(1, w):
-      pm = _step(hor[x - 1], pm, lo[y, x] - lo[y, x - 1], nds[y, x - 1], crow[x], hor[x],
+      pm = _step(hor, x - 1, pm, lo[y, x] - lo[y, x - 1], nds[y, x - 1], crow, x, hor, x,
                  nds[y, x], pen1, pen2, tmp)
     for x in range(w):
       if k == 0:
-        vpm[x] = _start(crow[x], vcur[x], nds[y, x])
+        vpm[x] = _start(crow, x, vcur, x, nds[y, x])
       else:
-        vpm[x] = _step(vprev[x], vpm[x], lo[y, x] - lo[y - 1, x], nds[y - 1, x], crow[x],
-                       vcur[x], nds[y, x], pen1, pen2, tmp)
+        vpm[x] = _step(vprev, x, vpm[x], lo[y, x] - lo[y - 1, x], nds[y - 1, x], crow, x,
+                       vcur, x, nds[y, x], pen1, pen2, tmp)
     for x in range(w - 1, -1, -1):
+      now = x & 1  # This pixel's row of t12; pixel x + 1 used the other one.
       if x == w - 1:
-        pm = _start(crow[x], t1, nds[y, x])
+        pm = _start(crow, x, t12, now, nds[y, x])
       else:
-        pm = _step(t2, pm, lo[y, x] - lo[y, x + 1], nds[y, x + 1], crow[x], t1, nds[y, x],
-                   pen1, pen2, tmp)
+        pm = _step(t12, 1 - now, pm, lo[y, x] - lo[y, x + 1], nds[y, x + 1], crow, x, t12,
+                   now, nds[y, x], pen1, pen2, tmp)
       out = total[offsets[k * w + x]:offsets[k * w + x + 1]]
-      h_, v_ = hor[x], vcur[x]
+      h_, v_, t1 = hor[x], vcur[x], t12[now]
       for i in range(nds[y, x]):
         out[i] = np.uint16(t1[i + 1] + h_[i + 1] + v_[i + 1])
-      t1, t2 = t2, t1
     vprev, vcur = vcur, vprev
   srow = np.empty(w * nd, np.int32)  # Pass 2: bottom-up path, S = total + L_up, winners.
   row_offsets = np.empty(w + 1, np.int64)
@@ -279,10 +287,10 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
     row_offsets[0] = 0
     for x in range(w):
       if k == n - 1:
-        vpm[x] = _start(crow[x], vcur[x], nds[y, x])
+        vpm[x] = _start(crow, x, vcur, x, nds[y, x])
       else:
-        vpm[x] = _step(vprev[x], vpm[x], lo[y, x] - lo[y + 1, x], nds[y + 1, x], crow[x],
-                       vcur[x], nds[y, x], pen1, pen2, tmp)
+        vpm[x] = _step(vprev, x, vpm[x], lo[y, x] - lo[y + 1, x], nds[y + 1, x], crow, x,
+                       vcur, x, nds[y, x], pen1, pen2, tmp)
       tot = total[offsets[k * w + x]:offsets[k * w + x + 1]]
       row_offsets[x + 1] = row_offsets[x] + nds[y, x]
       s_ = srow[row_offsets[x]:row_offsets[x + 1]]
