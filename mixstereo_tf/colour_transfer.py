@@ -79,7 +79,7 @@ def apply_reduced_fit(guide: np.ndarray, small_guide: np.ndarray, small_target: 
   for j in range(m):
     out[..., j] = full(offsets[j]) + sum(guide[..., i] * full(coeff[i][j])
                                          for i in range(guide.shape[-1]))
-  return np.clip(out, 0.0, 1.0)
+  return np.clip(out, np.float32(0.0), np.float32(1.0), out=out)
 
 
 def reduced_size(height: int, width: int, factor: int):
@@ -126,7 +126,7 @@ def local_linear_transfer(guide: np.ndarray, target: np.ndarray, train: np.ndarr
     out = np.empty(target.shape[:2] + (m,), np.float32)
     for j in range(m):
       out[..., j] = offsets[j] + sum(guide[..., i] * coeff[i][j] for i in range(k))
-    return np.clip(out, 0.0, 1.0)
+    return np.clip(out, np.float32(0.0), np.float32(1.0), out=out)
   size = reduced_size(*weight.shape, subsample)
   small_weight = _area(weight, size)
   small_target = _area(target * weight[..., None], size) / np.maximum(

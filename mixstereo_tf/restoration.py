@@ -174,14 +174,19 @@ def _solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, matric
                 inverses, copied, weights, clip, left, right):
   """`iterations` alternations of both views over rows [y0, y1), in place. Index 0 of
   each pair is the left view's, 1 the right's; offsets = (-d_L, d_R), where each view's
-  pixel finds the other view; matrices = (A_L, A_R). Rows are independent (the warps are
-  horizontal), so row blocks run in parallel and each stays in cache."""
+  pixel finds the other view; matrices = (A_L, A_R); finished rows are clipped to
+  [0, 1]. Rows are independent (the warps are horizontal), so row blocks run in parallel
+  and each stays in cache."""
   for y in range(y0, y1):
     for _ in range(iterations):
       _update_view(y, left, right, mixture, offsets[0], consistent[0], priors[0],
                    matrices[1], matrices[0], inverses[0], copied[0], weights, clip)
       _update_view(y, right, left, mixture, offsets[1], consistent[1], priors[1],
                    matrices[0], matrices[1], inverses[1], copied[1], weights, clip)
+    for view in (left, right):  # The result is clipped to [0, 1].
+      for x in range(view.shape[1]):
+        for c in range(3):
+          view[y, x, c] = min(max(view[y, x, c], np.float32(0.0)), np.float32(1.0))
 
 
 def _thread_count(config: RestoreConfig) -> int:
@@ -224,7 +229,7 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
     with concurrent.futures.ThreadPoolExecutor(_thread_count(config)) as pool:
       list(pool.map(lambda block: _solve_rows(int(block[0]), int(block[1]), *arguments),
                     blocks))
-  return np.clip(left, 0, 1), np.clip(right, 0, 1)
+  return left, right
 
 
 def _gray_priors(mixture, spec):
@@ -239,7 +244,7 @@ def _classical_solve(mixture, spec, d_left, d_right, consistent, config):
   solve with the transfer as the prior. With `config.transfer_subsample` s > 1 the first
   solve runs on copies reduced s times (area-reduced mixture, nearest-sampled disparities
   scaled by 1 / s, their own left-right check), whose result is all the reduced transfer
-  fit reads, and the second solve starts from it upsampled."""
+  fit reads, and the second solve starts from the transfer."""
   if not spec.transmits_colour:  # No colour to transfer: one solve, gray priors.
     gray = _gray_priors(mixture, spec)
     return _solve(mixture, spec, d_left, d_right, consistent, gray, config, gray)
@@ -262,9 +267,6 @@ def _classical_solve(mixture, spec, d_left, d_right, consistent, config):
   priors = tuple(colour_transfer.apply_reduced_fit(
       mixture[..., list(eye)], small_mixture[..., list(eye)], view, ok, radius)
                  for eye, view, ok in zip(spec.eye_channels, first, small_consistent))
-  full_size = d_left.shape[::-1]
-  start = tuple(np.clip(cv2.resize(view, full_size, interpolation=cv2.INTER_LINEAR), 0, 1)
-                for view in first)
   return _solve(mixture, spec, d_left, d_right, consistent, priors, config, priors)
 
 
