@@ -10,17 +10,18 @@ equals the other one warped. Each view V is the per-pixel least-squares solution
 (O the other view's current estimate, c the consistency mask, P a prior), alternated
 between the views with over-relaxation (weights, iterations and relaxation chosen on the
 `sample` training scenes with true disparities, over all encodings), channels the mixture
-copies set to the mixture's exactly after each step. So the other view's channels are warped in
-wherever they match, and what neither fixes comes from the prior: for the classical method a local linear colour transfer from the
-view's own mixture channels, fitted where the views match (standing in for Joulin & Kang's
-occlusion handling, which the paper adopts); for the model, the separation network's views.
-Encodings that transmit no colour (`MixtureSpec.transmits_colour`: the gray ones) give
-gray views, their luminance. Clipped channels of
-the Dubois encodings (0 or 255) are not used as observations.
+copies set to the mixture's exactly after each step (`restoration_kernel`). So the other
+view's channels are warped in wherever they match, and what neither fixes comes from the
+prior: for the classical method a local linear colour transfer from the view's own
+mixture channels, fitted where the views match (`colour_transfer`; standing in for Joulin
+& Kang's occlusion handling, which the paper adopts); for the model, the separation
+network's views. Encodings that transmit no colour (`MixtureSpec.transmits_colour`: the
+gray ones) give gray views, their luminance. Clipped channels of the Dubois encodings
+(0 or 255) are not used as observations.
 
 Images are float32 [H, W, 3] in [0, 1]; disparities float32 [H, W] in pixels, signed (the
 left pixel x matches the right pixel x - d_L, the right pixel x matches the left x + d_R).
-NumPy and OpenCV only: this runs on every video frame.
+NumPy, OpenCV and numba only: this runs on every video frame.
 """
 
 import concurrent.futures
@@ -29,11 +30,11 @@ import os
 from typing import Dict, Optional, Tuple
 
 import cv2
-import numba
 import numpy as np
 
 from mixstereo_tf import colour_transfer
 from mixstereo_tf import mixtures
+from mixstereo_tf import restoration_kernel
 
 
 @dataclasses.dataclass(frozen=True)
@@ -89,106 +90,6 @@ def lr_consistency(d_left: np.ndarray, d_right: np.ndarray,
   return ok_left, ok_right
 
 
-@numba.njit(error_model='numpy')
-def _linear_taps(width, x, offset):
-  """(x0, x1, f): a row of `width` pixels sampled linearly at clamp(x + offset, 0,
-  width - 1) is (1 - f) row[x0] + f row[x1] (`sample_horizontal` without OpenCV's
-  1/32-px rounding of the position)."""
-  last = width - 1
-  position = min(max(np.float32(x) + offset, np.float32(0.0)), np.float32(last))
-  x0 = min(int(position), last)
-  return x0, min(x0 + 1, last), position - np.float32(x0)
-
-
-@numba.njit(error_model='numpy')
-def _clipped_inverse(mixture, y, x, own, observation_weight, pull, residual, inverse):
-  """Dubois encodings: channels of the mixture clipped to 0 or 255 are no observations.
-  Zeroes their residual and writes into `inverse` [3, 3] the inverse of
-  w_obs sum_c [observed c] A_own[c]^T A_own[c] + pull I (cofactors, float64)."""
-  gram = np.zeros((3, 3), np.float64)
-  for c in range(3):
-    if not np.float32(0.5 / 255) < mixture[y, x, c] < np.float32(254.5 / 255):
-      residual[c] = 0.0
-      continue
-    for i in range(3):
-      for j in range(3):
-        gram[i, j] += observation_weight * own[c, i] * own[c, j]
-  for i in range(3):
-    gram[i, i] += pull
-  cofactor = np.empty((3, 3), np.float64)
-  for i in range(3):
-    for j in range(3):
-      a, b = (i + 1) % 3, (i + 2) % 3
-      c, d = (j + 1) % 3, (j + 2) % 3
-      cofactor[i, j] = gram[a, c] * gram[b, d] - gram[a, d] * gram[b, c]
-  determinant = gram[0, 0] * cofactor[0, 0] + gram[0, 1] * cofactor[0, 1] + (
-      gram[0, 2] * cofactor[0, 2])
-  for i in range(3):
-    for j in range(3):
-      inverse[i, j] = cofactor[j, i] / determinant
-
-
-@numba.njit(error_model='numpy')
-def _update_view(y, view, other_view, mixture, offset, consistent, prior, other, own,
-                 inverses, copied, weights, clip):
-  """One over-relaxed step of row y of one view, in place: the per-pixel normal equations'
-  solution of w_obs A_own^T (m - A_other v_other) + w_match [consistent] v_other(x +
-  offset) + w_prior prior; channels the mixture copies (copied[i] >= 0) set to it.
-  weights = (w_obs, w_match, w_prior, relaxation); inverses[k]: the normal matrix's
-  inverse for unmatched (k = 0) and matched (1) pixels, or per pixel where `clip`."""
-  observation_weight, match_weight, prior_weight, omega = weights
-  residual = np.empty(3, np.float32)
-  rhs = np.empty(3, np.float32)
-  inverse = np.empty((3, 3), np.float32)
-  for x in range(view.shape[1]):
-    for c in range(3):
-      residual[c] = mixture[y, x, c] - (other[c, 0] * other_view[y, x, 0] +
-                                        other[c, 1] * other_view[y, x, 1] +
-                                        other[c, 2] * other_view[y, x, 2])
-    matched = consistent[y, x]
-    k = 1 if matched else 0
-    if clip:
-      _clipped_inverse(mixture, y, x, own, observation_weight,
-                       prior_weight + match_weight * k, residual, inverse)
-    x0, x1, f = _linear_taps(view.shape[1], x, offset[y, x])
-    for i in range(3):
-      rhs[i] = observation_weight * (own[0, i] * residual[0] + own[1, i] * residual[1] +
-                                     own[2, i] * residual[2]) + prior_weight * prior[y, x, i]
-      if matched:
-        rhs[i] += match_weight * ((np.float32(1.0) - f) * other_view[y, x0, i] +
-                                  f * other_view[y, x1, i])
-    for i in range(3):
-      if copied[i] >= 0:
-        view[y, x, i] = mixture[y, x, copied[i]]
-      else:
-        if clip:
-          solved = inverse[i, 0] * rhs[0] + inverse[i, 1] * rhs[1] + inverse[i, 2] * rhs[2]
-        else:  # Indexed, not through a view: numba counts the references of views.
-          solved = (inverses[k, i, 0] * rhs[0] + inverses[k, i, 1] * rhs[1] +
-                    inverses[k, i, 2] * rhs[2])
-        view[y, x, i] += omega * (solved - view[y, x, i])
-
-
-@numba.njit(nogil=True, cache=True, error_model='numpy')
-def _solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, matrices,
-                inverses, copied, weights, clip, left, right):
-  """`iterations` alternations of both views over rows [y0, y1), in place. Index 0 of
-  each pair is the left view's, 1 the right's; offsets = (-d_L, d_R), where each view's
-  pixel finds the other view; matrices = (A_L, A_R); finished rows are clipped to
-  [0, 1]. Rows are independent (the warps are horizontal), so row blocks run in parallel
-  and each stays in cache."""
-  for y in range(y0, y1):
-    for _ in range(iterations):
-      _update_view(y, left, right, mixture, offsets[0], consistent[0], priors[0],
-                   matrices[1], matrices[0], inverses[0], copied[0], weights, clip)
-      _update_view(y, right, left, mixture, offsets[1], consistent[1], priors[1],
-                   matrices[0], matrices[1], inverses[1], copied[1], weights, clip)
-    for view in (left, right):  # The result is clipped to [0, 1].
-      for x in range(view.shape[1]):
-        for c in range(3):
-          view[y, x, c] = min(max(view[y, x, c], np.float32(0.0)), np.float32(1.0))
-
-
 def _thread_count(config: RestoreConfig) -> int:
   if config.threads:
     return config.threads
@@ -199,8 +100,8 @@ def _thread_count(config: RestoreConfig) -> int:
 
 def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
   """`config.iterations` over-relaxed alternations between the views from `start`
-  (`_solve_rows` on row blocks, in threads: the kernel releases the GIL); returns both
-  views clipped to [0, 1]."""
+  (`restoration_kernel.solve_rows` on row blocks, in threads: the kernel releases the
+  GIL); returns both views clipped to [0, 1]."""
   offsets = (-d_left, d_right)
   matrices = (np.asarray(spec.left_matrix, np.float32),
               np.asarray(spec.right_matrix, np.float32))
@@ -223,12 +124,13 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
   height = mixture.shape[0]
   bounds = np.linspace(0, height, min(height, 4 * _thread_count(config)) + 1).astype(int)
   blocks = list(zip(bounds[:-1], bounds[1:]))
+  solve = lambda block: restoration_kernel.solve_rows(int(block[0]), int(block[1]),
+                                                     *arguments)
   if len(blocks) == 1 or _thread_count(config) == 1:
-    _solve_rows(0, height, *arguments)
+    solve((0, height))
   else:
     with concurrent.futures.ThreadPoolExecutor(_thread_count(config)) as pool:
-      list(pool.map(lambda block: _solve_rows(int(block[0]), int(block[1]), *arguments),
-                    blocks))
+      list(pool.map(solve, blocks))
   return left, right
 
 
