@@ -5,7 +5,8 @@ change and consecutive disparities are close, so `VideoState` keeps, per shot:
   * the encoding, resolved (detected for 'auto') once at the shot's first frame;
   * the disparity range, estimated once at the shot's first frame;
   * the previous frame's left disparity, handed to the solver as a prior (the classical
-    matcher searches around it, `matcher.match(..., prior)`).
+    matcher searches around it, `matcher.match(..., prior)`), except where that frame's
+    match failed the left-right check (NaN: the whole range is searched there).
 Everything is reset at a scene cut. A cut is found between consecutive frames when the
 distance of their colour histograms exceeds `TemporalConfig.cut_threshold`
 (`histogram_distance`): per channel, 16-bin histograms of a copy at most 160 px wide,
@@ -71,7 +72,7 @@ class FrameHint:
     mixture: the shot's encoding.
     detection: the detection info of the shot's first frame ({'detected', 'confidence'}).
     disparity_range: the shot's (min, max) signed pixels.
-    prior: the previous frame's left disparity, float32 [H, W].
+    prior: the previous frame's left disparity, float32 [H, W] (NaN: no prior there).
     prior_window: (radius, spread) of the search around the prior (`TemporalConfig`).
   """
   mixture: Optional[str] = None
@@ -161,7 +162,9 @@ class VideoState:
 
   def end(self, outputs: Dict[str, object]) -> None:
     """Records the unmixed frame: its 'info' (mixture, detection, disparity range) when it
-    started the shot, and its 'disparity_left' as the next frame's prior."""
+    started the shot, and its 'disparity_left' as the next frame's prior, NaN where its
+    'consistent_left' (when given) says the match failed the left-right check: there the
+    next frame searches the whole range again, so a wrong disparity is not inherited."""
     if not self.config.enabled:
       return
     info = outputs.get('info', {})
@@ -171,5 +174,10 @@ class VideoState:
                     'detection': {k: info[k] for k in ('detected', 'confidence') if k in info},
                     'disparity_range': tuple(int(d) for d in search) if search else None}
     disparity = outputs.get('disparity_left')
-    self._prior = (np.asarray(disparity, np.float32)
-                   if disparity is not None and np.isfinite(disparity).all() else None)
+    if disparity is None or not np.isfinite(disparity).all():
+      self._prior = None
+      return
+    self._prior = np.array(disparity, np.float32)
+    consistent = outputs.get('consistent_left')
+    if consistent is not None:
+      self._prior[~np.asarray(consistent, bool)] = np.nan

@@ -146,11 +146,14 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
 def classical_unmix(image: np.ndarray, name: str, search: Range,
                     hint: Optional[temporal.FrameHint] = None) -> Dict[str, object]:
   """The training-free method; a `hint`'s prior: a left disparity to search around in its
-  prior_window (anaglyphs)."""
+  prior_window (anaglyphs; NaN pixels search the whole range). Anaglyphs also give
+  'consistent_left', the matcher's left-right check (`temporal.VideoState` drops the
+  prior where it failed)."""
   prior = hint.prior if hint is not None else None
   window = hint.prior_window if prior is not None else None
   out = baselines.unmix_classical(image, name, search, prior=prior, prior_window=window)
-  return {key: out[key] for key in ('left', 'right', 'disparity_left', 'disparity_right')}
+  keys = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
+  return {key: out[key] for key in keys if key in out}
 
 
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],

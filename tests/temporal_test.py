@@ -114,12 +114,30 @@ def test_prior_is_the_previous_disparity_and_none_after_a_cut(two_shots, monkeyp
   priors = [kwargs['prior'] for _, kwargs in calls]
   assert priors[0] is None and priors[7] is None
   for index in list(range(1, 7)) + list(range(8, 12)):
-    np.testing.assert_array_equal(priors[index], outputs[index - 1]['disparity_left'])
+    previous = outputs[index - 1]
+    # NaN (search everything) where the previous match failed the left-right check.
+    np.testing.assert_array_equal(priors[index], np.where(
+        previous['consistent_left'], previous['disparity_left'], np.nan))
+  assert any(np.isnan(prior).any() for prior in priors[1:7])
   assert [o['info']['prior'] for o in outputs] == [i not in (0, 7) for i in range(12)]
   # use_prior off: the shot's decisions stay, no prior is passed.
   del calls[:]
   _run(two_shots, temporal.TemporalConfig(use_prior=False), search=(0, 12))
   assert all(kwargs['prior'] is None for _, kwargs in calls)
+
+
+def test_a_frame_without_a_consistency_mask_hands_on_its_whole_disparity():
+  state = temporal.VideoState()
+  frame = np.zeros((8, 8, 3), np.uint8)
+  state.begin(frame)
+  disparity = np.arange(64, dtype=np.float32).reshape(8, 8)
+  state.end({'disparity_left': disparity})
+  np.testing.assert_array_equal(state.begin(frame).prior, disparity)
+  consistent = disparity % 3 > 0
+  state.end({'disparity_left': disparity, 'consistent_left': consistent})
+  prior = state.begin(frame).prior
+  np.testing.assert_array_equal(np.isnan(prior), ~consistent)
+  np.testing.assert_array_equal(prior[consistent], disparity[consistent])
 
 
 def test_prior_lowers_flicker_on_a_static_noisy_clip():

@@ -48,11 +48,13 @@ def unmix_anaglyph(mixture, mixture_name: str,
     mixture_name: one of SUPPORTED_MIXTURES.
     disparity_range: (min, max) signed pixels to search; None: estimated from the image.
     config: matching and restoration parameters.
-    prior: optional [H, W] left disparity to search around (a previous video frame's).
+    prior: optional [H, W] left disparity to search around (a previous video frame's;
+      NaN: search the whole range there).
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
     [H, W], signed pixels (left x matches right x - d_L; right x matches left x + d_R);
+    'consistent_left': bool [H, W], the left-right check before filling;
     'disparity_range': the (min, max) searched.
 
   Raises:
@@ -72,4 +74,5 @@ def unmix_anaglyph(mixture, mixture_name: str,
           'right': image_range.unit_to_u8(views['right']),
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
+          'consistent_left': matched['consistent_left'],
           'disparity_range': tuple(int(d) for d in disparity_range)}

@@ -48,6 +48,7 @@ class MatcherConfig:
     full_search_cells: above H * W * D cells (D disparities) `match` goes coarse-to-fine.
     prior_radius: pixels added on both sides of a prior's local [min, max].
     prior_spread: the local [min, max] of a prior is taken over (2 * spread + 1)^2 pixels.
+    prior_missing_spread: where the prior is NaN, over (2 * this + 1)^2 pixels.
     threads: worker threads; 0 = every CPU this process may use.
     strips: horizontal strips; 0 = max(threads, what max_strip_mib needs); 1 = exactly
       `sgm.match` (one strip holds 2 bytes per searched cell of the image).
@@ -67,6 +68,7 @@ class MatcherConfig:
   full_search_cells: int = 200_000_000
   prior_radius: int = 4
   prior_spread: int = 4
+  prior_missing_spread: int = 8
   threads: int = 0
   strips: int = 0
   strip_overlap: int = 32
@@ -89,7 +91,8 @@ class MatcherConfig:
     need(self.p1 <= self.p2 <= 16000, 'p2', 'in [p1, 16000] (uint16 sums of 4 paths)')
     need(self.lr_threshold >= 0, 'lr_threshold', '>= 0')
     need(self.full_search_cells > 0, 'full_search_cells', '> 0')
-    for field in ('prior_radius', 'prior_spread', 'threads', 'strips', 'strip_overlap'):
+    for field in ('prior_radius', 'prior_spread', 'prior_missing_spread', 'threads', 'strips',
+                  'strip_overlap'):
       need(getattr(self, field) >= 0, field, '>= 0')
     need(self.max_strip_mib > 0, 'max_strip_mib', '> 0')
     need(self.range_width >= 4 * self.census_width, 'range_width',
@@ -153,27 +156,40 @@ def coarse_factor(height: int, width: int, min_disparity: int, max_disparity: in
 
 
 def windows_from_prior(prior: np.ndarray, min_disparity: int, max_disparity: int,
-                       radius: int, spread: int) -> Tuple[np.ndarray, np.ndarray]:
+                       radius: int, spread: int,
+                       missing_spread: int = 0) -> Tuple[np.ndarray, np.ndarray]:
   """Per-pixel search windows around a prior disparity map.
 
   Args:
-    prior: float [H, W] disparities, pixels (signed, left-referenced).
+    prior: float [H, W] disparities, pixels (signed, left-referenced); NaN where there is
+      no prior (e.g. the previous frame's match failed the left-right check): those
+      pixels search the [min, max] of the valid prior within `missing_spread` px widened
+      by `radius`, or the whole [min_disparity, max_disparity] where there is none.
     min_disparity, max_disparity: the windows are clipped to this range.
     radius: pixels added on both sides.
     spread: the prior's [min, max] is taken over the (2 * spread + 1)^2 neighbourhood
       (edges replicated), so a depth edge misplaced by up to `spread` px keeps both sides.
+    missing_spread: the neighbourhood radius for NaN pixels (used when > spread).
 
   Returns:
     (lo, widths): int32 [H, W]; pixel (y, x) searches lo + [0, widths), widths >= 1.
   """
   prior = np.asarray(prior, np.float32)
-  low = high = prior
-  if spread > 0:
+  missing = np.isnan(prior)
+  low, high = (np.where(missing, fill, prior) for fill in (np.inf, -np.inf))
+  if spread > 0:  # NaN neighbours count neither in the min nor in the max.
     kernel = np.ones((2 * spread + 1, 2 * spread + 1), np.uint8)
-    low = cv2.erode(prior, kernel, borderType=cv2.BORDER_REPLICATE)
-    high = cv2.dilate(prior, kernel, borderType=cv2.BORDER_REPLICATE)
+    low = cv2.erode(low, kernel, borderType=cv2.BORDER_REPLICATE)
+    high = cv2.dilate(high, kernel, borderType=cv2.BORDER_REPLICATE)
+  if missing.any() and missing_spread > spread:
+    # Missing pixels: the valid prior within missing_spread px (both sides of an edge).
+    kernel = np.ones((2 * missing_spread + 1, 2 * missing_spread + 1), np.uint8)
+    low[missing] = cv2.erode(low, kernel, borderType=cv2.BORDER_REPLICATE)[missing]
+    high[missing] = cv2.dilate(high, kernel, borderType=cv2.BORDER_REPLICATE)[missing]
   lo = np.clip(np.floor(low) - radius, min_disparity, max_disparity)
   hi = np.clip(np.ceil(high) + radius, min_disparity, max_disparity)
+  unknown = ~np.isfinite(low) | ~np.isfinite(high)  # No valid prior near: everything.
+  lo[unknown], hi[unknown] = min_disparity, max_disparity
   return lo.astype(np.int32), (hi - lo + 1).astype(np.int32)
 
 
@@ -222,7 +238,7 @@ def match(left, right, min_disparity: int, max_disparity: int,
     config: parameters.
     prior: optional float [H, W] left disparity (e.g. the previous video frame's); then
       only windows around it are searched (`windows_from_prior`, config.prior_radius and
-      config.prior_spread).
+      config.prior_spread), the whole range where it is NaN.
 
   Returns:
     'disparity_left', 'disparity_right': float32 [H, W] signed pixels, filled everywhere
@@ -238,11 +254,11 @@ def match(left, right, min_disparity: int, max_disparity: int,
   low, high = _search_range(min_disparity, max_disparity, w)
   if prior is not None:
     prior = np.asarray(prior, np.float32)
-    if prior.shape != (h, w) or not np.isfinite(prior).all():
-      raise ValueError(f'prior must be a finite [H, W] = [{h}, {w}] disparity map, got '
-                       f'shape {prior.shape}.')
+    if prior.shape != (h, w) or np.isinf(prior).any():
+      raise ValueError(f'prior must be an [H, W] = [{h}, {w}] disparity map without '
+                       f'infinities, got shape {prior.shape}.')
     lo, widths = windows_from_prior(prior, low, high, config.prior_radius,
-                                    config.prior_spread)
+                                    config.prior_spread, config.prior_missing_spread)
     return _search(left, right, lo, widths, config)
   factor = coarse_factor(h, w, low, high, config)
   if factor == 1:
