@@ -125,7 +125,8 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
   (in tiles), then, for anaglyphs, both views restored from the refined disparities with,
   as the prior where the views do not match, the mean of the refined views and the
   classical colour transfer (each alone was worse on some encodings:
-  experiments/results/pretrained_ablations.md)."""
+  experiments/results/pretrained_ablations.md); 'consistent_left' is that restoration's
+  left-right check of the refined disparities."""
   classical = classical_unmix(image, name, search, hint)
   refined = tiling.apply(network, refiner_data.network_input(
       image, classical['left'], classical['right'], classical['disparity_left'],
@@ -140,6 +141,7 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
     prior = [(image_range.u8_to_unit(outputs[k]) + transfer[k]) / 2 for k in ('left', 'right')]
     views = restoration.restore_views(mixture01, name, *disparities, *prior)
     outputs.update({k: image_range.unit_to_u8(views[k]) for k in ('left', 'right')})
+    outputs['consistent_left'] = views['consistent_left']  # For the next frame's prior.
   return outputs
 
 

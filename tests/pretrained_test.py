@@ -9,6 +9,7 @@ import tensorflow as tf
 
 from mixstereo_tf import inference
 from mixstereo_tf import pretrained
+from mixstereo_tf import restoration
 from mixstereo_tf.models import refiner
 from tests import inference_test
 
@@ -77,6 +78,11 @@ def test_untrained_refiner_unmixes_like_the_classical_method(tmp_path):
   ours, theirs = model(image), classical(image)
   np.testing.assert_allclose(ours['disparity_left'], theirs['disparity_left'], atol=1e-4)
   np.testing.assert_allclose(ours['disparity_right'], theirs['disparity_right'], atol=1e-4)
+  # Both hand a video's next frame the left-right check of their disparities (the
+  # model's: its final restoration's, of the refined disparities).
+  assert theirs['consistent_left'].shape == (40, 64) and theirs['consistent_left'].any()
+  np.testing.assert_array_equal(ours['consistent_left'], restoration.lr_consistency(
+      ours['disparity_left'], ours['disparity_right'])[0])
   assert ours['info']['method'] == 'model' and model.restore_colour
   assert not inference.build_unmixer(inference.PredictorConfig(mixture='diplopia')).restore_colour
   with pytest.raises(ValueError, match='trained on'):
