@@ -47,6 +47,14 @@ def _averaged_coefficients(guide, target, weight, radius, eps, prior_count):
   return [[_box(c, radius) / windows for c in row] for row in coeff], offsets
 
 
+def _apply(guide: np.ndarray, coeff, offsets) -> np.ndarray:
+  """float32 [H, W, M] = offsets[j] + sum_i coeff[i][j] guide[..., i], clipped to [0, 1]."""
+  out = np.empty(guide.shape[:2] + (len(offsets),), np.float32)
+  for j, offset in enumerate(offsets):
+    out[..., j] = offset + sum(guide[..., i] * coeff[i][j] for i in range(guide.shape[-1]))
+  return np.clip(out, np.float32(0.0), np.float32(1.0), out=out)
+
+
 def _area(image: np.ndarray, size) -> np.ndarray:
   """Area-downsampled [h, w, C] copy of [H, W, C]."""
   out = cv2.resize(image, size, interpolation=cv2.INTER_AREA)
@@ -75,11 +83,7 @@ def apply_reduced_fit(guide: np.ndarray, small_guide: np.ndarray, small_target: 
                                           radius, eps, prior_count)
   height, width = guide.shape[:2]
   full = lambda x: cv2.resize(x, (width, height), interpolation=cv2.INTER_LINEAR)
-  out = np.empty((height, width, m), np.float32)
-  for j in range(m):
-    out[..., j] = full(offsets[j]) + sum(guide[..., i] * full(coeff[i][j])
-                                         for i in range(guide.shape[-1]))
-  return np.clip(out, np.float32(0.0), np.float32(1.0), out=out)
+  return _apply(guide, [[full(c) for c in row] for row in coeff], [full(b) for b in offsets])
 
 
 def reduced_size(height: int, width: int, factor: int):
@@ -122,11 +126,8 @@ def local_linear_transfer(guide: np.ndarray, target: np.ndarray, train: np.ndarr
     return np.repeat(guide.mean(-1, keepdims=True), m, axis=-1)
   weight = train.astype(np.float32)
   if subsample == 1:
-    coeff, offsets = _averaged_coefficients(guide, target, weight, radius, eps, prior_count)
-    out = np.empty(target.shape[:2] + (m,), np.float32)
-    for j in range(m):
-      out[..., j] = offsets[j] + sum(guide[..., i] * coeff[i][j] for i in range(k))
-    return np.clip(out, np.float32(0.0), np.float32(1.0), out=out)
+    return _apply(guide, *_averaged_coefficients(guide, target, weight, radius, eps,
+                                                 prior_count))
   size = reduced_size(*weight.shape, subsample)
   small_weight = _area(weight, size)
   small_target = _area(target * weight[..., None], size) / np.maximum(

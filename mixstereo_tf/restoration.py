@@ -49,8 +49,8 @@ class RestoreConfig:
     relaxation: over-relaxation factor of each alternation (1 = plain Gauss-Seidel).
     lr_threshold: largest accepted |d_L(x) - d_R(x - d_L(x))|, pixels.
     transfer_radius: window radius of the colour transfer, pixels.
-    transfer_subsample: the colour transfer fits on copies reduced this many times
-      (`colour_transfer.local_linear_transfer`; 1: exact).
+    transfer_subsample: the first solve and the colour transfer's fits run on copies
+      reduced this many times (`colour_transfer.apply_reduced_fit`; 1: full size, exact).
     threads: threads of the solve (row blocks); 0 = every CPU this process may use.
   """
   observation_weight: float = 30.0
@@ -121,15 +121,15 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
                contiguous(offsets, np.float32), contiguous(consistent, np.bool_),
                contiguous(priors, np.float32), matrices, tuple(inverses), tuple(copied),
                weights, bool(spec.clip), left, right)
-  height = mixture.shape[0]
-  bounds = np.linspace(0, height, min(height, 4 * _thread_count(config)) + 1).astype(int)
+  height, threads = mixture.shape[0], _thread_count(config)
+  bounds = np.linspace(0, height, min(height, 4 * threads) + 1).astype(int)
   blocks = list(zip(bounds[:-1], bounds[1:]))
   solve = lambda block: restoration_kernel.solve_rows(int(block[0]), int(block[1]),
                                                      *arguments)
-  if len(blocks) == 1 or _thread_count(config) == 1:
+  if len(blocks) == 1 or threads == 1:
     solve((0, height))
   else:
-    with concurrent.futures.ThreadPoolExecutor(_thread_count(config)) as pool:
+    with concurrent.futures.ThreadPoolExecutor(threads) as pool:
       list(pool.map(solve, blocks))
   return left, right
 
@@ -142,8 +142,9 @@ def _gray_priors(mixture, spec):
 
 def _classical_solve(mixture, spec, d_left, d_right, consistent, config):
   """Both views without a network (encodings that transmit no colour: one solve with
-  the gray priors): a first solve with the gray priors, the colour transfer from each view's mixture channels fitted where the views match, and a second
-  solve with the transfer as the prior. With `config.transfer_subsample` s > 1 the first
+  the gray priors): a first solve with the gray priors, the colour transfer from each
+  view's mixture channels fitted where the views match, and a second solve with the
+  transfer as the prior. With `config.transfer_subsample` s > 1 the first
   solve runs on copies reduced s times (area-reduced mixture, nearest-sampled disparities
   scaled by 1 / s, their own left-right check), whose result is all the reduced transfer
   fit reads, and the second solve starts from the transfer."""
