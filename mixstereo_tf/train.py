@@ -115,12 +115,15 @@ flags.DEFINE_boolean('realistic_scenes', _DATA['realistic_scenes'], '`sample` tr
                      'scenes with ground planes, thin poles and more layers.')
 flags.DEFINE_boolean('degrade', _PIPE['degrade'], 'Degrade each mixture like a real file '
                      '(noise, blur, JPEG, vignetting, channel imbalance; not in the paper).')
+flags.DEFINE_float('clean_probability', refiner_data.ExampleConfig.clean_probability,
+                   'With --degrade, the share of refiner examples left clean (anaglyphs '
+                   'made digitally from clean pairs; not in the paper).')
 
 flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner'), "joint: the paper's "
                   'network; refiner: the hybrid that refines the classical result '
                   '(models/refiner.py; trained on cached `sample` examples with ground truth, '
                   'from --sample_scenes, --sample_height/width, --max_disparity, --mixture, '
-                  '--texture_dir, --degrade; not in the paper).')
+                  '--texture_dir, --degrade, --clean_probability; not in the paper).')
 
 _RENAMED = {'DataConfig.split_list': 'train_list'}
 
@@ -183,7 +186,8 @@ def _train_refiner() -> None:
     examples = refiner_data.ExampleConfig(
         mixtures=FLAGS.mixture or 'anaglyphs', height=FLAGS.sample_height or FLAGS.crop_height,
         width=FLAGS.sample_width or FLAGS.crop_width, max_disparity=FLAGS.max_disparity,
-        degrade=FLAGS.degrade, texture_dir=FLAGS.texture_dir)
+        degrade=FLAGS.degrade, clean_probability=FLAGS.clean_probability,
+        texture_dir=FLAGS.texture_dir)
     config = refiner_loop.RefinerTrainConfig(
         model_dir=FLAGS.model_dir, num_shards=-(-FLAGS.sample_scenes // shard_size),
         crop_height=FLAGS.crop_height, crop_width=FLAGS.crop_width,

@@ -1,5 +1,6 @@
 """Tests for mixstereo_tf.data.refiner_data: examples with the classical result, shards."""
 
+import dataclasses
 import os
 
 import numpy as np
@@ -64,8 +65,22 @@ def test_shards_are_built_once_and_loaded_in_order(tmp_path, textures):
   np.testing.assert_array_equal(inputs[..., 9], data['classical_disparity_left'])
 
 
+def test_clean_share_keeps_the_encoding_and_draws_nothing_else(textures):
+  degraded = dataclasses.replace(SMALL, degrade=True)
+  clean = dataclasses.replace(degraded, clean_probability=1.0)
+  plain, kept = (refiner_data.make_example(5, c, textures) for c in (degraded, clean))
+  np.testing.assert_array_equal(plain['left'], kept['left'])  # Same scene and shift.
+  assert plain['name'] == kept['name']
+  expected = mixtures.mix(kept['name'], kept['left'] / 127.5 - 1,
+                          kept['right'] / 127.5 - 1).numpy()
+  assert np.abs((expected + 1) * 127.5 - kept['mixture']).max() <= 1
+  assert np.abs((expected + 1) * 127.5 - plain['mixture']).mean() > 2  # Degraded.
+
+
 def test_config_checks():
   with pytest.raises(ValueError, match='window_probability'):
     refiner_data.ExampleConfig(window_probability=2.0)
+  with pytest.raises(ValueError, match='clean_probability'):
+    refiner_data.ExampleConfig(clean_probability=-0.1)
   with pytest.raises(ValueError):
     refiner_data.ExampleConfig(mixtures='nothing')

@@ -10,7 +10,8 @@ One example (`make_example`):
      moves so a fraction U[0, 0.7] of the disparity range becomes negative (every
      disparity d - s); a double image's views stay ordered by positive disparity;
   4. the mixture, `degrade.degrade` (noise, blur, JPEG, vignetting, channel imbalance)
-     and 8-bit quantisation;
+     except with probability `clean_probability` (anaglyphs made digitally from clean
+     pairs, as FFmpeg or StereoPhoto Maker make them), and 8-bit quantisation;
   5. `baselines.unmix_classical` on it with the range estimated from the image, as at
      inference (`matcher.estimate_range` inside the anaglyph method,
      `diplopia.estimate_range` for a double image).
@@ -51,7 +52,8 @@ class ExampleConfig:
     height, width: example size in pixels.
     max_disparity: scene depth range (`synthetic.SceneConfig.max_disparity`), pixels.
     window_probability: chance of a window-aligned (signed) example.
-    degrade: pass each mixture through `degrade.degrade`.
+    degrade: pass each mixture through `degrade.degrade` ...
+    clean_probability: ... except this share of them, left clean.
     texture_dir: a folder of photographs for the scenes (None: scikit-image's).
   """
   mixtures: str = 'anaglyphs'
@@ -60,14 +62,16 @@ class ExampleConfig:
   max_disparity: int = 64
   window_probability: float = 0.7
   degrade: bool = True
+  clean_probability: float = 0.0
   texture_dir: Optional[str] = None
 
   def __post_init__(self):
     mixtures.parse_names(self.mixtures)  # ValueError naming an unknown encoding.
     synthetic.SceneConfig(self.max_disparity, self.height, self.width + self.max_disparity)
-    if not 0.0 <= self.window_probability <= 1.0:
-      raise ValueError(f'ExampleConfig.window_probability must be in [0, 1], got '
-                       f'{self.window_probability}.')
+    for field in ('window_probability', 'clean_probability'):
+      if not 0.0 <= getattr(self, field) <= 1.0:
+        raise ValueError(f'ExampleConfig.{field} must be in [0, 1], got '
+                         f'{getattr(self, field)}.')
 
 
 def _textures(config: ExampleConfig) -> synthetic.TextureAtlas:
@@ -96,6 +100,7 @@ def make_example(index: int, config: ExampleConfig,
   fraction = rng.uniform(0.0, 0.7) if window else 0.0
   names = mixtures.parse_names(config.mixtures)
   name = names[rng.integers(len(names))]
+  clean = rng.uniform() < config.clean_probability  # Drawn last: p = 0 keeps old examples.
   shift = 0
   if window and mixtures.get_mixture(name).is_anaglyph:
     low, high = np.percentile(scene['disparity_left'], [1.0, 99.0])
@@ -104,7 +109,7 @@ def make_example(index: int, config: ExampleConfig,
   mixed = mixtures.mix(name, image_range.u8_to_signed(pair['left']),
                        image_range.u8_to_signed(pair['right']))
   mixed = image_range.signed_to_unit(mixed)
-  if config.degrade:
+  if config.degrade and not clean:
     mixed = degrade.degrade(mixed, tf.constant([index, 7], tf.int32))
   mixture = image_range.unit_to_u8(np.asarray(mixed))
   if name == 'diplopia':
