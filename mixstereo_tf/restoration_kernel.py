@@ -22,21 +22,25 @@ def _linear_taps(width, x, offset):
 
 
 @numba.njit(error_model='numpy')
-def _clipped_inverse(mixture, y, x, own, observation_weight, pull, residual, inverse):
-  """Dubois encodings: channels of the mixture clipped to 0 or 255 are no observations.
-  Zeroes their residual and writes into `inverse` [3, 3] the inverse of
-  w_obs sum_c [observed c] A_own[c]^T A_own[c] + pull I (cofactors, float64)."""
-  gram = np.zeros((3, 3), np.float64)
+def _observed(value):
+  """A mixture channel clipped to 0 or 255 is no observation (Dubois encodings)."""
+  return np.float32(0.5 / 255) < value < np.float32(254.5 / 255)
+
+
+@numba.njit(error_model='numpy')
+def _clipped_inverse(mixture, y, x, own, observation_weight, pull, gram, cofactor, inverse):
+  """Dubois encodings: writes into `inverse` [3, 3] the inverse of w_obs sum_c [observed
+  c] A_own[c]^T A_own[c] + pull I (cofactors, float64; gram and cofactor: float64 [3, 3]
+  scratch)."""
+  gram[:] = 0.0
   for c in range(3):
-    if not np.float32(0.5 / 255) < mixture[y, x, c] < np.float32(254.5 / 255):
-      residual[c] = 0.0
+    if not _observed(mixture[y, x, c]):
       continue
     for i in range(3):
       for j in range(3):
         gram[i, j] += observation_weight * own[c, i] * own[c, j]
   for i in range(3):
     gram[i, i] += pull
-  cofactor = np.empty((3, 3), np.float64)
   for i in range(3):
     for j in range(3):
       a, b = (i + 1) % 3, (i + 2) % 3
@@ -56,37 +60,44 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
   solution of w_obs A_own^T (m - A_other v_other) + w_match [consistent] v_other(x +
   offset) + w_prior prior; channels the mixture copies (copied[i] >= 0) set to it.
   weights = (w_obs, w_match, w_prior, relaxation); inverses[k]: the normal matrix's
-  inverse for unmatched (k = 0) and matched (1) pixels, or per pixel where `clip`."""
+  inverse for unmatched (k = 0) and matched (1) pixels, or per pixel where `clip`.
+  Per-pixel values live in scalars (registers), not in small arrays."""
   observation_weight, match_weight, prior_weight, omega = weights
-  residual = np.empty(3, np.float32)
-  rhs = np.empty(3, np.float32)
   inverse = np.empty((3, 3), np.float32)
+  gram, cofactor = np.empty((3, 3), np.float64), np.empty((3, 3), np.float64)
+  one = np.float32(1.0)
   for x in range(view.shape[1]):
-    for c in range(3):
-      residual[c] = mixture[y, x, c] - (other[c, 0] * other_view[y, x, 0] +
-                                        other[c, 1] * other_view[y, x, 1] +
-                                        other[c, 2] * other_view[y, x, 2])
+    v0, v1, v2 = other_view[y, x, 0], other_view[y, x, 1], other_view[y, x, 2]
+    e0 = mixture[y, x, 0] - (other[0, 0] * v0 + other[0, 1] * v1 + other[0, 2] * v2)
+    e1 = mixture[y, x, 1] - (other[1, 0] * v0 + other[1, 1] * v1 + other[1, 2] * v2)
+    e2 = mixture[y, x, 2] - (other[2, 0] * v0 + other[2, 1] * v1 + other[2, 2] * v2)
     matched = consistent[y, x]
     k = 1 if matched else 0
     if clip:
+      e0 = e0 if _observed(mixture[y, x, 0]) else np.float32(0.0)
+      e1 = e1 if _observed(mixture[y, x, 1]) else np.float32(0.0)
+      e2 = e2 if _observed(mixture[y, x, 2]) else np.float32(0.0)
       _clipped_inverse(mixture, y, x, own, observation_weight,
-                       prior_weight + match_weight * k, residual, inverse)
+                       prior_weight + match_weight * k, gram, cofactor, inverse)
     x0, x1, f = _linear_taps(view.shape[1], x, offset[y, x])
-    for i in range(3):
-      rhs[i] = observation_weight * (own[0, i] * residual[0] + own[1, i] * residual[1] +
-                                     own[2, i] * residual[2]) + prior_weight * prior[y, x, i]
-      if matched:
-        rhs[i] += match_weight * ((np.float32(1.0) - f) * other_view[y, x0, i] +
-                                  f * other_view[y, x1, i])
+    h0 = observation_weight * (own[0, 0] * e0 + own[1, 0] * e1 + own[2, 0] * e2) + (
+        prior_weight * prior[y, x, 0])
+    h1 = observation_weight * (own[0, 1] * e0 + own[1, 1] * e1 + own[2, 1] * e2) + (
+        prior_weight * prior[y, x, 1])
+    h2 = observation_weight * (own[0, 2] * e0 + own[1, 2] * e1 + own[2, 2] * e2) + (
+        prior_weight * prior[y, x, 2])
+    if matched:
+      h0 += match_weight * ((one - f) * other_view[y, x0, 0] + f * other_view[y, x1, 0])
+      h1 += match_weight * ((one - f) * other_view[y, x0, 1] + f * other_view[y, x1, 1])
+      h2 += match_weight * ((one - f) * other_view[y, x0, 2] + f * other_view[y, x1, 2])
     for i in range(3):
       if copied[i] >= 0:
         view[y, x, i] = mixture[y, x, copied[i]]
       else:
         if clip:
-          solved = inverse[i, 0] * rhs[0] + inverse[i, 1] * rhs[1] + inverse[i, 2] * rhs[2]
+          solved = inverse[i, 0] * h0 + inverse[i, 1] * h1 + inverse[i, 2] * h2
         else:  # Indexed, not through a view: numba counts the references of views.
-          solved = (inverses[k, i, 0] * rhs[0] + inverses[k, i, 1] * rhs[1] +
-                    inverses[k, i, 2] * rhs[2])
+          solved = inverses[k, i, 0] * h0 + inverses[k, i, 1] * h1 + inverses[k, i, 2] * h2
         view[y, x, i] += omega * (solved - view[y, x, i])
 
 
