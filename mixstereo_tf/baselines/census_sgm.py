@@ -193,10 +193,11 @@ def _winners(s, offsets, lo, nds, y, dl, dr, best, bestd):
   w = dl.shape[1]
   for x in range(w):
     base, nd = offsets[x], nds[y, x]
-    bi = 0
+    bi, bv = 0, s[base]  # The first minimum, its cost kept in a register.
     for i in range(1, nd):
-      if s[base + i] < s[base + bi]:
-        bi = i
+      v = s[base + i]
+      bi = i if v < bv else bi
+      bv = v if v < bv else bv
     if 0 < bi < nd - 1:
       dl[y, x] = _refined(lo[y, x] + bi, s[base + bi - 1], s[base + bi], s[base + bi + 1])
     else:
