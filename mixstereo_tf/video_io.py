@@ -43,11 +43,14 @@ class EncoderSettings:
 
 # H.264 at constant quality 18 (visually lossless for x264) in 4:2:0, which every player
 # decodes; AVI gets Motion JPEG at the best quantiser (AVI holds no B-frame timing).
+# Preset veryfast: on a 2560x720 side-by-side clip it encodes in 61 ms a frame on one core
+# where medium took 166 ms, at the same PSNR (41.03 / 41.01 dB) and size (987 / 1036
+# KiB); on a 2-core machine medium's encoding took a third of the CPU of a video job.
 # x264's macroblock-tree rate control is off (mbtree=0): on CPUs with AVX-512 its AVX-512
 # code encodes identical frames differently from run to run (seen with libx264 core 165
 # whenever the width in macroblocks is not a multiple of 16, e.g. 96 or 1920 px), and a
 # resumed video job must re-encode its segments exactly as an uninterrupted run does.
-_H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'medium'),
+_H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'veryfast'),
                                                ('x264-params', 'mbtree=0')))
 ENCODERS: Dict[str, EncoderSettings] = {
     '.mp4': _H264, '.mov': _H264, '.mkv': _H264,
