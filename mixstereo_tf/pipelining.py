@@ -11,14 +11,26 @@ three stages run at once on different cores. Both queues are bounded (`depth`), 
 stays bounded when one stage is slower. A failure in a background stage is raised in the
 calling thread at its next call; leaving a `with` block (also by an exception or Ctrl-C)
 stops the prefetching thread and waits for the submitted tasks, which therefore always run
-in submission order and completely or not at all.
+in submission order and completely or not at all. `usable_cpus` sizes the kernels' thread
+pools.
 """
 
+import os
 import queue
 import threading
 from typing import Callable, Iterable, Iterator, List
 
 _END = object()
+
+
+def usable_cpus(requested: int = 0) -> int:
+  """`requested` threads, or when 0 the CPUs this process may use (on Linux its affinity
+  mask, e.g. under `taskset`, not the machine's count)."""
+  if requested:
+    return requested
+  if hasattr(os, 'sched_getaffinity'):
+    return len(os.sched_getaffinity(0))
+  return os.cpu_count() or 1
 
 
 class Prefetcher:

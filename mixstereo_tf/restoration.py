@@ -26,7 +26,6 @@ NumPy, OpenCV and numba only: this runs on every video frame.
 
 import concurrent.futures
 import dataclasses
-import os
 from typing import Dict, Optional, Tuple
 
 import cv2
@@ -34,6 +33,7 @@ import numpy as np
 
 from mixstereo_tf import colour_transfer
 from mixstereo_tf import mixtures
+from mixstereo_tf import pipelining
 from mixstereo_tf import restoration_kernel
 
 
@@ -90,14 +90,6 @@ def lr_consistency(d_left: np.ndarray, d_right: np.ndarray,
   return ok_left, ok_right
 
 
-def _thread_count(config: RestoreConfig) -> int:
-  if config.threads:
-    return config.threads
-  if hasattr(os, 'sched_getaffinity'):  # Linux: the affinity mask, not the machine.
-    return len(os.sched_getaffinity(0))
-  return os.cpu_count() or 1
-
-
 def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
   """`config.iterations` over-relaxed alternations between the views from `start`
   (`restoration_kernel.solve_rows` on row blocks, in threads: the kernel releases the
@@ -121,7 +113,7 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
                contiguous(offsets, np.float32), contiguous(consistent, np.bool_),
                contiguous(priors, np.float32), matrices, tuple(inverses), tuple(copied),
                weights, bool(spec.clip), left, right)
-  height, threads = mixture.shape[0], _thread_count(config)
+  height, threads = mixture.shape[0], pipelining.usable_cpus(config.threads)
   bounds = np.linspace(0, height, min(height, 4 * threads) + 1).astype(int)
   blocks = list(zip(bounds[:-1], bounds[1:]))
   solve = lambda block: restoration_kernel.solve_rows(int(block[0]), int(block[1]),

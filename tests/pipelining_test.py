@@ -1,5 +1,6 @@
 """Tests of the threaded prefetcher and serial worker: order, bounds, failures."""
 
+import os
 import threading
 import time
 
@@ -90,3 +91,10 @@ def test_depth_must_be_positive():
     pipelining.SerialWorker(depth=0)
   with pytest.raises(ValueError, match='depth'):
     pipelining.Prefetcher([], depth=0)
+
+
+def test_usable_cpus_follows_the_request_or_the_affinity_mask():
+  assert pipelining.usable_cpus(3) == 3
+  expected = (len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity')
+              else os.cpu_count())
+  assert pipelining.usable_cpus() == expected >= 1

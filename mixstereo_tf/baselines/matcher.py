@@ -26,12 +26,12 @@ MatcherConfig.threads of them at a time). A 4000x3000 pair with a +-181 or +-300
 
 import dataclasses
 import math
-import os
 from typing import Optional, Tuple
 
 import cv2
 import numpy as np
 
+from mixstereo_tf import pipelining
 from mixstereo_tf.baselines import fast_postprocess
 from mixstereo_tf.baselines import parallel_sgm
 
@@ -103,9 +103,7 @@ class MatcherConfig:
 
   def thread_count(self) -> int:
     """`threads`, or when 0 the CPUs this process may use."""
-    if hasattr(os, 'sched_getaffinity'):  # Linux: the affinity mask, not the machine.
-      return self.threads or len(os.sched_getaffinity(0))
-    return self.threads or os.cpu_count() or 1
+    return pipelining.usable_cpus(self.threads)
 
 
 def _pair(left, right, config: MatcherConfig) -> Tuple[np.ndarray, np.ndarray]:
