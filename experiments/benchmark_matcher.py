@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 
 from mixstereo_tf.baselines import matcher
+from mixstereo_tf.baselines import search_windows
 from mixstereo_tf.baselines import sgm
 from mixstereo_tf.data import sample
 from mixstereo_tf.data import sources
@@ -121,7 +122,7 @@ def matcher_speed(case: str, method: str = 'numba', repeats: int = 2) -> dict:
   if case == '1280x720':
     previous = matcher.match(left, right, low, high, config)['disparity_left']
     prior = np.roll(previous, (1, 2), axis=(0, 1)) + 1.0
-    result['mean_window'] = float(matcher.windows_from_prior(
+    result['mean_window'] = float(search_windows.around_prior(
         prior, low, high, config.prior_radius, config.prior_spread)[1].mean())
     result['prior'] = _timed(lambda: matcher.match(left, right, low, high, config, prior),
                              repeats, truth, visible)

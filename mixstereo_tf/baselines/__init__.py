@@ -32,7 +32,7 @@ def unmix_classical(mixture_u8, mixture_name: str,
     disparity_range: (min, max) signed pixels (anaglyphs); None: estimated from the image
       for anaglyphs, the default positive range for diplopia.
     prior: optional [H, W] left disparity to search around (anaglyphs; a previous frame's).
-    prior_window: (radius, spread) of that search (`matcher.windows_from_prior`); None:
+    prior_window: (radius, spread) of that search (`search_windows.around_prior`); None:
       MatcherConfig's prior_radius and prior_spread.
 
   Returns:

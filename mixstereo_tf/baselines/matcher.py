@@ -12,8 +12,8 @@ disparity windows:
   * full search: every pixel searches [min_disparity, max_disparity];
   * prior (e.g. the previous video frame's left disparity): pixel (y, x) searches the
     prior's [min, max] over its (2 * spread + 1)^2 neighbourhood widened by `radius`
-    (`windows_from_prior`), so windows are narrow on smooth surfaces and wide only along
-    depth edges, which may move by up to `spread` px;
+    (`search_windows.around_prior`), so windows are narrow on smooth surfaces and wide
+    only along depth edges, which may move by up to `spread` px;
   * coarse-to-fine, chosen by `match` above MatcherConfig.full_search_cells: the full range
     at 1/f scale (area downsampling, `coarse_factor`), then windows around the upsampled
     result (radius ceil(f) + 2, spread ceil(f) + 1) at full scale.
@@ -34,6 +34,7 @@ import numpy as np
 from mixstereo_tf import pipelining
 from mixstereo_tf.baselines import fast_postprocess
 from mixstereo_tf.baselines import parallel_sgm
+from mixstereo_tf.baselines import search_windows
 
 
 @dataclasses.dataclass(frozen=True)
@@ -153,44 +154,6 @@ def coarse_factor(height: int, width: int, min_disparity: int, max_disparity: in
   return factor
 
 
-def windows_from_prior(prior: np.ndarray, min_disparity: int, max_disparity: int,
-                       radius: int, spread: int,
-                       missing_spread: int = 0) -> Tuple[np.ndarray, np.ndarray]:
-  """Per-pixel search windows around a prior disparity map.
-
-  Args:
-    prior: float [H, W] disparities, pixels (signed, left-referenced); NaN where there is
-      no prior (e.g. the previous frame's match failed the left-right check): those
-      pixels search the [min, max] of the valid prior within `missing_spread` px widened
-      by `radius`, or the whole [min_disparity, max_disparity] where there is none.
-    min_disparity, max_disparity: the windows are clipped to this range.
-    radius: pixels added on both sides.
-    spread: the prior's [min, max] is taken over the (2 * spread + 1)^2 neighbourhood
-      (edges replicated), so a depth edge misplaced by up to `spread` px keeps both sides.
-    missing_spread: the neighbourhood radius for NaN pixels (used when > spread).
-
-  Returns:
-    (lo, widths): int32 [H, W]; pixel (y, x) searches lo + [0, widths), widths >= 1.
-  """
-  prior = np.asarray(prior, np.float32)
-  missing = np.isnan(prior)
-  low, high = (np.where(missing, fill, prior) for fill in (np.inf, -np.inf))
-  if spread > 0:  # NaN neighbours count neither in the min nor in the max.
-    kernel = np.ones((2 * spread + 1, 2 * spread + 1), np.uint8)
-    low = cv2.erode(low, kernel, borderType=cv2.BORDER_REPLICATE)
-    high = cv2.dilate(high, kernel, borderType=cv2.BORDER_REPLICATE)
-  if missing.any() and missing_spread > spread:
-    # Missing pixels: the valid prior within missing_spread px (both sides of an edge).
-    kernel = np.ones((2 * missing_spread + 1, 2 * missing_spread + 1), np.uint8)
-    low[missing] = cv2.erode(low, kernel, borderType=cv2.BORDER_REPLICATE)[missing]
-    high[missing] = cv2.dilate(high, kernel, borderType=cv2.BORDER_REPLICATE)[missing]
-  lo = np.clip(np.floor(low) - radius, min_disparity, max_disparity)
-  hi = np.clip(np.ceil(high) + radius, min_disparity, max_disparity)
-  unknown = ~np.isfinite(low) | ~np.isfinite(high)  # No valid prior near: everything.
-  lo[unknown], hi[unknown] = min_disparity, max_disparity
-  return lo.astype(np.int32), (hi - lo + 1).astype(np.int32)
-
-
 def _search(left, right, lo, widths, config: MatcherConfig) -> dict:
   """Matches over the windows lo + [0, widths); post-processed as `sgm.match`."""
   threads = config.thread_count()
@@ -235,7 +198,7 @@ def match(left, right, min_disparity: int, max_disparity: int,
       |d| <= W - 1.
     config: parameters.
     prior: optional float [H, W] left disparity (e.g. the previous video frame's); then
-      only windows around it are searched (`windows_from_prior`, config.prior_radius and
+      only windows around it are searched (`search_windows.around_prior`, config.prior_radius and
       config.prior_spread), the whole range where it is NaN.
 
   Returns:
@@ -255,7 +218,7 @@ def match(left, right, min_disparity: int, max_disparity: int,
     if prior.shape != (h, w) or np.isinf(prior).any():
       raise ValueError(f'prior must be an [H, W] = [{h}, {w}] disparity map without '
                        f'infinities, got shape {prior.shape}.')
-    lo, widths = windows_from_prior(prior, low, high, config.prior_radius,
+    lo, widths = search_windows.around_prior(prior, low, high, config.prior_radius,
                                     config.prior_spread, config.prior_missing_spread)
     return _search(left, right, lo, widths, config)
   factor = coarse_factor(h, w, low, high, config)
@@ -267,7 +230,7 @@ def match(left, right, min_disparity: int, max_disparity: int,
   coarse = _full(small_left, small_right, max(math.floor(low / scale), 1 - small_width),
                  min(math.ceil(high / scale), small_width - 1), config)['disparity_left']
   prior = cv2.resize(coarse, (w, h), interpolation=cv2.INTER_LINEAR) * scale
-  lo, widths = windows_from_prior(prior, low, high, math.ceil(scale) + 2,
+  lo, widths = search_windows.around_prior(prior, low, high, math.ceil(scale) + 2,
                                   math.ceil(scale) + 1)
   return _search(left, right, lo, widths, config)
 
