@@ -69,7 +69,7 @@ class MatcherConfig:
   full_search_cells: int = 200_000_000
   prior_radius: int = 4
   prior_spread: int = 4
-  prior_missing_spread: int = 8
+  prior_missing_spread: int = 4
   threads: int = 0
   strips: int = 0
   strip_overlap: int = 32
