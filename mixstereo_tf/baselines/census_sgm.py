@@ -27,6 +27,7 @@ from numba.core import types
 from numba.extending import intrinsic
 
 _BIG = np.int32(30000)  # Above any path cost; _BIG + P2 still fits the int32 arithmetic.
+_NONE = np.int64(2 ** 63 - 1)  # No candidate yet (right winners).
 # Helpers run once per pixel and path. They only index arrays (never allocate or slice),
 # so they are compiled without numba's reference counting (`_nrt=False`): with it, each
 # call paid ~50 ns of atomic increments and decrements on its array arguments, more than
@@ -184,11 +185,11 @@ def _refined(base, lower, best, upper):
 
 
 @numba.njit(**_INNER)
-def _winners(s, offsets, lo, nds, y, dl, dr, best, bestd):
+def _winners(s, offsets, lo, nds, y, dl, dr, best):
   """Left winners of the row's aggregated costs and right winners along the diagonal.
 
-  s: int32 flat costs, pixel x at offsets[x] + [0, nds[y, x]). Right pixels no left pixel
-  reaches get NaN.
+  s: int32 flat costs (>= 0), pixel x at offsets[x] + [0, nds[y, x]); best: int64 [W]
+  scratch. Right pixels no left pixel reaches get NaN.
   """
   w = dl.shape[1]
   for x in range(w):
@@ -202,26 +203,26 @@ def _winners(s, offsets, lo, nds, y, dl, dr, best, bestd):
       dl[y, x] = _refined(lo[y, x] + bi, s[base + bi - 1], s[base + bi], s[base + bi + 1])
     else:
       dl[y, x] = lo[y, x] + bi
-  best[:] = _BIG * 8
+  # Right winners: per right pixel the least (cost, left column), packed in one int64 so
+  # that ties go to the first candidate in column order as a plain running minimum would.
+  best[:] = _NONE
   for x in range(w):
-    d0, base = lo[y, x], offsets[x]
-    xr0 = x - d0  # Right pixel of window position 0; position i -> xr0 - i.
+    base = offsets[x]
+    xr0 = x - lo[y, x]  # Right pixel of window position 0; position i -> xr0 - i.
     for i in range(max(0, xr0 - w + 1), min(nds[y, x], xr0 + 1)):
-      k, v = xr0 - i, s[base + i]
-      take = v < best[k]
-      best[k] = v if take else best[k]
-      bestd[k] = (d0 + i) if take else bestd[k]
+      key = (np.int64(s[base + i]) << 32) | x
+      best[xr0 - i] = min(best[xr0 - i], key)
   for xr in range(w):
-    if best[xr] >= _BIG * 8:
+    if best[xr] == _NONE:
       dr[y, xr] = np.nan
       continue
-    d = bestd[xr]
+    cost, d = np.int32(best[xr] >> 32), np.int32(best[xr] & 0xFFFFFFFF) - xr
     dr[y, xr] = d
     xa, xb = xr + d - 1, xr + d + 1  # Diagonal neighbours: left x -+ 1 at d -+ 1.
     if 0 <= xa and xb < w:
       ia, ib = d - 1 - lo[y, xa], d + 1 - lo[y, xb]
       if 0 <= ia < nds[y, xa] and 0 <= ib < nds[y, xb]:
-        dr[y, xr] = _refined(d, s[offsets[xa] + ia], best[xr], s[offsets[xb] + ib])
+        dr[y, xr] = _refined(d, s[offsets[xa] + ia], cost, s[offsets[xb] + ib])
 
 
 @numba.njit(**_JIT)
@@ -281,8 +282,7 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
     vprev, vcur = vcur, vprev
   srow = np.empty(w * nd, np.int32)  # Pass 2: bottom-up path, S = total + L_up, winners.
   row_offsets = np.empty(w + 1, np.int64)
-  best = np.empty(w, np.int32)
-  bestd = np.zeros(w, np.int32)
+  best = np.empty(w, np.int64)
   for k in range(n - 1, -1, -1):
     y = y0 + k
     _cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
@@ -299,4 +299,4 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
         srow[row_base + i] = np.int32(total[base + i]) + vcur[x, i + 1]
     vprev, vcur = vcur, vprev
     if w0 <= y < w1:
-      _winners(srow, row_offsets, lo, nds, y, dl, dr, best, bestd)
+      _winners(srow, row_offsets, lo, nds, y, dl, dr, best)
