@@ -66,11 +66,18 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
   inverse = np.empty((3, 3), np.float32)
   gram, cofactor = np.empty((3, 3), np.float64), np.empty((3, 3), np.float64)
   one = np.float32(1.0)
+  # The matrices in scalars: loads from arrays the loop writes to could alias.
+  p00, p01, p02 = other[0, 0], other[0, 1], other[0, 2]
+  p10, p11, p12 = other[1, 0], other[1, 1], other[1, 2]
+  p20, p21, p22 = other[2, 0], other[2, 1], other[2, 2]
+  q00, q01, q02 = own[0, 0], own[0, 1], own[0, 2]
+  q10, q11, q12 = own[1, 0], own[1, 1], own[1, 2]
+  q20, q21, q22 = own[2, 0], own[2, 1], own[2, 2]
   for x in range(view.shape[1]):
     v0, v1, v2 = other_view[y, x, 0], other_view[y, x, 1], other_view[y, x, 2]
-    e0 = mixture[y, x, 0] - (other[0, 0] * v0 + other[0, 1] * v1 + other[0, 2] * v2)
-    e1 = mixture[y, x, 1] - (other[1, 0] * v0 + other[1, 1] * v1 + other[1, 2] * v2)
-    e2 = mixture[y, x, 2] - (other[2, 0] * v0 + other[2, 1] * v1 + other[2, 2] * v2)
+    e0 = mixture[y, x, 0] - (p00 * v0 + p01 * v1 + p02 * v2)
+    e1 = mixture[y, x, 1] - (p10 * v0 + p11 * v1 + p12 * v2)
+    e2 = mixture[y, x, 2] - (p20 * v0 + p21 * v1 + p22 * v2)
     matched = consistent[y, x]
     k = 1 if matched else 0
     if clip:
@@ -80,12 +87,9 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
       _clipped_inverse(mixture, y, x, own, observation_weight,
                        prior_weight + match_weight * k, gram, cofactor, inverse)
     x0, x1, f = _linear_taps(view.shape[1], x, offset[y, x])
-    h0 = observation_weight * (own[0, 0] * e0 + own[1, 0] * e1 + own[2, 0] * e2) + (
-        prior_weight * prior[y, x, 0])
-    h1 = observation_weight * (own[0, 1] * e0 + own[1, 1] * e1 + own[2, 1] * e2) + (
-        prior_weight * prior[y, x, 1])
-    h2 = observation_weight * (own[0, 2] * e0 + own[1, 2] * e1 + own[2, 2] * e2) + (
-        prior_weight * prior[y, x, 2])
+    h0 = observation_weight * (q00 * e0 + q10 * e1 + q20 * e2) + prior_weight * prior[y, x, 0]
+    h1 = observation_weight * (q01 * e0 + q11 * e1 + q21 * e2) + prior_weight * prior[y, x, 1]
+    h2 = observation_weight * (q02 * e0 + q12 * e1 + q22 * e2) + prior_weight * prior[y, x, 2]
     if matched:
       h0 += match_weight * ((one - f) * other_view[y, x0, 0] + f * other_view[y, x1, 0])
       h1 += match_weight * ((one - f) * other_view[y, x0, 1] + f * other_view[y, x1, 1])
