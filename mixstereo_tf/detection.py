@@ -40,6 +40,7 @@ Dubois matrices of `mixtures` differ by < 0.03 per coefficient, which an image c
 apart.
 """
 
+import concurrent.futures
 import dataclasses
 from typing import Dict, Optional, Tuple
 
@@ -129,11 +130,15 @@ def _match(a: np.ndarray, b: np.ndarray, reach: int) -> dict:
 def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
   """{family: score} (step 1 of the module docstring) of a 0..255 image."""
   reach = max(2, round(config.reach_fraction * small.shape[1]))
+  match_pair = lambda pair: _match(small[..., pair[0]], small[..., pair[1]], reach)
+  # The pairs in threads: each match is one strip (the same result on any machine) and
+  # numba releases the GIL.
+  with concurrent.futures.ThreadPoolExecutor(len(_PAIRS)) as pool:
+    outs = list(pool.map(match_pair, _PAIRS))
   displaced = {}
-  for a, b in _PAIRS:
-    out = _match(small[..., a], small[..., b], reach)
+  for pair, out in zip(_PAIRS, outs):
     moved = out['consistent_left'] & (np.abs(out['disparity_left']) >= 1.5)
-    displaced[(a, b)] = float(moved.mean())
+    displaced[pair] = float(moved.mean())
   scores = {}
   for family, odd in FAMILY_ODD_CHANNEL.items():
     others = tuple(c for c in range(3) if c != odd)
