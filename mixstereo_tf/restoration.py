@@ -132,6 +132,15 @@ def _gray_priors(mixture, spec):
                for eye in spec.eye_channels)
 
 
+def _per_view(config, fn, *arguments) -> Tuple[np.ndarray, np.ndarray]:
+  """(fn(left's arguments), fn(right's)): in two threads when config allows (OpenCV and
+  large NumPy operations release the GIL)."""
+  if pipelining.usable_cpus(config.threads) == 1:
+    return tuple(fn(*args) for args in zip(*arguments))
+  with concurrent.futures.ThreadPoolExecutor(2) as pool:
+    return tuple(pool.map(fn, *arguments))
+
+
 def _classical_solve(mixture, spec, d_left, d_right, consistent, config):
   """Both views without a network (encodings that transmit no colour: one solve with
   the gray priors): a first solve with the gray priors, the colour transfer from each
@@ -146,9 +155,9 @@ def _classical_solve(mixture, spec, d_left, d_right, consistent, config):
   if config.transfer_subsample == 1:
     gray = _gray_priors(mixture, spec)
     first = _solve(mixture, spec, d_left, d_right, consistent, gray, config, gray)
-    priors = tuple(colour_transfer.local_linear_transfer(
-        mixture[..., list(eye)], view, ok, config.transfer_radius)
-                   for eye, view, ok in zip(spec.eye_channels, first, consistent))
+    priors = _per_view(config, lambda eye, view, ok: colour_transfer.local_linear_transfer(
+        mixture[..., list(eye)], view, ok, config.transfer_radius),
+                       spec.eye_channels, first, consistent)
     return _solve(mixture, spec, d_left, d_right, consistent, priors, config, first)
   size = colour_transfer.reduced_size(*d_left.shape, config.transfer_subsample)
   scale = size[0] / d_left.shape[1]
@@ -159,9 +168,9 @@ def _classical_solve(mixture, spec, d_left, d_right, consistent, config):
   gray = _gray_priors(small_mixture, spec)
   first = _solve(small_mixture, spec, *small_d, small_consistent, gray, config, gray)
   radius = max(1, round(config.transfer_radius / config.transfer_subsample))
-  priors = tuple(colour_transfer.apply_reduced_fit(
-      mixture[..., list(eye)], small_mixture[..., list(eye)], view, ok, radius)
-                 for eye, view, ok in zip(spec.eye_channels, first, small_consistent))
+  priors = _per_view(config, lambda eye, view, ok: colour_transfer.apply_reduced_fit(
+      mixture[..., list(eye)], small_mixture[..., list(eye)], view, ok, radius),
+                     spec.eye_channels, first, small_consistent)
   return _solve(mixture, spec, d_left, d_right, consistent, priors, config, priors)
 
 
