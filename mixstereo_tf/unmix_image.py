@@ -148,12 +148,15 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
 def classical_unmix(image: np.ndarray, name: str, search: Range,
                     hint: Optional[temporal.FrameHint] = None) -> Dict[str, object]:
   """The training-free method; a `hint`'s prior: a left disparity to search around in its
-  prior_window (anaglyphs; NaN pixels search the whole range). Anaglyphs also give
+  prior_window (anaglyphs; NaN pixels search the whole range); its full_search_cells: the
+  matcher's coarse-to-fine threshold (a shot's first frame). Anaglyphs also give
   'consistent_left', the matcher's left-right check (`temporal.VideoState` drops the
   prior where it failed)."""
   prior = hint.prior if hint is not None else None
   window = hint.prior_window if prior is not None else None
-  out = baselines.unmix_classical(image, name, search, prior=prior, prior_window=window)
+  cells = hint.full_search_cells if hint is not None else None
+  out = baselines.unmix_classical(image, name, search, prior=prior, prior_window=window,
+                                  full_search_cells=cells)
   keys = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
   return {key: out[key] for key in keys if key in out}
 

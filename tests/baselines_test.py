@@ -9,6 +9,7 @@ from mixstereo_tf import baselines
 from mixstereo_tf import image_range
 from mixstereo_tf import mixtures
 from mixstereo_tf.baselines import diplopia
+from mixstereo_tf.baselines import matcher
 from mixstereo_tf.baselines import sgm
 from mixstereo_tf.evaluation import metrics
 
@@ -159,3 +160,16 @@ def test_bad_image_raises():
     baselines.unmix_classical(np.zeros((8, 16), np.uint8), 'anaglyph')
   with pytest.raises(ValueError, match=r'\[0, 1\]'):
     baselines.unmix_classical(np.full((8, 16, 3), 2.0), 'diplopia')
+
+
+def test_full_search_cells_and_prior_window_reach_the_matcher(monkeypatch):
+  left, right, _, _ = _scene(2, 6)
+  seen = []
+  original = matcher.match
+  monkeypatch.setattr(matcher, 'match', lambda *args: seen.append(args[4]) or original(*args))
+  baselines.unmix_classical(_mix('anaglyph', left, right), 'anaglyph', (0, 10),
+                            prior=np.full((_H, _W), 4.0, np.float32), prior_window=(1, 2),
+                            full_search_cells=1000)
+  assert (seen[0].full_search_cells, seen[0].prior_radius, seen[0].prior_spread) == (1000, 1, 2)
+  baselines.unmix_classical(_mix('anaglyph', left, right), 'anaglyph', (0, 10))
+  assert seen[1] == matcher.MatcherConfig()

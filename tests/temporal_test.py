@@ -120,6 +120,10 @@ def test_prior_is_the_previous_disparity_and_none_after_a_cut(two_shots, monkeyp
         previous['consistent_left'], previous['disparity_left'], np.nan))
   assert any(np.isnan(prior).any() for prior in priors[1:7])
   assert [o['info']['prior'] for o in outputs] == [i not in (0, 7) for i in range(12)]
+  # A shot's first frame (only) gets the coarse-to-fine threshold of its full search.
+  cells = [kwargs['full_search_cells'] for _, kwargs in calls]
+  first = temporal.TemporalConfig().first_frame_cells
+  assert cells == [first if i in (0, 7) else None for i in range(12)]
   # use_prior off: the shot's decisions stay, no prior is passed.
   del calls[:]
   _run(two_shots, temporal.TemporalConfig(use_prior=False), search=(0, 12))

@@ -23,7 +23,8 @@ SUPPORTED_MIXTURES = anaglyph.SUPPORTED_MIXTURES + ('diplopia',)
 def unmix_classical(mixture_u8, mixture_name: str,
                     disparity_range: Optional[Tuple[int, int]] = None,
                     prior: Optional[np.ndarray] = None,
-                    prior_window: Optional[Tuple[int, int]] = None) -> Dict[str, object]:
+                    prior_window: Optional[Tuple[int, int]] = None,
+                    full_search_cells: Optional[int] = None) -> Dict[str, object]:
   """Separates a mixture image with the classical baseline for its operator.
 
   Args:
@@ -34,6 +35,8 @@ def unmix_classical(mixture_u8, mixture_name: str,
     prior: optional [H, W] left disparity to search around (anaglyphs; a previous frame's).
     prior_window: (radius, spread) of that search (`search_windows.around_prior`); None:
       MatcherConfig's prior_radius and prior_spread.
+    full_search_cells: above this many cells the anaglyph matcher goes coarse-to-fine
+      (`MatcherConfig.full_search_cells`); None: its default.
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32 [H, W],
@@ -50,9 +53,14 @@ def unmix_classical(mixture_u8, mixture_name: str,
   if mixture_name == 'diplopia':
     return diplopia.unmix_diplopia(mixture_u8, disparity_range)
   config = anaglyph.AnaglyphConfig()
+  matching = {}
   if prior_window is not None:
-    config = dataclasses.replace(config, matching=dataclasses.replace(
-        config.matching, prior_radius=prior_window[0], prior_spread=prior_window[1]))
+    matching.update(prior_radius=prior_window[0], prior_spread=prior_window[1])
+  if full_search_cells is not None:
+    matching.update(full_search_cells=full_search_cells)
+  if matching:
+    config = dataclasses.replace(config, matching=dataclasses.replace(config.matching,
+                                                                      **matching))
   return anaglyph.unmix_anaglyph(mixture_u8, mixture_name, disparity_range, config, prior)
 
 
