@@ -74,8 +74,7 @@ def _cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
   """out[x, i] (uint8 [W, >= widths]) = mean Hamming cost of left (y, x) against right
   (y, x - lo - i). The right codes are reversed (rev[b, k] = cr[b, y, W-1-k]) so the loop
   over i reads consecutive words and vectorises; 1x1, 1x2 and 2x1 channel pairs (plain and
-  colour anaglyphs) have their own loops. Arrays are indexed, never sliced: a slice per
-  pixel costs numba two atomic reference counts."""
+  colour anaglyphs) have their own loops."""
   kl, _, w = cl.shape
   kr = cr.shape[0]
   pairs = kl * kr
