@@ -30,8 +30,8 @@ Two questions, each answered by a physical property of the encodings (`mixtures`
      channels (red-cyan: G gets -0.094 of the left view). Regressing the high-passed other
      channels at a right pixel on the high-passed odd channel at the matching left pixel and
      at the same pixel, the second coefficient is that leak (0 for colour, gray,
-     half-colour). Its projection on a Dubois encoding's expected leak (`expected_ghost`),
-     as a fraction of it, chooses the Dubois encoding at >= ghost_fraction and rules it
+     half-colour; `dubois_leak`). Its projection on a Dubois encoding's expected leak, as
+     a fraction of it, chooses the Dubois encoding at >= ghost_fraction and rules it
      out below; the colour samples then choose among the others.
 Confidence: the family's margin through a logistic, times the variant's: the explained
 share's distance to its threshold through a logistic of scale share_softness (1 for gray
@@ -47,6 +47,7 @@ from typing import Dict, Optional, Tuple
 import cv2
 import numpy as np
 
+from mixstereo_tf import dubois_leak
 from mixstereo_tf import mixtures
 from mixstereo_tf.baselines import matcher
 
@@ -178,41 +179,6 @@ def colour_samples(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
   return obs
 
 
-def observed_ghost(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
-                   config: DetectConfig) -> np.ndarray:
-  """[2]: per other channel, the leak of the odd eye into it (step 3 of the module
-  docstring); ~0 without a leak. Only pixels matched with confidence count: the
-  high-passed odd channel and other channels agree over 7x7 (normalised correlation >=
-  ghost_correlation) and lie >= ghost_min_shift px apart."""
-  high = small / 255.0 - cv2.GaussianBlur(small / 255.0, (0, 0), config.ghost_sigma)
-  others = [c for c in range(3) if c != odd]
-  ys, xs, xr = matched
-  odd_map, other_map = (np.zeros(small.shape[:2], np.float32) for _ in range(2))
-  odd_map[ys, xs] = high[ys, xs, odd]
-  other_map[ys, xs] = high[ys, xr][:, others].mean(axis=1)
-  box = lambda image: cv2.boxFilter(image, -1, (7, 7), normalize=False)
-  correlation = box(odd_map * other_map) / np.sqrt(
-      box(odd_map ** 2) * box(other_map ** 2) + 1e-12)
-  keep = (correlation[ys, xs] >= config.ghost_correlation) & (
-      np.abs(xs - xr) >= config.ghost_min_shift)
-  ys, xs, xr = ys[keep], xs[keep], xr[keep]
-  if ys.size < 50:
-    return np.zeros(2)
-  regressors = np.stack([high[ys, xs, odd], high[ys, xr, odd]], axis=1)
-  return np.array([np.linalg.lstsq(regressors, high[ys, xr, c], rcond=None)[0][1]
-                   for c in others])
-
-
-def expected_ghost(name: str) -> np.ndarray:
-  """[2]: an encoding's leak of the odd eye into the other channels, relative to the odd
-  channel (row sums of the odd eye's matrix; zero for all but Dubois)."""
-  spec = mixtures.get_mixture(name)
-  odd = FAMILY_ODD_CHANNEL[spec.family]
-  left, right = np.asarray(spec.left_matrix), np.asarray(spec.right_matrix)
-  eye = left if np.abs(left[odd]).sum() > np.abs(right[odd]).sum() else right
-  return np.array([eye[c].sum() / eye[odd].sum() for c in range(3) if c != odd])
-
-
 def _matrix(name: str) -> np.ndarray:
   spec = mixtures.get_mixture(name)
   return np.asarray(spec.left_matrix) + np.asarray(spec.right_matrix)
@@ -301,9 +267,10 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   gray = {n: explained_share(small, obs, n, config) for n in names
           if not mixtures.get_mixture(n).transmits_colour}
   scores.update({n: round(v, 4) for n, v in gray.items()})
-  ghost = observed_ghost(small, odd, matched, config)
-  leaky = {n: float(ghost @ expected_ghost(n) / (expected_ghost(n) @ expected_ghost(n)))
-           for n in names if np.abs(expected_ghost(n)).max() > 0.01}
+  ghost = dubois_leak.observed(small, odd, matched, config.ghost_sigma,
+                               config.ghost_correlation, config.ghost_min_shift)
+  expected = {n: dubois_leak.expected(n, odd) for n in names}
+  leaky = {n: float(ghost @ e / (e @ e)) for n, e in expected.items() if np.abs(e).max() > 0.01}
   scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})
   fitting = [n for n, share in gray.items() if share >= needed_share(n, config)]
   if fitting:  # Equal channels are the surest sign; a leak is measured less surely.

@@ -72,18 +72,6 @@ def test_ffmpeg_stereo3d_anaglyphs(tmp_path, mode):
   assert (ghost > 0.6) if dubois else (abs(ghost) < 0.15), found.scores
 
 
-def test_expected_ghost_is_the_odd_eyes_leak():
-  # Red-cyan Dubois: G gets (-0.040 - 0.038 - 0.016) of the left view, R (0.456 + 0.500 +
-  # 0.176); B gets (-0.015 - 0.021 - 0.005).
-  spec = mixtures.get_mixture('dubois_ffmpeg')
-  left = np.asarray(spec.left_matrix)
-  np.testing.assert_allclose(detection.expected_ghost('dubois_ffmpeg'),
-                             [left[1].sum() / left[0].sum(), left[2].sum() / left[0].sum()])
-  assert -0.09 < detection.expected_ghost('dubois_ffmpeg')[0] < -0.07
-  for name in ('anaglyph', 'half_color', 'gray', 'green_magenta', 'amber_blue_half'):
-    np.testing.assert_array_equal(detection.expected_ghost(name), [0.0, 0.0])
-
-
 def test_needed_share_follows_the_sets_volume():
   config = detection.DetectConfig()
   # A thinner set is likelier per sample, so it may leave more samples outside.
