@@ -6,7 +6,8 @@ change and consecutive disparities are close, so `VideoState` keeps, per shot:
   * the disparity range, estimated once at the shot's first frame;
   * the previous frame's left disparity, handed to the solver as a prior (the classical
     matcher searches around it, `matcher.match(..., prior)`), except where that frame's
-    match failed the left-right check (NaN: the whole range is searched there).
+    match failed the left-right check (NaN: those pixels search the valid prior's range
+    nearby, or the whole range where none is near).
 Everything is reset at a scene cut. A cut is found between consecutive frames when the
 distance of their colour histograms exceeds `TemporalConfig.cut_threshold`
 (`histogram_distance`): per channel, 16-bin histograms of a copy at most 160 px wide,
@@ -178,7 +179,8 @@ class VideoState:
     """Records the unmixed frame: its 'info' (mixture, detection, disparity range) when it
     started the shot, and its 'disparity_left' as the next frame's prior, NaN where its
     'consistent_left' (when given) says the match failed the left-right check: there the
-    next frame searches the whole range again, so a wrong disparity is not inherited."""
+    next frame searches the valid prior's range nearby (or everything), so a wrong
+    disparity is not inherited."""
     if not self.config.enabled:
       return
     info = outputs.get('info', {})

@@ -148,7 +148,7 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
 def classical_unmix(image: np.ndarray, name: str, search: Range,
                     hint: Optional[temporal.FrameHint] = None) -> Dict[str, object]:
   """The training-free method; a `hint`'s prior: a left disparity to search around in its
-  prior_window (anaglyphs; NaN pixels search the whole range); its full_search_cells: the
+  prior_window (anaglyphs; NaN: no prior there); its full_search_cells: the
   matcher's coarse-to-fine threshold (a shot's first frame). Anaglyphs also give
   'consistent_left', the matcher's left-right check (`temporal.VideoState` drops the
   prior where it failed)."""

@@ -49,7 +49,7 @@ def unmix_anaglyph(mixture, mixture_name: str,
     disparity_range: (min, max) signed pixels to search; None: estimated from the image.
     config: matching and restoration parameters.
     prior: optional [H, W] left disparity to search around (a previous video frame's;
-      NaN: search the whole range there).
+      NaN: no prior there, `search_windows.around_prior`).
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32

@@ -198,8 +198,9 @@ def match(left, right, min_disparity: int, max_disparity: int,
       |d| <= W - 1.
     config: parameters.
     prior: optional float [H, W] left disparity (e.g. the previous video frame's); then
-      only windows around it are searched (`search_windows.around_prior`, config.prior_radius and
-      config.prior_spread), the whole range where it is NaN.
+      only windows around it are searched (`search_windows.around_prior` with
+      config.prior_radius, prior_spread and prior_missing_spread; NaN pixels search the
+      valid prior's range nearby, or the whole range where none is near).
 
   Returns:
     'disparity_left', 'disparity_right': float32 [H, W] signed pixels, filled everywhere
@@ -219,7 +220,8 @@ def match(left, right, min_disparity: int, max_disparity: int,
       raise ValueError(f'prior must be an [H, W] = [{h}, {w}] disparity map without '
                        f'infinities, got shape {prior.shape}.')
     lo, widths = search_windows.around_prior(prior, low, high, config.prior_radius,
-                                    config.prior_spread, config.prior_missing_spread)
+                                             config.prior_spread,
+                                             config.prior_missing_spread)
     return _search(left, right, lo, widths, config)
   factor = coarse_factor(h, w, low, high, config)
   if factor == 1:
@@ -231,7 +233,7 @@ def match(left, right, min_disparity: int, max_disparity: int,
                  min(math.ceil(high / scale), small_width - 1), config)['disparity_left']
   prior = cv2.resize(coarse, (w, h), interpolation=cv2.INTER_LINEAR) * scale
   lo, widths = search_windows.around_prior(prior, low, high, math.ceil(scale) + 2,
-                                  math.ceil(scale) + 1)
+                                           math.ceil(scale) + 1)
   return _search(left, right, lo, widths, config)
 
 
