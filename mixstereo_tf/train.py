@@ -118,12 +118,16 @@ flags.DEFINE_boolean('degrade', _PIPE['degrade'], 'Degrade each mixture like a r
 flags.DEFINE_float('clean_probability', refiner_data.ExampleConfig.clean_probability,
                    'With --degrade, the share of refiner examples left clean (anaglyphs '
                    'made digitally from clean pairs; not in the paper).')
+flags.DEFINE_float('large_probability', refiner_data.ExampleConfig.large_probability,
+                   'The share of refiner examples cut from a scene twice as large and deep '
+                   '(photo-sized disparities and occlusions; not in the paper).')
 
 flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner'), "joint: the paper's "
                   'network; refiner: the hybrid that refines the classical result '
                   '(models/refiner.py; trained on cached `sample` examples with ground truth, '
                   'from --sample_scenes, --sample_height/width, --max_disparity, --mixture, '
-                  '--texture_dir, --degrade, --clean_probability; not in the paper).')
+                  '--texture_dir, --degrade, --clean_probability, --large_probability; not in the '
+                  'paper).')
 
 _RENAMED = {'DataConfig.split_list': 'train_list'}
 
@@ -187,7 +191,7 @@ def _train_refiner() -> None:
         mixtures=FLAGS.mixture or 'anaglyphs', height=FLAGS.sample_height or FLAGS.crop_height,
         width=FLAGS.sample_width or FLAGS.crop_width, max_disparity=FLAGS.max_disparity,
         degrade=FLAGS.degrade, clean_probability=FLAGS.clean_probability,
-        texture_dir=FLAGS.texture_dir)
+        large_probability=FLAGS.large_probability, texture_dir=FLAGS.texture_dir)
     config = refiner_loop.RefinerTrainConfig(
         model_dir=FLAGS.model_dir, num_shards=-(-FLAGS.sample_scenes // shard_size),
         crop_height=FLAGS.crop_height, crop_width=FLAGS.crop_width,

@@ -77,10 +77,41 @@ def test_clean_share_keeps_the_encoding_and_draws_nothing_else(textures):
   assert np.abs((expected + 1) * 127.5 - plain['mixture']).mean() > 2  # Degraded.
 
 
+def test_large_example_is_a_window_of_a_scene_twice_as_large(textures):
+  large = dataclasses.replace(SMALL, large_probability=1.0)
+  example = refiner_data.make_example(5, large, textures)
+  assert example['mixture'].shape == (48, 64, 3)
+  assert example['classical_disparity_left'].shape == (48, 64)
+  # The same draws as the small examples, on scenes twice as deep: the encodings are
+  # kept and the windows' disparity spreads are about twice the small scenes'.
+  drawn = {config: [refiner_data.make_example(i, config, textures) for i in range(4)]
+           for config in (SMALL, large)}
+  assert [e['name'] for e in drawn[SMALL]] == [e['name'] for e in drawn[large]]
+  spread = {config: np.mean([np.ptp(e['disparity_left']) for e in examples])
+            for config, examples in drawn.items()}
+  assert spread[large] > 1.5 * spread[SMALL]
+  # The window keeps the pair's geometry: the left view is the right one at x - d.
+  d = example['disparity_left']
+  rows, cols = np.mgrid[0:48, 0:64]
+  source = np.round(cols - d).astype(int)
+  inside = (source >= 0) & (source < 64)
+  diff = np.abs(example['left'][inside].astype(float) -
+                example['right'][rows[inside], source[inside]].astype(float))
+  assert np.median(diff) < 8
+  # The mixture is the encoding of the kept views (undegraded).
+  expected = mixtures.mix(example['name'], example['left'] / 127.5 - 1,
+                          example['right'] / 127.5 - 1).numpy()
+  assert np.abs((expected + 1) * 127.5 - example['mixture']).max() <= 1
+
+
 def test_config_checks():
   with pytest.raises(ValueError, match='window_probability'):
     refiner_data.ExampleConfig(window_probability=2.0)
   with pytest.raises(ValueError, match='clean_probability'):
     refiner_data.ExampleConfig(clean_probability=-0.1)
+  with pytest.raises(ValueError, match='large_probability'):
+    refiner_data.ExampleConfig(large_probability=1.5)
+  with pytest.raises(ValueError, match='large_factor'):
+    refiner_data.ExampleConfig(large_factor=0)
   with pytest.raises(ValueError):
     refiner_data.ExampleConfig(mixtures='nothing')

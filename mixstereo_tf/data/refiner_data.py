@@ -14,7 +14,11 @@ One example (`make_example`):
      pairs, as FFmpeg or StereoPhoto Maker make them), and 8-bit quantisation;
   5. `baselines.unmix_classical` on it with the range estimated from the image, as at
      inference (`matcher.estimate_range` inside the anaglyph method,
-     `diplopia.estimate_range` for a double image).
+     `diplopia.estimate_range` for a double image);
+  6. with probability `large_probability`, steps 1-5 happen on a scene `large_factor`
+     times as high, wide and deep, and a random height x width window of everything is
+     kept: the network sees disparities, occlusions and classical errors of photo-sized
+     images (as it does in a tile of one at inference) in an example of the usual size.
 Seeds: example i draws everything from seed i (scenes: the `sample` training seeds; the
 held-out scenes use other textures and seeds 2^31 + i). Shards `shard_<k>.npz` of
 `shard_size` examples each are written atomically, so an interrupted build resumes.
@@ -55,6 +59,8 @@ class ExampleConfig:
     degrade: pass each mixture through `degrade.degrade` ...
     clean_probability: ... except this share of them, left clean.
     texture_dir: a folder of photographs for the scenes (None: scikit-image's).
+    large_probability: chance of an example cut from a larger scene (step 6) ...
+    large_factor: ... this many times the size and disparity range.
   """
   mixtures: str = 'anaglyphs'
   height: int = 160
@@ -64,11 +70,15 @@ class ExampleConfig:
   degrade: bool = True
   clean_probability: float = 0.0
   texture_dir: Optional[str] = None
+  large_probability: float = 0.0
+  large_factor: int = 2
 
   def __post_init__(self):
     mixtures.parse_names(self.mixtures)  # ValueError naming an unknown encoding.
     synthetic.SceneConfig(self.max_disparity, self.height, self.width + self.max_disparity)
-    for field in ('window_probability', 'clean_probability'):
+    if self.large_factor < 1:
+      raise ValueError(f'ExampleConfig.large_factor must be >= 1, got {self.large_factor}.')
+    for field in ('window_probability', 'clean_probability', 'large_probability'):
       if not 0.0 <= getattr(self, field) <= 1.0:
         raise ValueError(f'ExampleConfig.{field} must be in [0, 1], got '
                          f'{getattr(self, field)}.')
@@ -93,19 +103,32 @@ def make_example(index: int, config: ExampleConfig,
                  textures: synthetic.TextureAtlas) -> Dict[str, np.ndarray]:
   """Example `index` (module docstring): uint8 images, float32 disparities, str 'name'."""
   rng = np.random.default_rng(index)
-  scene_config = synthetic.SceneConfig(config.max_disparity, config.height,
-                                       config.width + config.max_disparity, realistic=True)
-  scene = synthetic.render_scene(index, scene_config, textures)
   window = rng.uniform() < config.window_probability
   fraction = rng.uniform(0.0, 0.7) if window else 0.0
   names = mixtures.parse_names(config.mixtures)
   name = names[rng.integers(len(names))]
-  clean = rng.uniform() < config.clean_probability  # Drawn last: p = 0 keeps old examples.
+  clean = rng.uniform() < config.clean_probability
+  # Drawn after the others: with p = 0 the examples of earlier recipes stay the same.
+  factor = config.large_factor if rng.uniform() < config.large_probability else 1
+  height, width = factor * config.height, factor * config.width
+  example = _whole_example(index, name, window, fraction, clean, factor, config, textures)
+  y0, x0 = rng.integers(height - config.height + 1), rng.integers(width - config.width + 1)
+  window_of = lambda a: a[y0:y0 + config.height, x0:x0 + config.width]
+  return dict({key: window_of(example[key]) for key in KEYS}, name=name)
+
+
+def _whole_example(index, name, window, fraction, clean, factor, config, textures):
+  """Steps 1-5 on a scene `factor` times the configured size (all of KEYS)."""
+  max_disparity = factor * config.max_disparity
+  width = factor * config.width
+  scene_config = synthetic.SceneConfig(max_disparity, factor * config.height,
+                                       width + max_disparity, realistic=True)
+  scene = synthetic.render_scene(index, scene_config, textures)
   shift = 0
   if window and mixtures.get_mixture(name).is_anaglyph:
     low, high = np.percentile(scene['disparity_left'], [1.0, 99.0])
     shift = int(round(low + fraction * (high - low)))
-  pair = _window_aligned(scene, shift, config.width)
+  pair = _window_aligned(scene, shift, width)
   mixed = mixtures.mix(name, image_range.u8_to_signed(pair['left']),
                        image_range.u8_to_signed(pair['right']))
   mixed = image_range.signed_to_unit(mixed)
@@ -116,7 +139,7 @@ def make_example(index: int, config: ExampleConfig,
     classical = baselines.unmix_classical(mixture, name, diplopia.estimate_range(mixture))
   else:
     classical = anaglyph.unmix_anaglyph(mixture, name, None, ONE_STRIP)
-  return {'name': name, 'mixture': mixture,
+  return {'mixture': mixture,
           'classical_left': classical['left'], 'classical_right': classical['right'],
           'classical_disparity_left': classical['disparity_left'].astype(np.float32),
           'classical_disparity_right': classical['disparity_right'].astype(np.float32),
