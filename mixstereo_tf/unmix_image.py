@@ -40,6 +40,10 @@ from mixstereo_tf.baselines import matcher
 from mixstereo_tf.data import refiner_data
 
 AUTO = 'auto'
+# The refined views' share of the restoration prior of a refiner's anaglyph (the rest: the
+# classical colour transfer); chosen on validation examples, neither training nor
+# evaluation data (experiments/results/pretrained_ablations.md).
+REFINED_VIEW_WEIGHT = 0.25
 # A named encoding the detector contradicts with at least this confidence is warned about.
 WARN_CONFIDENCE = 0.9
 Range = Union[None, str, Tuple[int, int]]  # disparity_range.parse's values.
@@ -123,10 +127,9 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
                   search: Range, hint: Optional[temporal.FrameHint] = None) -> Dict[str, object]:
   """The hybrid (`models/refiner.py`): the classical method, the refiner on its result
   (in tiles), then, for anaglyphs, both views restored from the refined disparities with,
-  as the prior where the views do not match, the mean of the refined views and the
-  classical colour transfer (each alone was worse on some encodings:
-  experiments/results/pretrained_ablations.md); 'consistent_left' is that restoration's
-  left-right check of the refined disparities."""
+  as the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
+  the rest of the classical colour transfer (each alone was worse on some encodings);
+  'consistent_left' is that restoration's left-right check of the refined disparities."""
   classical = classical_unmix(image, name, search, hint)
   refined = tiling.apply(network, refiner_data.network_input(
       image, classical['left'], classical['right'], classical['disparity_left'],
@@ -138,7 +141,9 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
     mixture01 = image_range.u8_to_unit(image)
     disparities = outputs['disparity_left'], outputs['disparity_right']
     transfer = restoration.restore_views(mixture01, name, *disparities)
-    prior = [(image_range.u8_to_unit(outputs[k]) + transfer[k]) / 2 for k in ('left', 'right')]
+    weight = REFINED_VIEW_WEIGHT
+    prior = [weight * image_range.u8_to_unit(outputs[k]) + (1 - weight) * transfer[k]
+             for k in ('left', 'right')]
     views = restoration.restore_views(mixture01, name, *disparities, *prior)
     outputs.update({k: image_range.unit_to_u8(views[k]) for k in ('left', 'right')})
     outputs['consistent_left'] = views['consistent_left']  # For the next frame's prior.
