@@ -28,12 +28,11 @@ from numba.extending import intrinsic
 
 _BIG = np.int32(30000)  # Above any path cost; _BIG + P2 still fits the int32 arithmetic.
 _NONE = np.int64(2 ** 63 - 1)  # No candidate yet (right winners).
-# Helpers run once per pixel and path. They only index arrays (never allocate or slice),
-# so they are compiled without numba's reference counting (`_nrt=False`): with it, each
-# call paid ~50 ns of atomic increments and decrements on its array arguments, more than
-# the recursion itself on narrow windows (1280x720, 16 disparities: 463 -> 254 ms). The
-# entry points allocate, release the GIL and are cached on disk. error_model: no
-# ZeroDivisionError checks in the loops.
+# Helpers run once per pixel and path and only index arrays (never allocate or slice), so
+# they are compiled without numba's reference counting (`_nrt=False`): with it, each call
+# paid ~50 ns of atomic counts on its array arguments, more than the recursion on narrow
+# windows (1280x720, 16 disparities: 463 -> 254 ms). The entry points allocate, release
+# the GIL and are cached on disk. error_model: no ZeroDivisionError checks in the loops.
 _INNER = {'error_model': 'numpy', '_nrt': False}
 _JIT = dict(error_model='numpy', nogil=True, cache=True)
 
