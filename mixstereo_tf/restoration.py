@@ -177,7 +177,9 @@ def _classical_solve(mixture, spec, d_left, d_right, consistent, config):
 def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
                   d_right: np.ndarray, fallback_left: Optional[np.ndarray] = None,
                   fallback_right: Optional[np.ndarray] = None,
-                  config: RestoreConfig = RestoreConfig()) -> Dict[str, np.ndarray]:
+                  config: RestoreConfig = RestoreConfig(),
+                  consistent: Optional[Tuple[np.ndarray, np.ndarray]] = None
+                  ) -> Dict[str, np.ndarray]:
   """Restores both views of an anaglyph (module docstring).
 
   Args:
@@ -187,6 +189,8 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
     fallback_left, fallback_right: [H, W, 3] in [0, 1], the prior where the views do not
       match (the separation network's views); None: the classical colour transfer.
     config: weights.
+    consistent: (left, right) bool [H, W], `lr_consistency` of these disparities at
+      config.lr_threshold when already computed (an earlier restoration's); None: computed.
 
   Returns:
     'left', 'right': float32 [H, W, 3] in [0, 1]; 'consistent_left', 'consistent_right':
@@ -197,7 +201,8 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
     raise ValueError(f'restore_views needs an anaglyph encoding, got {mixture_name!r}.')
   mixture = np.asarray(mixture, np.float32)
   d_left, d_right = np.asarray(d_left, np.float32), np.asarray(d_right, np.float32)
-  consistent = lr_consistency(d_left, d_right, config.lr_threshold)
+  if consistent is None:
+    consistent = lr_consistency(d_left, d_right, config.lr_threshold)
   if fallback_left is not None and fallback_right is not None:
     priors = (np.asarray(fallback_left, np.float32), np.asarray(fallback_right, np.float32))
     left, right = _solve(mixture, spec, d_left, d_right, consistent, priors, config, priors)

@@ -144,7 +144,9 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
     weight = REFINED_VIEW_WEIGHT
     prior = [weight * image_range.u8_to_unit(outputs[k]) + (1 - weight) * transfer[k]
              for k in ('left', 'right')]
-    views = restoration.restore_views(mixture01, name, *disparities, *prior)
+    checked = transfer['consistent_left'], transfer['consistent_right']
+    views = restoration.restore_views(mixture01, name, *disparities, *prior,
+                                      consistent=checked)
     outputs.update({k: image_range.unit_to_u8(views[k]) for k in ('left', 'right')})
     outputs['consistent_left'] = views['consistent_left']  # For the next frame's prior.
   return outputs

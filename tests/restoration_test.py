@@ -83,6 +83,23 @@ def test_the_network_prior_fills_what_nothing_else_fixes():
   np.testing.assert_allclose(out['left'][occluded][:, 1:], 0.5, atol=0.02)
 
 
+def test_a_given_left_right_check_is_the_one_used():
+  left, right, d, _ = _pair(seed=4)
+  mixture, prior = _mix('anaglyph', left, right), np.full_like(left, 0.5)
+  out = restoration.restore_views(mixture, 'anaglyph', d, d, prior, prior)
+  checked = out['consistent_left'], out['consistent_right']
+  again = restoration.restore_views(mixture, 'anaglyph', d, d, prior, prior,
+                                    consistent=checked)
+  np.testing.assert_array_equal(again['left'], out['left'])
+  np.testing.assert_array_equal(again['right'], out['right'])
+  # Nothing matched: the lost channels come from the prior alone.
+  nothing = tuple(np.zeros_like(c) for c in checked)
+  alone = restoration.restore_views(mixture, 'anaglyph', d, d, prior, prior,
+                                    consistent=nothing)
+  assert not alone['consistent_left'].any()
+  np.testing.assert_allclose(alone['left'][..., 1:], 0.5, atol=0.02)
+
+
 def _reference_solve(mixture, spec, d_left, d_right, consistent, priors, config):
   """The module docstring's alternation, transcribed with NumPy solves per pixel."""
   left, right = (p.copy() for p in priors)
