@@ -20,24 +20,29 @@ def textures():
   return refiner_data._textures(SMALL)  # pylint: disable=protected-access
 
 
+def _assert_undegraded_pair(example):
+  """The left view is the right one sampled at x - d (the scene's own convention), and
+  the mixture is the encoding of the views."""
+  height, width = example['left'].shape[:2]
+  rows, cols = np.mgrid[0:height, 0:width]
+  source = np.round(cols - example['disparity_left']).astype(int)
+  inside = (source >= 0) & (source < width)
+  diff = np.abs(example['left'][inside].astype(float) -
+                example['right'][rows[inside], source[inside]].astype(float))
+  assert np.median(diff) < 8
+  expected = mixtures.mix(example['name'], example['left'] / 127.5 - 1,
+                          example['right'] / 127.5 - 1).numpy()
+  assert np.abs((expected + 1) * 127.5 - example['mixture']).max() <= 1
+
+
 def test_window_aligned_example_matches_its_ground_truth(textures):
   example = refiner_data.make_example(5, SMALL, textures)
   assert example['name'] in ('gray', 'anaglyph')
   assert example['mixture'].shape == (48, 64, 3) and example['mixture'].dtype == np.uint8
   d = example['disparity_left']
   assert d.min() < 0 < d.max()  # Window-aligned: the disparities straddle zero.
-  # The left view is the right one sampled at x - d (the scene's own convention).
-  rows, cols = np.mgrid[0:48, 0:64]
-  source = np.round(cols - d).astype(int)
-  inside = (source >= 0) & (source < 64)
-  diff = np.abs(example['left'][inside].astype(float) -
-                example['right'][rows[inside], source[inside]].astype(float))
-  assert np.median(diff) < 8
-  # Undegraded: the mixture is the encoding of the views, and the classical result is
-  # what baselines gives on it.
-  expected = mixtures.mix(example['name'], example['left'] / 127.5 - 1,
-                          example['right'] / 127.5 - 1).numpy()
-  assert np.abs((expected + 1) * 127.5 - example['mixture']).max() <= 1
+  _assert_undegraded_pair(example)
+  # The classical result is what baselines gives on the mixture.
   again = anaglyph.unmix_anaglyph(example['mixture'], example['name'], None,
                                   refiner_data.ONE_STRIP)
   np.testing.assert_array_equal(again['disparity_left'], example['classical_disparity_left'])
@@ -90,18 +95,7 @@ def test_large_example_is_a_window_of_a_scene_twice_as_large(textures):
   spread = {config: np.mean([np.ptp(e['disparity_left']) for e in examples])
             for config, examples in drawn.items()}
   assert spread[large] > 1.5 * spread[SMALL]
-  # The window keeps the pair's geometry: the left view is the right one at x - d.
-  d = example['disparity_left']
-  rows, cols = np.mgrid[0:48, 0:64]
-  source = np.round(cols - d).astype(int)
-  inside = (source >= 0) & (source < 64)
-  diff = np.abs(example['left'][inside].astype(float) -
-                example['right'][rows[inside], source[inside]].astype(float))
-  assert np.median(diff) < 8
-  # The mixture is the encoding of the kept views (undegraded).
-  expected = mixtures.mix(example['name'], example['left'] / 127.5 - 1,
-                          example['right'] / 127.5 - 1).numpy()
-  assert np.abs((expected + 1) * 127.5 - example['mixture']).max() <= 1
+  _assert_undegraded_pair(example)  # The window keeps the pair's geometry.
 
 
 def test_config_checks():
