@@ -75,7 +75,8 @@ class DetectConfig:
     samples: at most this many colour samples.
     ghost_sigma: the Gaussian high-pass of the ghost regression, pixels of the copy.
     ghost_correlation: ... over pixels matched with at least this correlation ...
-    ghost_min_shift: ... and at least this many pixels of displacement.
+    ghost_min_shift: ... at least this many pixels of displacement ...
+    ghost_collinearity: ... and regressors correlated by less than this (`dubois_leak`).
     ghost_fraction: a Dubois encoding is chosen when at least this fraction of its
       expected leak is observed.
   """
@@ -91,6 +92,7 @@ class DetectConfig:
   ghost_sigma: float = 2.0
   ghost_correlation: float = 0.85
   ghost_min_shift: int = 3
+  ghost_collinearity: float = 0.3
   ghost_fraction: float = 0.3
 
 
@@ -268,7 +270,8 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
           if not mixtures.get_mixture(n).transmits_colour}
   scores.update({n: round(v, 4) for n, v in gray.items()})
   ghost = dubois_leak.observed(small, odd, matched, config.ghost_sigma,
-                               config.ghost_correlation, config.ghost_min_shift)
+                               config.ghost_correlation, config.ghost_min_shift,
+                               config.ghost_collinearity)
   expected = {n: dubois_leak.expected(n, odd) for n in names}
   leaky = {n: float(ghost @ e / (e @ e)) for n, e in expected.items() if np.abs(e).max() > 0.01}
   scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})

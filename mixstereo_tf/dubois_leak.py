@@ -17,7 +17,7 @@ from mixstereo_tf import mixtures
 
 
 def observed(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...], sigma: float,
-             correlation: float, min_shift: int) -> np.ndarray:
+             correlation: float, min_shift: int, collinearity: float) -> np.ndarray:
   """[2]: per other channel, the leak of the odd channel's eye into it; ~0 without one.
 
   Args:
@@ -28,18 +28,25 @@ def observed(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...], sigma
     sigma: the Gaussian high-pass's sigma, pixels.
     correlation, min_shift: only pixels whose high-passed odd and other channels agree
       over 7x7 (normalised correlation >= `correlation`) and lie >= `min_shift` px apart
-      count.
+      count ...
+    collinearity: ... and where the two regressors (the odd channel at the matching and at
+      the same pixel) correlate over 7x7 by less than this in magnitude: where they repeat
+      each other (horizontal edges, smooth texture seen a few pixels apart), the second
+      absorbs whatever the first leaves unexplained of the other channels' colour.
   """
   high = small / 255.0 - cv2.GaussianBlur(small / 255.0, (0, 0), sigma)
   others = [c for c in range(3) if c != odd]
   ys, xs, xr = matched
-  odd_map, other_map = (np.zeros(small.shape[:2], np.float32) for _ in range(2))
+  odd_map, other_map, same_map = (np.zeros(small.shape[:2], np.float32) for _ in range(3))
   odd_map[ys, xs] = high[ys, xs, odd]
   other_map[ys, xs] = high[ys, xr][:, others].mean(axis=1)
+  same_map[ys, xs] = high[ys, xr, odd]
   box = lambda image: cv2.boxFilter(image, -1, (7, 7), normalize=False)
-  agreement = box(odd_map * other_map) / np.sqrt(
-      box(odd_map ** 2) * box(other_map ** 2) + 1e-12)
-  keep = (agreement[ys, xs] >= correlation) & (np.abs(xs - xr) >= min_shift)
+  local_correlation = lambda a, b: (box(a * b) / np.sqrt(box(a ** 2) * box(b ** 2) + 1e-12)
+                                    )[ys, xs]
+  keep = ((local_correlation(odd_map, other_map) >= correlation) &
+          (np.abs(local_correlation(odd_map, same_map)) < collinearity) &
+          (np.abs(xs - xr) >= min_shift))
   ys, xs, xr = ys[keep], xs[keep], xr[keep]
   if ys.size < 50:
     return np.zeros(2)
