@@ -106,11 +106,14 @@ class Detection:
     reason: one line saying why.
     scores: family scores ('family:<name>'), Dubois leaks ('ghost:<name>', as a fraction
       of the expected) and explained shares (encoding names).
+    also_fits: the family's colour encoding when a smaller set (half-colour, optimized)
+      was chosen: the colour encoding explains every image, so it fits as well.
   """
   name: Optional[str]
   confidence: float
   reason: str
   scores: Dict[str, float]
+  also_fits: Optional[str] = None
 
 
 def _small(image: np.ndarray, width: int) -> np.ndarray:
@@ -276,6 +279,7 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   leaky = {n: float(ghost @ e / (e @ e)) for n, e in expected.items() if np.abs(e).max() > 0.01}
   scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})
   fitting = [n for n, share in gray.items() if share >= needed_share(n, config)]
+  also_fits = None
   if fitting:  # Equal channels are the surest sign; a leak is measured less surely.
     name, variant_confidence = fitting[0], 1.0
   else:
@@ -285,7 +289,9 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
       names = [n for n in names if n not in leaky and n not in gray]
     name, variant_confidence, shares = choose_variant(small, obs, names, config)
     scores.update({n: round(v, 4) for n, v in shares.items()})
+    largest = max(names, key=_size)
+    also_fits = largest if name != largest else None
   return Detection(name, family_confidence * variant_confidence,
                    f'{family} channels displaced (score {families[family]:.3f}); '
                    f'{len(obs)} colour samples: {name} is the smallest encoding that '
-                   'explains them', scores)
+                   'explains them', scores, also_fits)

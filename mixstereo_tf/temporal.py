@@ -80,7 +80,8 @@ class FrameHint:
 
   Attributes:
     mixture: the shot's encoding.
-    detection: the detection info of the shot's first frame ({'detected', 'confidence'}).
+    detection: the detection info of the shot's first frame ({'detected', 'confidence'} and
+      'also_fits' when detection gave one).
     disparity_range: the shot's (min, max) signed pixels.
     prior: the previous frame's left disparity, float32 [H, W] (NaN: no prior there).
     prior_window: (radius, spread) of the search around the prior (`TemporalConfig`).
@@ -187,7 +188,8 @@ class VideoState:
     if not self._shot and 'mixture' in info:
       search = info.get('disparity_range')
       self._shot = {'mixture': info['mixture'],
-                    'detection': {k: info[k] for k in ('detected', 'confidence') if k in info},
+                    'detection': {k: info[k] for k in ('detected', 'confidence', 'also_fits')
+                                  if k in info},
                     'disparity_range': tuple(int(d) for d in search) if search else None}
     disparity = outputs.get('disparity_left')
     if disparity is None or not np.isfinite(disparity).all():

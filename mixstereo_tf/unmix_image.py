@@ -69,6 +69,12 @@ def resolve_mixture(image: np.ndarray, requested: str,
       raise ValueError(f'This image does not look like an anaglyph ({found.reason}); name '
                        'its mixture with PredictorConfig.mixture (e.g. diplopia).')
     name = found.name
+    if found.also_fits:
+      info['also_fits'] = found.also_fits
+      logging.warning('Detected %s, the smallest encoding that explains the image; %s fits '
+                      'it as well. Name the mixture if you know it: %s read as %s loses '
+                      'much more colour than the other way round.', name, found.also_fits,
+                      found.also_fits, name)
   else:
     name = requested
     if found.confidence >= WARN_CONFIDENCE and found.name != name and (

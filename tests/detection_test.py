@@ -62,6 +62,16 @@ def test_every_encoding_of_our_operators(name):
   assert found.confidence > 0.6, found
 
 
+@pytest.mark.parametrize('name, also_fits', [
+    ('half_color', 'anaglyph'), ('optimized', 'anaglyph'),
+    ('green_magenta_half', 'green_magenta'), ('amber_blue_half', 'amber_blue'),
+    ('anaglyph', None), ('gray', None), ('dubois_ffmpeg', None)])
+def test_a_smaller_set_names_the_colour_encoding_that_fits_as_well(name, also_fits):
+  left, right, _ = _pair()
+  found = detection.detect(_ours(name, left, right))
+  assert found.name == name and found.also_fits == also_fits, found
+
+
 @pytest.mark.parametrize('mode', sorted(FFMPEG_MODES))
 def test_ffmpeg_stereo3d_anaglyphs(tmp_path, mode):
   left, right, _ = _pair()

@@ -21,6 +21,19 @@ def test_auto_takes_the_detected_encoding():
   assert name == 'gray' and info['detected'] == 'gray' and info['confidence'] > 0.9
 
 
+def test_auto_on_a_half_colour_anaglyph_records_and_warns_that_colour_fits_too(monkeypatch):
+  warnings = []
+  monkeypatch.setattr(logging, 'warning', lambda msg, *args: warnings.append(msg % args))
+  name, info = unmix_image.resolve_mixture(_anaglyph('half_color')[0], 'auto',
+                                           mixtures.ANAGLYPH_NAMES)
+  assert name == 'half_color' and info['also_fits'] == 'anaglyph'
+  assert len(warnings) == 1 and 'anaglyph fits it as well' in warnings[0]
+  warnings.clear()
+  _, info = unmix_image.resolve_mixture(_anaglyph('anaglyph')[0], 'auto',
+                                        mixtures.ANAGLYPH_NAMES)
+  assert 'also_fits' not in info and not warnings
+
+
 def test_auto_refuses_a_plain_photo_with_a_clear_message():
   left, _, _ = detection_test._pair()  # pylint: disable=protected-access
   with pytest.raises(ValueError, match='does not look like an anaglyph.*name its mixture'):
