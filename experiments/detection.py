@@ -11,6 +11,7 @@ is only measured here; its parameters were chosen on training scenes. For each m
 views the classical method restores told the true and the detected encoding (RGB PSNR).
 """
 
+import functools
 import os
 import sys
 import time
@@ -25,6 +26,7 @@ from mixstereo_tf import inference
 from mixstereo_tf import mixtures
 from mixstereo_tf.data import image_io
 from mixstereo_tf.evaluation import ffmpeg_encoder
+from mixstereo_tf.evaluation import metrics
 
 import numpy as np
 import skimage.data
@@ -57,27 +59,25 @@ def _family(name):
   return mixtures.get_mixture(name).family if name else None
 
 
-def _psnr(image, reference):
-  error = np.mean((image.astype(np.float64) - reference) ** 2)
-  return 10 * np.log10(255.0 ** 2 / error)
+@functools.cache
+def _classical(name):
+  return inference.build_unmixer(inference.PredictorConfig('classical', mixture=name))
 
 
-def _miss_cost(image, truth, found, left, right, unmixers):
+def _miss_cost(image, truth, found, left, right):
   """A table row: RGB PSNR L / R of the classical method told `truth`, then `found`."""
   cells = []
   for name in (truth, found):
-    if name not in unmixers:
-      unmixers[name] = inference.build_unmixer(
-          inference.PredictorConfig('classical', mixture=name))
-    out = unmixers[name](image)
-    cells.append(f"{_psnr(out['left'], left):.2f} / {_psnr(out['right'], right):.2f}")
+    out = _classical(name)(image)
+    cells.append(f"{metrics.psnr(out['left'], left):.2f} / "
+                 f"{metrics.psnr(out['right'], right):.2f}")
   return cells
 
 
 def main(argv):
   del argv
   start = time.perf_counter()
-  rows, costs, unmixers, exact, family, total = [], [], {}, 0, 0, 0
+  rows, costs, exact, family, total = [], [], 0, 0, 0
   for scene, left, right in _pairs(FLAGS.shared_dir):
     for index, (truth, image) in enumerate(_cases(left, right)):
       found = detection.detect(image)
@@ -90,7 +90,7 @@ def main(argv):
                   f'{found.confidence:.2f} | {"yes" if ok else "no"} |')
       print(rows[-1], flush=True)
       if not ok and truth and found.name:
-        told, detected = _miss_cost(image, truth, found.name, left, right, unmixers)
+        told, detected = _miss_cost(image, truth, found.name, left, right)
         costs.append(f'| {scene} | {truth} | {found.name} | {told} | {detected} |')
   seconds = time.perf_counter() - start
   text = '\n'.join([

@@ -13,6 +13,7 @@ luma PSNR, bad-1 / bad-3, and how often `detection` named the encoding.
 """
 
 import csv
+import functools
 import os
 import sys
 import time
@@ -43,6 +44,11 @@ def _group(name):
   return 'procedural (mean)' if name.startswith('synthetic') else name
 
 
+@functools.cache
+def _classical(name):
+  return inference.build_unmixer(inference.PredictorConfig('classical', mixture=name))
+
+
 def _unmixed(common, method, unmixer, pair, image):
   """A result row: `unmixer` on `image`, scored against `pair`'s views and disparities."""
   start = time.perf_counter()
@@ -53,14 +59,6 @@ def _unmixed(common, method, unmixer, pair, image):
 
 def _evaluate(shared_dir):
   rows = []
-  classical = {}  # encoding -> the classical unmixer, built when first needed
-
-  def classical_for(name):
-    if name not in classical:
-      classical[name] = inference.build_unmixer(
-          inference.PredictorConfig('classical', mixture=name))
-    return classical[name]
-
   # A model unmixes the encodings it was trained on (its own mixture), window-aligned.
   model = inference.build_unmixer(inference.PredictorConfig(
       checkpoint=FLAGS.checkpoint)) if FLAGS.checkpoint else None
@@ -76,13 +74,13 @@ def _evaluate(shared_dir):
                       detected=found.name, confidence=round(found.confidence, 3))
         rows.append(dict(common, method='trivial',
                          **realworld.score(pair, image, image)))
-        told = _unmixed(common, 'classical', classical_for(name), pair, image)
+        told = _unmixed(common, 'classical', _classical(name), pair, image)
         rows.append(told)
         if model is not None and model.mixture == name:
           rows.append(_unmixed(common, 'model', model, pair, image))
         if fraction == 0.3 and found.name:  # As `--mixture=auto` would unmix it.
           rows.append(dict(told, method=DETECTED) if found.name == name else
-                      _unmixed(common, DETECTED, classical_for(found.name), pair, image))
+                      _unmixed(common, DETECTED, _classical(found.name), pair, image))
         print(scene, fraction, name, found.name, file=sys.stderr, flush=True)
   return rows
 
