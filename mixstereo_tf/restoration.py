@@ -8,8 +8,9 @@ equals the other one warped. Each view V is the per-pixel least-squares solution
     w_obs |A_V V + A_O O(x) - m(x)|^2 + w_match c(x) |V - O(x - d)|^2 + w_prior |V - P(x)|^2
 
 (O the other view's current estimate, c the consistency mask, P a prior), alternated
-between the views with over-relaxation (weights, iterations and relaxation chosen on the
-`sample` training scenes with true disparities, over all encodings), channels the mixture
+between the views with over-relaxation (iterations and relaxation chosen on the `sample`
+training scenes with true disparities, over all encodings; the prior's weight on validation
+examples with the classical disparities, `RestoreConfig`), channels the mixture
 copies set to the mixture's exactly after each step (`restoration_kernel`). So the other
 view's channels are warped in wherever they match, and what neither fixes comes from the
 prior: for the classical method a local linear colour transfer from the view's own
@@ -44,7 +45,10 @@ class RestoreConfig:
   Attributes:
     observation_weight: w_obs, the weight of the mixture equation.
     match_weight: w_match, the pull towards the other view warped, where consistent.
-    prior_weight: w_prior, the pull towards the prior.
+    prior_weight: w_prior, the pull towards the prior (chosen on validation examples,
+      `experiments/restoration_weight.py`: the matched view's errors, which the encodings
+      that infer a channel amplify, are larger on real and degraded inputs than on clean
+      renders; 0.01 before).
     iterations: alternations between the two views per solve.
     relaxation: over-relaxation factor of each alternation (1 = plain Gauss-Seidel).
     lr_threshold: largest accepted |d_L(x) - d_R(x - d_L(x))|, pixels.
@@ -55,7 +59,7 @@ class RestoreConfig:
   """
   observation_weight: float = 30.0
   match_weight: float = 1.0
-  prior_weight: float = 0.01
+  prior_weight: float = 0.1
   iterations: int = 10
   relaxation: float = 1.5
   lr_threshold: float = 1.0

@@ -76,6 +76,7 @@ def test_clean_share_keeps_the_encoding_and_draws_nothing_else(textures):
   plain, kept = (refiner_data.make_example(5, c, textures) for c in (degraded, clean))
   np.testing.assert_array_equal(plain['left'], kept['left'])  # Same scene and shift.
   assert plain['name'] == kept['name']
+  assert kept['clean'] and not plain['clean']
   expected = mixtures.mix(kept['name'], kept['left'] / 127.5 - 1,
                           kept['right'] / 127.5 - 1).numpy()
   assert np.abs((expected + 1) * 127.5 - kept['mixture']).max() <= 1

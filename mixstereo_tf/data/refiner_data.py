@@ -101,7 +101,8 @@ def _window_aligned(scene: Dict[str, np.ndarray], shift: int, width: int):
 
 def make_example(index: int, config: ExampleConfig,
                  textures: synthetic.TextureAtlas) -> Dict[str, np.ndarray]:
-  """Example `index` (module docstring): uint8 images, float32 disparities, str 'name'."""
+  """Example `index` (module docstring): uint8 images, float32 disparities, str 'name',
+  bool 'clean' (whether the mixture was left undegraded)."""
   rng = np.random.default_rng(index)
   window = rng.uniform() < config.window_probability
   fraction = rng.uniform(0.0, 0.7) if window else 0.0
@@ -114,7 +115,8 @@ def make_example(index: int, config: ExampleConfig,
   example = _whole_example(index, name, window, fraction, clean, factor, config, textures)
   y0, x0 = rng.integers(height - config.height + 1), rng.integers(width - config.width + 1)
   window_of = lambda a: a[y0:y0 + config.height, x0:x0 + config.width]
-  return dict({key: window_of(example[key]) for key in KEYS}, name=name)
+  return dict({key: window_of(example[key]) for key in KEYS}, name=name,
+              clean=bool(clean or not config.degrade))
 
 
 def _whole_example(index, name, window, fraction, clean, factor, config, textures):
