@@ -113,6 +113,29 @@ def test_colour_red_cyan_of_a_saturated_scene_is_not_half_colour():
   assert found.name == 'anaglyph', found
 
 
+@pytest.mark.parametrize('half, colour', [('half_color', 'anaglyph'),
+                                           ('green_magenta_half', 'green_magenta'),
+                                           ('amber_blue_half', 'amber_blue')])
+def test_a_half_colour_anaglyph_is_the_colour_anaglyph_of_a_scene_whose_odd_channel_is_luma(
+    half, colour):
+  """Why no detector can always tell them apart: the half-colour anaglyph of a scene is,
+  pixel for pixel, the colour anaglyph of the scene whose odd channel (R for red-cyan) is
+  replaced by luma in both views. Only the colours of that second scene, less saturated,
+  can make one reading likelier, so a colour anaglyph of a scene without saturated colours
+  is read as half-colour (`Detection.also_fits` names the colour encoding)."""
+  left, right, _ = _pair()
+  odd = detection.FAMILY_ODD_CHANNEL[mixtures.get_mixture(half).family]
+  def odd_is_luma(view):
+    view = view.astype(np.float64)
+    view[..., odd] = view @ np.asarray(mixtures.LUMA)
+    return np.clip(np.round(view), 0, 255).astype(np.uint8)
+  made_half = _ours(half, left, right)
+  made_colour = _ours(colour, odd_is_luma(left), odd_is_luma(right))
+  assert np.abs(made_half.astype(int) - made_colour).max() <= 1
+  found = detection.detect(made_colour)
+  assert found.name == half and found.also_fits == colour, found
+
+
 def test_a_blue_scene_leaks_nothing_into_its_colour_anaglyph():
   """A realistic training scene, mostly dark blue with smooth textures: its red channel,
   seen a few pixels apart, repeats itself, so without the collinearity filter the leak
