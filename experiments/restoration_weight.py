@@ -25,6 +25,7 @@ from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf import mixtures
 from mixstereo_tf import restoration
 from mixstereo_tf.data import refiner_data
+from mixstereo_tf.data import synthetic
 from mixstereo_tf.evaluation import metrics
 
 import numpy as np
@@ -45,7 +46,7 @@ def _scores(name: str, large: float, count: int) -> Dict[bool, List[np.ndarray]]
   """{clean: [per example, the mean view PSNR of every weight]} for one encoding and scale."""
   config = refiner_data.ExampleConfig(mixtures=name, clean_probability=CLEAN_SHARE,
                                       large_probability=large)
-  textures = refiner_data._textures(config)  # pylint: disable=protected-access
+  textures = synthetic.load_textures('train')  # As the refiner's examples (no texture_dir).
   out = collections.defaultdict(list)
   for index in range(FIRST_INDEX, FIRST_INDEX + count):
     example = refiner_data.make_example(index, config, textures)
@@ -78,12 +79,14 @@ def main(argv):
   start = time.time()
   header = '| encoding | ' + ' | '.join(f'w = {w}' for w in WEIGHTS) + ' |'
   rule = '| --- ' * (len(WEIGHTS) + 1) + '|'
-  sections, cases = [], []
+  sections, cases, split = [], [], collections.defaultdict(list)
   for scale, large, share in SCALES:
     count = max(1, round(FLAGS.examples * share))
     lines = [f'## {scale} scenes, {count} examples per encoding', '', header, rule]
     for name in mixtures.parse_names('anaglyphs'):
       scores = _scores(name, large, count)
+      for clean, rows in scores.items():
+        split[clean].append(np.mean(rows, axis=0))
       weighted = sum(share_of * np.mean(scores[clean], axis=0)
                      for clean, share_of in ((True, CLEAN_SHARE), (False, 1 - CLEAN_SHARE))
                      if scores[clean])
@@ -101,7 +104,9 @@ def main(argv):
       '/ 0.7 degraded; regret: dB lost to the best weight of an encoding and scale.', '',
       '| over encodings and scales | ' + ' | '.join(f'w = {w}' for w in WEIGHTS) + ' |', rule,
       _row('mean', summary['mean'], 3), _row('largest regret', summary['max_regret']),
-      _row('mean regret', summary['mean_regret'], 3), '',
+      _row('mean regret', summary['mean_regret'], 3),
+      _row('mean, clean examples only', np.mean(split[True], axis=0), 3),
+      _row('mean, degraded examples only', np.mean(split[False], axis=0), 3), '',
       f'Best mean: w = {WEIGHTS[best]}; smallest largest regret: w = {WEIGHTS[safest]}; '
       f'shipped (`RestoreConfig.prior_weight`): w = {restoration.RestoreConfig().prior_weight}.',
       '', '\n\n'.join(sections), '']
