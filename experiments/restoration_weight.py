@@ -63,6 +63,15 @@ def _scores(name: str, large: float, count: int) -> Dict[bool, List[np.ndarray]]
   return out
 
 
+def _weighted(scores: Dict[bool, List[np.ndarray]]) -> np.ndarray:
+  """The clean and degraded means mixed CLEAN_SHARE : 1 - CLEAN_SHARE (the share of a
+  kind with no example goes to the other)."""
+  shares = {True: CLEAN_SHARE, False: 1.0 - CLEAN_SHARE}
+  present = [clean for clean in shares if scores[clean]]
+  total = sum(shares[clean] for clean in present)
+  return sum(shares[clean] / total * np.mean(scores[clean], axis=0) for clean in present)
+
+
 def summarize(table: np.ndarray) -> Dict[str, np.ndarray]:
   """{'mean', 'max_regret', 'mean_regret'} per weight of a [cases, weights] PSNR table."""
   regret = table.max(axis=1, keepdims=True) - table
@@ -87,11 +96,7 @@ def main(argv):
       scores = _scores(name, large, count)
       for clean, rows in scores.items():
         split[clean].append(np.mean(rows, axis=0))
-      weighted = sum(share_of * np.mean(scores[clean], axis=0)
-                     for clean, share_of in ((True, CLEAN_SHARE), (False, 1 - CLEAN_SHARE))
-                     if scores[clean])
-      weighted /= sum(s for c, s in ((True, CLEAN_SHARE), (False, 1 - CLEAN_SHARE))
-                      if scores[c])
+      weighted = _weighted(scores)
       cases.append(weighted)
       lines.append(_row(name, weighted))
     sections.append('\n'.join(lines))
