@@ -16,9 +16,9 @@ setuptools.setup(
     packages=setuptools.find_packages(include=['mixstereo_tf', 'mixstereo_tf.*']) + [
         'mixstereo_tf.data_lists'],
     package_dir={'mixstereo_tf.data_lists': 'data_lists'},
-    # The shipped models (mixstereo_tf/pretrained/NAME/{info.json,weights.npz}).
+    # The shipped models (mixstereo_tf/artifacts/pretrained/NAME/{info.json,weights.npz}).
     package_data={'mixstereo_tf.data_lists': ['README.md', 'kitti/*.txt'],
-                  'mixstereo_tf.pretrained': ['*/info.json', '*/weights.npz']},
+                  'mixstereo_tf.artifacts.pretrained': ['*/info.json', '*/weights.npz']},
     include_package_data=True,
     # baselines/sgm.py uses np.bitwise_count (numpy >= 2.0). The TF, OpenCV, scikit-image and
     # SciPy bounds are their first releases built for numpy 2; older wheels need numpy < 2.

@@ -24,9 +24,9 @@ import time
 import cv2
 import numpy as np
 
-from mixstereo_tf.baselines import matcher
-from mixstereo_tf.baselines import search_windows
-from mixstereo_tf.baselines import sgm
+from mixstereo_tf.classical import matcher
+from mixstereo_tf.classical import search_windows
+from mixstereo_tf.classical import sgm
 from mixstereo_tf.data import sample
 from mixstereo_tf.data import sources
 

@@ -31,11 +31,11 @@ def video_quality(method: str, frames_per_shot: int = 20) -> dict:
   """Flicker and accuracy of `method` on the clip, without and with the temporal state."""
   # pylint: disable=g-import-not-at-top (TensorFlow only in the worker processes)
   from experiments import temporal as clip_lib
-  from mixstereo_tf import inference
-  from mixstereo_tf import temporal
+  from mixstereo_tf.unmixing import predictors
+  from mixstereo_tf.video import temporal
   clip = clip_lib.make_clip(frames_per_shot)
   frames = [c[0] for c in clip]
-  unmixer = inference.build_unmixer(inference.PredictorConfig(method, mixture='auto'))
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(method, mixture='auto'))
   clip_lib.unmix_clip(unmixer, frames[:2], temporal.TemporalConfig())  # Compiles kernels.
   result = {}
   for name, enabled in QUALITY_VARIANTS:
@@ -49,8 +49,8 @@ def video_quality(method: str, frames_per_shot: int = 20) -> dict:
 
 def _write_clip(path: str, size, frames: int) -> None:
   from experiments import temporal as clip_lib  # pylint: disable=g-import-not-at-top
-  from mixstereo_tf import video_io  # pylint: disable=g-import-not-at-top
-  writer = video_io.VideoWriter(path, fractions.Fraction(25))
+  from mixstereo_tf.video import streams  # pylint: disable=g-import-not-at-top
+  writer = streams.VideoWriter(path, fractions.Fraction(25))
   for index, (image, *_) in enumerate(clip_lib.make_clip(frames)[:frames]):
     writer.write(cv2.resize(image, size, interpolation=cv2.INTER_CUBIC),
                  fractions.Fraction(index, 25))
@@ -60,16 +60,16 @@ def _write_clip(path: str, size, frames: int) -> None:
 def video_speed(method: str, width: int, height: int, frames: int = 12) -> dict:
   """Frames/s of `unmix_inputs` on a `frames`-frame clip, without and with the prior."""
   # pylint: disable=g-import-not-at-top
-  from mixstereo_tf import inference
-  from mixstereo_tf import temporal
-  from mixstereo_tf import unmix_files
-  from mixstereo_tf import video_io
+  from mixstereo_tf.unmixing import predictors
+  from mixstereo_tf.video import temporal
+  from mixstereo_tf.cli import unmix_files
+  from mixstereo_tf.video import streams
   root = tempfile.mkdtemp()
   try:
     path = os.path.join(root, 'clip.mp4')
     _write_clip(path, (width, height), frames)
-    unmixer = inference.build_unmixer(inference.PredictorConfig(method, mixture='auto'))
-    _, decoded = video_io.open_video(path)
+    unmixer = predictors.build_unmixer(predictors.PredictorConfig(method, mixture='auto'))
+    _, decoded = streams.open_video(path)
     unmixer(next(iter(decoded)).image)  # Warm-up: numba's cache, tracing.
     decoded.close()
     import mixstereo_tf  # pylint: disable=g-import-not-at-top

@@ -21,12 +21,12 @@ from absl import flags
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.cli import flags as cli_flags
-from mixstereo_tf import detection
-from mixstereo_tf import inference
-from mixstereo_tf import mixtures
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import image_io
 from mixstereo_tf.evaluation import ffmpeg_encoder
 from mixstereo_tf.evaluation import metrics
+from mixstereo_tf.unmixing import detection
+from mixstereo_tf.unmixing import predictors
 
 import numpy as np
 import skimage.data
@@ -61,7 +61,7 @@ def _family(name):
 
 @functools.cache
 def _classical(name):
-  return inference.build_unmixer(inference.PredictorConfig('classical', mixture=name))
+  return predictors.build_unmixer(predictors.PredictorConfig('classical', mixture=name))
 
 
 def _miss_cost(image, truth, found, left, right):

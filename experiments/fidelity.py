@@ -76,15 +76,15 @@ def heldout_means(model_dir: str) -> dict:
 def disparity_panel(model_dirs, path: str) -> None:
   """Held-out disparity maps (synthetic scene 1 and Motorcycle), one row per variant."""
   # pylint: disable=g-import-not-at-top
-  from mixstereo_tf import colormap
-  from mixstereo_tf import inference
-  from mixstereo_tf import media
+  from mixstereo_tf.core import colormap
+  from mixstereo_tf.unmixing import predictors
+  from mixstereo_tf.cli import media
   from mixstereo_tf.data import sample
   from mixstereo_tf.data import sources
   from mixstereo_tf.evaluation import runner
   rows = []
   for model_dir in model_dirs:
-    unmixer = inference.build_unmixer(inference.PredictorConfig(checkpoint=model_dir))
+    unmixer = predictors.build_unmixer(predictors.PredictorConfig(checkpoint=model_dir))
     records = sample.sample_records('heldout', max_disparity=int(unmixer.max_disparity))
     tiles = []
     for record in (records[1], records[-1]):

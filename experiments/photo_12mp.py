@@ -18,8 +18,8 @@ import numpy as np
 import skimage.data
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
-from mixstereo_tf import inference
 from mixstereo_tf.evaluation import realworld
+from mixstereo_tf.unmixing import predictors
 
 flags.DEFINE_string('photo_encoding', 'anaglyph', 'The anaglyph encoding to make and unmix.')
 flags.DEFINE_enum('photo_method', 'classical', ('classical', 'model'),
@@ -43,7 +43,7 @@ def main(argv):
     image = realworld.make_anaglyph({'left': left, 'right': right}, FLAGS.photo_encoding, 'ours')
   del left, right
   before = _peak_gib()
-  unmixer = inference.build_unmixer(inference.PredictorConfig(FLAGS.photo_method,
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(FLAGS.photo_method,
                                                               mixture='auto'))
   start, cpu = time.perf_counter(), time.process_time()
   out = unmixer(image)

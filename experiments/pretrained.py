@@ -22,11 +22,11 @@ from absl import flags
 import numpy as np
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
+from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.cli import flags as cli_flags
-from mixstereo_tf import inference
-from mixstereo_tf import mixtures
-from mixstereo_tf import pretrained
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.evaluation import realworld
+from mixstereo_tf.unmixing import predictors
 
 cli_flags.define_shared_dir()
 cli_flags.define_pretrained()
@@ -39,9 +39,9 @@ METHODS = ('model', 'classical')
 
 
 def _unmixers(entry, name):
-  return {'model': inference.build_unmixer(inference.PredictorConfig(
+  return {'model': predictors.build_unmixer(predictors.PredictorConfig(
               method='model', pretrained=entry.folder, mixture=name)),
-          'classical': inference.build_unmixer(inference.PredictorConfig(
+          'classical': predictors.build_unmixer(predictors.PredictorConfig(
               method='classical', mixture=name))}
 
 

@@ -23,9 +23,9 @@ from absl import flags
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.cli import flags as cli_flags
-from mixstereo_tf import detection
-from mixstereo_tf import inference
 from mixstereo_tf.evaluation import realworld
+from mixstereo_tf.unmixing import detection
+from mixstereo_tf.unmixing import predictors
 
 import numpy as np
 
@@ -46,7 +46,7 @@ def _group(name):
 
 @functools.cache
 def _classical(name):
-  return inference.build_unmixer(inference.PredictorConfig('classical', mixture=name))
+  return predictors.build_unmixer(predictors.PredictorConfig('classical', mixture=name))
 
 
 def _unmixed(common, method, unmixer, pair, image):
@@ -60,7 +60,7 @@ def _unmixed(common, method, unmixer, pair, image):
 def _evaluate(shared_dir):
   rows = []
   # A model unmixes the encodings it was trained on (its own mixture), window-aligned.
-  model = inference.build_unmixer(inference.PredictorConfig(
+  model = predictors.build_unmixer(predictors.PredictorConfig(
       checkpoint=FLAGS.checkpoint)) if FLAGS.checkpoint else None
   for scene, data in realworld.scenes(shared_dir):
     base = {'scene': scene, 'group': _group(scene)}

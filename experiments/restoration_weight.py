@@ -22,11 +22,11 @@ from absl import app
 from absl import flags
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
-from mixstereo_tf import mixtures
-from mixstereo_tf import restoration
-from mixstereo_tf.data import refiner_data
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.evaluation import metrics
+from mixstereo_tf.restoration import views
+from mixstereo_tf.training import refiner_data
 
 import numpy as np
 
@@ -53,11 +53,11 @@ def _scores(name: str, large: float, count: int) -> Dict[bool, List[np.ndarray]]
     mixture = example['mixture'].astype(np.float32) / 255.0
     row = []
     for weight in WEIGHTS:
-      views = restoration.restore_views(
+      restored = views.restore_views(
           mixture, name, example['classical_disparity_left'],
           example['classical_disparity_right'],
-          config=restoration.RestoreConfig(prior_weight=weight))
-      row.append(np.mean([metrics.psnr(views[key] * 255.0, example[key].astype(np.float64))
+          config=views.RestoreConfig(prior_weight=weight))
+      row.append(np.mean([metrics.psnr(restored[key] * 255.0, example[key].astype(np.float64))
                           for key in ('left', 'right')]))
     out[example['clean']].append(np.array(row))
   return out
@@ -113,7 +113,7 @@ def main(argv):
       _row('mean, clean examples only', np.mean(split[True], axis=0), 3),
       _row('mean, degraded examples only', np.mean(split[False], axis=0), 3), '',
       f'Best mean: w = {WEIGHTS[best]}; smallest largest regret: w = {WEIGHTS[safest]}; '
-      f'shipped (`RestoreConfig.prior_weight`): w = {restoration.RestoreConfig().prior_weight}.',
+      f'shipped (`RestoreConfig.prior_weight`): w = {views.RestoreConfig().prior_weight}.',
       '', '\n\n'.join(sections), '']
   with open(FLAGS.restoration_weight_output, 'w') as handle:
     handle.write('\n'.join(lines))

@@ -31,11 +31,11 @@ from absl import flags
 import cv2
 import numpy as np
 
-from mixstereo_tf import image_range
-from mixstereo_tf import inference
-from mixstereo_tf import mixtures
-from mixstereo_tf import temporal
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import temporal
 
 FLAGS = flags.FLAGS
 flags.DEFINE_integer('frames_per_shot', 20, 'Frames of each of the two shots.')
@@ -133,7 +133,7 @@ def main(argv):
   planted = FLAGS.frames_per_shot
   rows = []
   for method in METHODS:
-    unmixer = inference.build_unmixer(inference.PredictorConfig(method, mixture='auto'))
+    unmixer = predictors.build_unmixer(predictors.PredictorConfig(method, mixture='auto'))
     unmix_clip(unmixer, frames[:2], temporal.TemporalConfig())  # Compiles the kernels.
     for timed, (name, config) in enumerate(VARIANTS):
       if method == 'model' and timed not in TIMED:

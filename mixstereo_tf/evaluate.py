@@ -19,14 +19,14 @@ from absl import app  # pylint: disable=g-bad-import-order
 from absl import flags
 from absl import logging
 
-from mixstereo_tf import disparity_range
-from mixstereo_tf import inference
-from mixstereo_tf import mixtures
 from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.evaluation import protocols
 from mixstereo_tf.evaluation import report
 from mixstereo_tf.evaluation import results
 from mixstereo_tf.evaluation import runner
+from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import predictors
 
 FLAGS = flags.FLAGS
 
@@ -70,7 +70,7 @@ def main(argv):
       # The paper's protocols: a network sees the image as it is, the classical method
       # searches its own fixed range.
       predictor = dataclasses.replace(predictor, disparity_range=disparity_range.NETWORK)
-    unmixer = inference.build_unmixer(predictor)
+    unmixer = predictors.build_unmixer(predictor)
     encoding = FLAGS.encoding or unmixer.mixture
     if encoding == 'auto':
       raise ValueError('--mixture=auto needs --encoding: the mixture the pairs are mixed '

@@ -19,10 +19,10 @@ from absl import app  # pylint: disable=g-bad-import-order
 from absl import flags
 from absl import logging
 
-from mixstereo_tf import graphs
-from mixstereo_tf import pretrained
-from mixstereo_tf import runs
-from mixstereo_tf import serving
+from mixstereo_tf.artifacts import graphs
+from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.artifacts import serving
 from mixstereo_tf.cli import flags as cli_flags
 
 FLAGS = flags.FLAGS
@@ -49,7 +49,7 @@ def _model_and_info():
   if entry.kind != 'joint':
     raise ValueError(f'The shipped model {entry.name!r} is a {entry.kind}: its first stage '
                      'is the classical method, which a SavedModel cannot hold; use it through '
-                     'mixstereo-unmix / mixstereo-eval (or mixstereo_tf.inference).')
+                     'mixstereo-unmix / mixstereo-eval (or mixstereo_tf.unmixing.predictors).')
   model = pretrained.load_model(entry)
   return model, runs.RunInfo(entry.mixture, entry.crop[0], entry.crop[1], model.model_config)
 

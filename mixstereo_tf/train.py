@@ -18,15 +18,15 @@ from absl import flags
 from absl import logging
 
 from mixstereo_tf import models
-from mixstereo_tf.models import refiner
-from mixstereo_tf import objective
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.data import pipeline
-from mixstereo_tf.data import refiner_data
 from mixstereo_tf.data import sources
+from mixstereo_tf.models import refiner
 from mixstereo_tf.training import config as config_lib
 from mixstereo_tf.training import loop
+from mixstereo_tf.training import objective
 from mixstereo_tf.training import optimizers
+from mixstereo_tf.training import refiner_data
 from mixstereo_tf.training import refiner_loop
 
 FLAGS = flags.FLAGS

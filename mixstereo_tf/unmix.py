@@ -22,12 +22,12 @@ from absl import app
 from absl import flags
 from absl import logging
 
-from mixstereo_tf import inference
-from mixstereo_tf import media
-from mixstereo_tf import temporal
-from mixstereo_tf import unmix_files
-from mixstereo_tf import video_job
 from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.cli import media
+from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import jobs
+from mixstereo_tf.video import temporal
 
 FLAGS = flags.FLAGS
 
@@ -40,7 +40,7 @@ flags.DEFINE_enum('layout', 'separate', media.LAYOUTS,
                   'half width (sbs_half) or top-bottom (tb).')
 flags.DEFINE_float('max_display_disparity', None, 'Disparity (pixels) shown brightest in '
                    "the colour maps, fixed for the run (default: the predictor's range).")
-flags.DEFINE_integer('segment_frames', video_job.VideoConfig.segment_frames,
+flags.DEFINE_integer('segment_frames', jobs.VideoConfig.segment_frames,
                      'Videos are written in resumable segments of this many frames: '
                      'running the same command again after an interruption continues '
                      'from the last finished segment.')
@@ -59,11 +59,11 @@ def main(argv):
     if config.method == 'oracle':
       raise ValueError('--method=oracle needs the clean stereo pair; it is for evaluation '
                        'only.')
-    unmixer = inference.build_unmixer(config)
+    unmixer = predictors.build_unmixer(config)
     report = unmix_files.unmix_inputs(unmixer, FLAGS.input, FLAGS.output_dir, FLAGS.layout,
                                       FLAGS.max_display_disparity,
                                       progress_stream=sys.stderr,
-                                      video_config=video_job.VideoConfig(FLAGS.segment_frames),
+                                      video_config=jobs.VideoConfig(FLAGS.segment_frames),
                                       settings=dataclasses.asdict(config),
                                       temporal_config=temporal.TemporalConfig(
                                           enabled=FLAGS.temporal))

@@ -10,17 +10,17 @@ import sys
 import pytest
 import tensorflow as tf
 
-from mixstereo_tf import disparity_range
-from mixstereo_tf import graphs
-from mixstereo_tf import inference
 from mixstereo_tf import models
-from mixstereo_tf import runs
-from mixstereo_tf import serving
+from mixstereo_tf.artifacts import graphs
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.artifacts import serving
 from mixstereo_tf.data import sample
 from mixstereo_tf.evaluation import report
 from mixstereo_tf.evaluation import results
 from mixstereo_tf.evaluation import runner
-from tests import runner_test
+from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import predictors
+from tests.evaluation import runner_test
 
 EvalConfig = results.EvalConfig
 
@@ -173,7 +173,7 @@ def test_cli_middlebury_and_flag_errors(run_dir, tmp_path):
 def _sample_rows_in_process(run_dir, restore_colour):
   """The sample protocol's rows for the run, evaluated in this process (the reference):
   the CLI feeds a model the images as they are (disparity_range.NETWORK)."""
-  unmixer = inference.build_unmixer(inference.PredictorConfig(
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
       checkpoint=run_dir, restore_colour=restore_colour,
       disparity_range=disparity_range.NETWORK))
   config = EvalConfig('sample', unmixer.mixture, heldout_scenes=1,

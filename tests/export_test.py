@@ -1,4 +1,4 @@
-"""Tests for the SavedModel export (mixstereo_tf.serving and the export binary)."""
+"""Tests for the SavedModel export (mixstereo_tf.artifacts.serving and the export binary)."""
 
 import json
 import os
@@ -9,13 +9,13 @@ import textwrap
 import numpy as np
 import pytest
 
-from mixstereo_tf import disparity_range
-from mixstereo_tf import graphs
-from mixstereo_tf import inference
 from mixstereo_tf import models
-from mixstereo_tf import runs
-from mixstereo_tf import serving
-from tests import inference_test
+from mixstereo_tf.artifacts import graphs
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.artifacts import serving
+from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import predictors
+from tests.unmixing import predictors_test
 
 SIZES = ((375, 1242), (97, 131))
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -54,12 +54,12 @@ def _run(command, cwd, env=None):
 def exported(tmp_path_factory):
   """A training run directory exported by the export binary."""
   root = tmp_path_factory.mktemp('export')
-  model, _ = inference_test.make_run_dir(str(root / 'run'), mixture='diplopia', seed=3)
+  model, _ = predictors_test.make_run_dir(str(root / 'run'), mixture='diplopia', seed=3)
   export_dir = str(root / 'saved')
   result = _run([sys.executable, '-m', 'mixstereo_tf.export', f'--checkpoint={root / "run"}',
                  f'--export_dir={export_dir}'], cwd=REPO)
   assert result.returncode == 0, result.stderr[-3000:]
-  return model, runs.RunInfo('diplopia', 64, 128, inference_test.TINY), export_dir, str(
+  return model, runs.RunInfo('diplopia', 64, 128, predictors_test.TINY), export_dir, str(
       root / 'run')
 
 
@@ -77,11 +77,11 @@ def test_plain_tensorflow_loads_the_export_and_matches_keras(exported, tmp_path)
   assert not meta['mixstereo_imported']
   assert meta['mixture'] == meta['attribute_mixture'] == 'diplopia'
   assert (meta['crop_height'], meta['crop_width']) == (64, 128)
-  assert meta['max_disparity'] == inference_test.TINY.max_disparity
+  assert meta['max_disparity'] == predictors_test.TINY.max_disparity
   assert meta['size_multiple'] == 32
   assert models.ModelConfig.from_dict(json.loads(meta['model_config'])) == info.model_config
 
-  unmixer = inference.build_unmixer(inference.PredictorConfig(
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
       checkpoint=run_dir, restore_colour=False,
       disparity_range=disparity_range.NETWORK))  # The image as it is, as the graph sees it.
   with np.load(tmp_path / 'out.npz') as served:
@@ -102,11 +102,11 @@ def test_plain_tensorflow_loads_the_export_and_matches_keras(exported, tmp_path)
 
 def test_saved_model_unmixer_reads_the_metadata(exported):
   _, info, export_dir, run_dir = exported
-  unmixer = inference.build_unmixer(inference.PredictorConfig(saved_model=export_dir))
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(saved_model=export_dir))
   assert (unmixer.mixture, unmixer.max_disparity) == ('diplopia', info.model_config.max_disparity)
   assert not unmixer.restore_colour
   image = np.random.RandomState(2).randint(0, 256, (45, 70, 3)).astype(np.uint8)
-  expected = inference.build_unmixer(inference.PredictorConfig(checkpoint=run_dir))(image)
+  expected = predictors.build_unmixer(predictors.PredictorConfig(checkpoint=run_dir))(image)
   got = unmixer(image)
   np.testing.assert_allclose(got['disparity_left'], expected['disparity_left'], atol=1e-4)
   assert np.abs(got['left'].astype(int) - expected['left']).max() <= 1

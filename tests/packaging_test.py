@@ -20,10 +20,10 @@ def test_the_wheel_ships_the_split_lists_as_package_data(tmp_path):
     assert f'mixstereo_tf/data_lists/kitti/{name}' in names
   assert 'mixstereo_tf/evaluation/protocols/eigen.py' in names
   assert 'mixstereo_tf/cli/flags.py' in names
-  shipped = {n for n in names if n.startswith('mixstereo_tf/pretrained/')}
+  shipped = {n for n in names if n.startswith('mixstereo_tf/artifacts/pretrained/')}
   for model in ('anaglyph', 'diplopia'):
-    assert {f'mixstereo_tf/pretrained/{model}/info.json',
-            f'mixstereo_tf/pretrained/{model}/weights.npz'} <= shipped
+    assert {f'mixstereo_tf/artifacts/pretrained/{model}/info.json',
+            f'mixstereo_tf/artifacts/pretrained/{model}/weights.npz'} <= shipped
   # Installed (the wheel unpacked, no repository around it): the Eigen protocol's default
   # list resolves to the packaged copy, all 697 test frames.
   site = tmp_path / 'site'
@@ -31,7 +31,7 @@ def test_the_wheel_ships_the_split_lists_as_package_data(tmp_path):
   script = ('import os\n'
             'from mixstereo_tf.data import split_lists\n'
             'from mixstereo_tf.evaluation import protocols\n'
-            'from mixstereo_tf import pretrained\n'
+            'from mixstereo_tf.artifacts import pretrained\n'
             "path = split_lists.resolve(protocols.get('eigen').default_split_list)\n"
             "entry = pretrained.choose(None, 'auto')\n"
             'pretrained.load_model(entry)\n'

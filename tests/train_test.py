@@ -14,11 +14,11 @@ import numpy as np
 import tensorflow as tf
 
 from mixstereo_tf import models
-from mixstereo_tf import objective
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import sample
 from mixstereo_tf.training import config as config_lib
 from mixstereo_tf.training import loop
+from mixstereo_tf.training import objective
 from mixstereo_tf.training import step as step_lib
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

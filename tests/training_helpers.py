@@ -3,8 +3,8 @@
 import numpy as np
 import tensorflow as tf
 
-from mixstereo_tf import mixtures
 from mixstereo_tf import models
+from mixstereo_tf.core import mixtures
 
 TINY = models.ModelConfig(separation_widths=(4, 4, 8, 8, 8, 8), stereo_features=4,
                           stereo_residual_blocks=1, stereo_3d_widths=(4, 4, 4, 8),

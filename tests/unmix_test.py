@@ -11,24 +11,24 @@ import pytest
 import skimage.data
 import tensorflow as tf
 
-from mixstereo_tf import colormap
-from mixstereo_tf import graphs
-from mixstereo_tf import media
-from mixstereo_tf import mixtures
 from mixstereo_tf import models
-from mixstereo_tf import runs
-from mixstereo_tf import serving
-from tests import detection_test
-from tests import inference_test
+from mixstereo_tf.artifacts import graphs
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.artifacts import serving
+from mixstereo_tf.cli import media
+from mixstereo_tf.core import colormap
+from mixstereo_tf.core import mixtures
+from tests.unmixing import detection_test
+from tests.unmixing import predictors_test
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-INFO = runs.RunInfo('anaglyph', 64, 128, inference_test.TINY)
+INFO = runs.RunInfo('anaglyph', 64, 128, predictors_test.TINY)
 
 
 @pytest.fixture(scope='module')
 def model():
   tf.keras.utils.set_random_seed(5)
-  return models.build_model(inference_test.TINY)
+  return models.build_model(predictors_test.TINY)
 
 
 def _image(path, shape, seed=0):

@@ -15,11 +15,11 @@ from typing import Any, Dict, Optional, Sequence, Tuple
 from absl import app
 from absl import flags
 
-from mixstereo_tf import disparity_range
-from mixstereo_tf import inference
-from mixstereo_tf import mixtures
 from mixstereo_tf import models
-from mixstereo_tf import pretrained
+from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import predictors
 
 FLAGS = flags.FLAGS
 
@@ -84,8 +84,8 @@ def define_predictor() -> None:
   --disparity_range, --max_network_pixels."""
   define_checkpoint()
   define_mixture()
-  defaults = inference.PredictorConfig()
-  flags.DEFINE_enum('method', defaults.method, inference.METHODS,
+  defaults = predictors.PredictorConfig()
+  flags.DEFINE_enum('method', defaults.method, predictors.METHODS,
                     'model: a trained network (--checkpoint or --saved_model); classical: the '
                     'training-free baseline; oracle: the stereo module of --checkpoint (a '
                     'stereo_only run) on the clean pairs (evaluation only).')
@@ -143,13 +143,13 @@ def define_data() -> None:
                     "layout's scale).")
 
 
-def predictor_config() -> inference.PredictorConfig:
+def predictor_config() -> predictors.PredictorConfig:
   """The PredictorConfig of the parsed predictor flags."""
   try:
     search = disparity_range.parse(FLAGS.disparity_range)
   except ValueError as e:
     raise app.UsageError(f'--disparity_range: {e}') from None
-  return inference.PredictorConfig(
+  return predictors.PredictorConfig(
       method=FLAGS.method, checkpoint=FLAGS.checkpoint, saved_model=FLAGS.saved_model,
       mixture=FLAGS.mixture, restore_colour=FLAGS.restore_colour, disparity_range=search,
       max_network_pixels=FLAGS.max_network_pixels, pretrained=FLAGS.pretrained)

@@ -19,8 +19,8 @@ from typing import Dict, Sequence
 import numpy as np
 import tensorflow as tf
 
-from mixstereo_tf import image_range
-from mixstereo_tf import mixtures
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import degrade
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sources
@@ -40,7 +40,7 @@ class PipelineConfig:
   """How pairs become training or evaluation elements.
 
   Attributes:
-    mixture: name of the composition operator (`mixstereo_tf.mixtures.MIXTURE_NAMES`), or a
+    mixture: name of the composition operator (`mixstereo_tf.core.mixtures.MIXTURE_NAMES`), or a
       comma-separated list of them ('anaglyphs' = every anaglyph encoding): then each
       element is mixed with one drawn uniformly (encoding mixing; not in the paper).
     crop_height: training crop height (paper: 256 KITTI, 384 Middlebury).

@@ -25,8 +25,8 @@ import urllib.parse
 import numpy as np
 import tensorflow as tf
 
-from mixstereo_tf import image_range
-from mixstereo_tf import mixtures
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import records
 from mixstereo_tf.data import synthetic
 

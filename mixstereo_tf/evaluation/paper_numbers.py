@@ -3,7 +3,7 @@
 Looked up by (protocol, mixture, method, scene):
   protocols: 'middlebury' (scenes Tsukuba, Venus, Cones, Teddy, plus 'mean' for bad-1),
     'kitti2015' (200 training images), 'kitti2015_ablation', 'eigen' (697 test images);
-  mixtures: names of `mixstereo_tf.mixtures` ('anaglyph', 'diplopia', 'monocular'), or None
+  mixtures: names of `mixstereo_tf.core.mixtures` ('anaglyph', 'diplopia', 'monocular'), or None
     for the ablation, whose mixture the paper does not state;
   methods: 'ours', 'joulin', 'williem', 'li' (layer separation), 'oracle' (stereo on the
     clean pair), 'godard', 'garg', 'zhou', 'separation_only', 'joint';

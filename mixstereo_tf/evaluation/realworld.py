@@ -18,8 +18,8 @@ from typing import Dict, Iterator, Optional, Tuple
 
 import numpy as np
 
-from mixstereo_tf import image_range
-from mixstereo_tf import mixtures
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import image_io
 from mixstereo_tf.data import sources
 from mixstereo_tf.evaluation import ffmpeg_encoder

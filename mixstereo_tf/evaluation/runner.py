@@ -2,7 +2,7 @@
 
 For each pair the mixture is synthesised exactly as training does (uint8 views -> [-1, 1]
 -> `mixtures.mix`) and then quantised to uint8: the predictor sees what an 8-bit mixture
-image file would hold. The predictor is an `inference.Unmixer`: a uint8 [H, W, 3] mixture
+image file would hold. The predictor is an `predictors.Unmixer`: a uint8 [H, W, 3] mixture
 in, {'left', 'right': uint8 [H, W, 3], 'disparity_left', 'disparity_right': float32 [H, W]
 pixels} out; one that `takes_pair` (the 'oracle') gets the clean (left, right) views and
 returns disparities only, so its rows have no view PSNR.
@@ -22,9 +22,8 @@ from typing import Any, Callable, Dict, List, Optional
 import numpy as np
 import tensorflow as tf
 
-from mixstereo_tf import image_range
-from mixstereo_tf import inference
-from mixstereo_tf import mixtures
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sources
 from mixstereo_tf.data import split_lists
@@ -32,6 +31,7 @@ from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import protocol as protocol_lib
 from mixstereo_tf.evaluation import protocols
 from mixstereo_tf.evaluation import results
+from mixstereo_tf.unmixing import predictors
 
 Progress = Callable[[int, int, Dict[str, Any]], None]
 
@@ -73,7 +73,7 @@ def _check_outputs(outputs: Dict[str, np.ndarray], height: int, width: int, name
 
 
 def evaluate_sample(config: results.EvalConfig, record: records.StereoSample,
-                    unmixer: inference.Unmixer) -> Dict[str, Any]:
+                    unmixer: predictors.Unmixer) -> Dict[str, Any]:
   """Loads, mixes, predicts and scores one pair; returns its row."""
   data = sources.load_sample(record)
   height, width = data['left'].shape[:2]
@@ -95,7 +95,7 @@ def evaluate_sample(config: results.EvalConfig, record: records.StereoSample,
   return row
 
 
-def evaluate(config: results.EvalConfig, unmixer: inference.Unmixer,
+def evaluate(config: results.EvalConfig, unmixer: predictors.Unmixer,
              progress: Optional[Progress] = None) -> results.EvalResult:
   """Runs `unmixer` over the protocol's pairs.
 

@@ -65,4 +65,4 @@ def check_size(image: tf.Tensor, multiple: int, what: str) -> None:
     if size is not None and size % multiple:
       raise ValueError(
           f'{what} {axis} {size} is not a multiple of {multiple}; pad the image (edge '
-          f'replication, as mixstereo_tf.inference does) or crop to a multiple of {multiple}.')
+          f'replication, as mixstereo_tf.unmixing.predictors does) or crop to a multiple of {multiple}.')

@@ -25,12 +25,23 @@ x + d_R). Output: {'left', 'right'} [B, H, W, 3] in [-1, 1], {'disparity_left',
 import dataclasses
 from typing import Any, Dict, Mapping, Tuple
 
+import numpy as np
 import tensorflow as tf
 
+from mixstereo_tf.core import image_range
 from mixstereo_tf.models import layers_util
 from mixstereo_tf.ops import warp
 
 INPUT_CHANNELS = 11
+
+
+def network_input(mixture, left, right, d_left, d_right) -> np.ndarray:
+  """The refiner's [..., H, W, 11] float32 input from uint8 images and float disparities."""
+  images = [image_range.u8_to_signed(np.asarray(i)).astype(np.float32)
+            for i in (mixture, left, right)]
+  disparities = [np.asarray(d, np.float32)[..., None] for d in (d_left, d_right)]
+  return np.concatenate(images + disparities, axis=-1)
+
 
 
 @dataclasses.dataclass(frozen=True)

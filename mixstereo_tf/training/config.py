@@ -3,7 +3,7 @@
 import dataclasses
 from typing import Optional
 
-from mixstereo_tf import objective
+from mixstereo_tf.training import objective
 from mixstereo_tf.training import optimizers
 
 JIT_CHOICES = ('auto', 'true', 'false')

@@ -19,10 +19,10 @@ from absl import logging
 import tensorflow as tf
 
 from mixstereo_tf import models
-from mixstereo_tf import objective
-from mixstereo_tf import runs
+from mixstereo_tf.artifacts import runs
 from mixstereo_tf.ops import conv3d
 from mixstereo_tf.training import config as config_lib
+from mixstereo_tf.training import objective
 from mixstereo_tf.training import optimizers
 from mixstereo_tf.training import step as step_lib
 from mixstereo_tf.training import summaries

@@ -26,10 +26,10 @@ from absl import logging
 import numpy as np
 import tensorflow as tf
 
-from mixstereo_tf import image_range
-from mixstereo_tf import runs
-from mixstereo_tf.data import refiner_data
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.core import image_range
 from mixstereo_tf.models import refiner
+from mixstereo_tf.training import refiner_data
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,7 +112,7 @@ def draw_batch(data: Mapping[str, np.ndarray], config: RefinerTrainConfig,
     flip = slice(None, None, -1) if rng.uniform() < 0.5 else slice(None)
     rows.append({k: data[k][i, y:y + h, x:x + w][flip] for k in refiner_data.KEYS})
   stacked = {k: np.stack([r[k] for r in rows]) for k in refiner_data.KEYS}
-  batch = {'inputs': refiner_data.network_input(
+  batch = {'inputs': refiner.network_input(
       stacked['mixture'], stacked['classical_left'], stacked['classical_right'],
       stacked['classical_disparity_left'], stacked['classical_disparity_right'])}
   for key in ('left', 'right'):

@@ -10,7 +10,7 @@ from typing import Dict, List, Tuple
 
 import tensorflow as tf
 
-from mixstereo_tf import objective
+from mixstereo_tf.training import objective
 
 
 def resolve_jit_compile(setting: str, device_type: str) -> bool:

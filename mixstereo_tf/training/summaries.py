@@ -4,8 +4,8 @@ from typing import Dict, Optional
 
 import tensorflow as tf
 
-from mixstereo_tf import colormap
-from mixstereo_tf import image_range
+from mixstereo_tf.core import colormap
+from mixstereo_tf.core import image_range
 
 
 def write_scalars(scalars: Dict[str, float], step: int,

@@ -1,0 +1,295 @@
+"""Training-free de-diplopia: shift estimation by self-matching, layers by least squares.
+
+The mixture is I = (L + R) / 2 on one pixel grid. With the right pixel x matching the left
+pixel x + d_R(x) (docs/DESIGN.md), R(x) = L(x + d_R(x)) wherever the right pixel is visible
+in the left view, so
+
+    I(x) = (L(x) + L(x + d_R(x))) / 2,
+
+one linear equation per pixel in the unknown left view. Steps:
+  1. Global shift (reported, not used further): the power cepstrum of the rows peaks at
+     the dominant echo delay (classic echo detection; the autocorrelation of natural
+     images peaks at lag 1 instead).
+  2. Per-pixel shifts: I(x) and I(x - d_L(x)) share the component L(x), so SGM on a ZNCC
+     volume of the mixture against itself (`self_matching_volume`, lags from
+     `min_disparity` >= 1 up, the trivial lag 0 excluded) gives d_L, and the volume's
+     diagonal search gives d_R; then the left-right check and filling of `sgm`.
+  3. Layers: L on the columns [0, W + E) (E covers the largest d_R, content the left view
+     never shows inside the image) minimises
+       sum_x (L(x)/2 + L(x + d_R(x))/2 - I(x))^2 + smoothness * |grad L|^2
+         + fidelity * |L - I|^2   (I edge-extended to the extra columns)
+     (sub-pixel shifts by linear interpolation; horizontal and vertical first differences),
+     solved by Jacobi-preconditioned conjugate gradients for all channels at once; then
+     R = L sampled at x + d_R. The 2-tap filter (1 + e^{i w d}) / 2 has zeros at
+     w = pi (2k + 1) / d, so those frequencies are unobservable and the prior sets them.
+
+Ambiguity: (L, R, d) and (R, L, -d) give the same symmetric average; the convention that
+disparities are positive (the left camera is on the left) decides which layer is left.
+"""
+
+import dataclasses
+import math
+from typing import Dict, Optional, Tuple
+
+import cv2
+import numpy as np
+import scipy.sparse
+
+from mixstereo_tf.classical import sgm
+from mixstereo_tf.core import image_range
+
+
+@dataclasses.dataclass(frozen=True)
+class DiplopiaConfig:
+  """Parameters of the de-diplopia baseline.
+
+  Attributes:
+    matching: SGM parameters of the self-matching (min_disparity >= 1; the census
+      fields are unused).
+    window_radius: ZNCC window radius, pixels.
+    highpass_sigma: Gaussian sigma of the high-pass applied before ZNCC, pixels.
+    cost_scale: cost units per unit of (1 - zncc).
+    smoothness: weight of the squared-gradient prior on the left layer ([0, 1] units).
+    fidelity: weight of a prior pulling the left layer towards the mixture itself, which
+      fills the unobservable frequencies with the mixture's and limits the damage of
+      wrong shifts.
+    cg_iterations: conjugate-gradient iteration cap.
+    cg_tolerance: relative residual at which CG stops.
+  """
+  matching: sgm.SgmConfig = sgm.SgmConfig(min_disparity=1, p1=8, p2=64)
+  window_radius: int = 3
+  highpass_sigma: float = 1.0
+  cost_scale: float = 32.0
+  smoothness: float = 0.01
+  fidelity: float = 0.05
+  cg_iterations: int = 300
+  cg_tolerance: float = 1e-4
+
+  def __post_init__(self):
+    if self.matching.min_disparity < 1:
+      raise ValueError('Diplopia self-matching needs matching.min_disparity >= 1 (lag 0 '
+                       'matches every image to itself).')
+    if not self.smoothness > 0:
+      raise ValueError(f'smoothness must be positive, got {self.smoothness!r}.')
+
+
+def global_shift(gray: np.ndarray, min_lag: int = 2, max_lag: int = 128) -> int:
+  """Dominant horizontal shift of a double image: the peak of the power cepstrum.
+
+  An echo I(x) = (L(x) + L(x + d)) / 2 multiplies the row power spectrum by
+  (1 + cos(w d)) / 2, a ripple that the log turns into an additive term whose inverse
+  transform (the cepstrum) peaks at quefrency d; the image's own smooth spectrum stays at
+  small quefrencies. (The plain autocorrelation peaks at lag 1 on natural images.)
+
+  Args:
+    gray: float [H, W] intensities of the mixture.
+    min_lag, max_lag: lags searched, pixels (max_lag clipped to W - 1); lags below 2 are
+      dominated by the spectrum's envelope.
+
+  Returns:
+    The lag in [min_lag, max_lag] maximising the row-averaged power cepstrum.
+  """
+  rows = np.asarray(gray, np.float64)
+  rows = rows - rows.mean(axis=1, keepdims=True)
+  width = rows.shape[1]
+  max_lag = min(max_lag, width - 1)
+  if not 1 <= min_lag <= max_lag:
+    raise ValueError(f'Need 1 <= min_lag <= max_lag < width, got {min_lag}, {max_lag} for '
+                     f'width {width}.')
+  power = (np.abs(np.fft.rfft(rows, n=2 * width, axis=1)) ** 2).mean(axis=0)
+  cepstrum = np.fft.irfft(np.log(power + 1e-6 * power.max()))
+  return int(min_lag + np.argmax(cepstrum[min_lag:max_lag + 1]))
+
+
+def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray:
+  """ZNCC costs of the high-passed mixture against itself, corrected for self-similarity.
+
+  A linear score suits an additive mixture: I(x) and I(x - d_L) share one of their two
+  components, a normalised correlation of about 1/2, where census codes barely react.
+  The image is high-passed (minus a Gaussian blur) and compared in (2r+1)^2 windows; the
+  cost is (1 - zncc) * `cost_scale`. Neighbouring pixels of a smooth image correlate, so
+  the cost rises from lag 0 towards the level of unrelated texture over a few pixels and
+  would favour the smallest lags: the expected cost of lag d without an echo is estimated
+  by the upper envelope (running maximum over lags) of the image-mean cost per lag, which
+  an echo only lowers, and each lag gets the penalty (envelope maximum - envelope(d)).
+
+  Args:
+    gray: float [H, W] mixture intensities.
+    config: window, high-pass and disparity range.
+
+  Returns:
+    uint8 [H, W, D] left-referenced costs, d_i = min_disparity + i (as `sgm.cost_volume`).
+  """
+  matching = config.matching
+  height, width = gray.shape
+  max_disparity = min(matching.max_disparity, width - 1)
+  high = (gray - cv2.GaussianBlur(gray, (0, 0), config.highpass_sigma)).astype(np.float32)
+  window = (2 * config.window_radius + 1,) * 2
+  energy = cv2.boxFilter(high * high, -1, window)
+  lags = range(matching.min_disparity, max_disparity + 1)
+  volume = np.full((len(lags), height, width), config.cost_scale, np.float32)
+  for i, d in enumerate(lags):
+    product = np.zeros_like(high)
+    product[:, d:] = high[:, d:] * high[:, :width - d]
+    shifted_energy = np.zeros_like(energy)
+    shifted_energy[:, d:] = energy[:, :width - d]
+    zncc = cv2.boxFilter(product, -1, window) / np.sqrt(energy * shifted_energy + 1e-6)
+    volume[i, :, d:] = (1.0 - zncc[:, d:]) * config.cost_scale
+  mean_cost = np.array([volume[i, :, d:].mean() for i, d in enumerate(lags)])
+  envelope = np.maximum.accumulate(mean_cost)
+  volume += (envelope.max() - envelope)[:, None, None]
+  return np.ascontiguousarray(np.clip(np.rint(volume), 0, 255).astype(np.uint8)
+                              .transpose(1, 2, 0))
+
+
+def _system(d_right: np.ndarray, extra: int, smoothness: float):
+  """The normal-equation matrix and data operator of the layer least squares."""
+  h, w = d_right.shape
+  wide = w + extra
+  index = np.arange(h * wide).reshape(h, wide)
+  rows = np.arange(h * w)
+  own = index[:, :w].ravel()
+  position = np.clip(np.arange(w)[None, :] + d_right, 0, wide - 1.001)
+  x0 = np.floor(position).astype(np.int64)
+  frac = (position - x0).ravel()
+  shifted0 = np.take_along_axis(index, x0, axis=1).ravel()
+  data = scipy.sparse.csr_matrix(
+      (np.concatenate([np.full(h * w, 0.5), 0.5 * (1 - frac), 0.5 * frac]),
+       (np.tile(rows, 3), np.concatenate([own, shifted0, shifted0 + 1]))),
+      shape=(h * w, h * wide))
+  diff_x = scipy.sparse.diags([-1.0, 1.0], [0, 1], shape=(wide - 1, wide))
+  diff_y = scipy.sparse.diags([-1.0, 1.0], [0, 1], shape=(h - 1, h))
+  grad = scipy.sparse.vstack([scipy.sparse.kron(scipy.sparse.identity(h), diff_x),
+                              scipy.sparse.kron(diff_y, scipy.sparse.identity(wide))])
+  normal = (data.T @ data + smoothness * (grad.T @ grad)).tocsr()
+  return normal, data
+
+
+def _conjugate_gradient(matrix, rhs: np.ndarray, start: np.ndarray, iterations: int,
+                        tolerance: float) -> np.ndarray:
+  """Jacobi-preconditioned CG on every column of `rhs` [N, C] at once (SPD `matrix`)."""
+  inverse_diagonal = 1.0 / matrix.diagonal()[:, None]
+  solution = start.copy()
+  residual = rhs - matrix @ solution
+  z = inverse_diagonal * residual
+  direction = z.copy()
+  rz = np.sum(residual * z, axis=0)
+  target = tolerance * np.linalg.norm(rhs, axis=0)
+  for _ in range(iterations):
+    if np.all(np.linalg.norm(residual, axis=0) <= target):
+      break
+    product = matrix @ direction
+    alpha = rz / np.maximum(np.sum(direction * product, axis=0), 1e-30)
+    solution += alpha * direction
+    residual -= alpha * product
+    z = inverse_diagonal * residual
+    rz_new = np.sum(residual * z, axis=0)
+    direction = z + (rz_new / np.maximum(rz, 1e-30)) * direction
+    rz = rz_new
+  return solution
+
+
+def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
+                    config: DiplopiaConfig) -> Dict[str, np.ndarray]:
+  """Left and right layers of I = (L + R) / 2 given the right disparity.
+
+  Args:
+    mixture01: float [H, W, 3] in [0, 1].
+    d_right: float [H, W], pixels, positive: right pixel x shows left pixel x + d_R.
+    config: prior weight and solver settings.
+
+  Returns:
+    'left', 'right': float32 [H, W, 3] in [0, 1].
+  """
+  h, w, channels = mixture01.shape
+  extra = int(np.ceil(max(float(d_right.max()), 0.0))) + 2
+  normal, data = _system(d_right, extra, config.smoothness)
+  # The mixture itself, edge-extended: CG's start and the target of the fidelity prior.
+  start = np.pad(mixture01, ((0, 0), (0, extra), (0, 0)), mode='edge')
+  start = start.reshape(-1, channels).astype(np.float64)
+  normal = normal + config.fidelity * scipy.sparse.identity(normal.shape[0], format='csr')
+  rhs = data.T @ mixture01.reshape(h * w, channels).astype(np.float64) + config.fidelity * start
+  wide = _conjugate_gradient(normal, rhs, start,
+                             config.cg_iterations, config.cg_tolerance)
+  wide = wide.reshape(h, w + extra, channels)
+  position = np.clip(np.arange(w)[None, :] + d_right, 0, w + extra - 1.001)
+  x0 = np.floor(position).astype(np.int64)
+  frac = (position - x0)[..., None]
+  gather = lambda cols: np.take_along_axis(wide, cols[..., None], axis=1)
+  right = (1 - frac) * gather(x0) + frac * gather(x0 + 1)
+  return {'left': np.clip(wide[:, :w], 0, 1).astype(np.float32),
+          'right': np.clip(right, 0, 1).astype(np.float32)}
+
+
+def estimate_range(mixture, config: Optional[DiplopiaConfig] = None, width: int = 320,
+                   fraction: float = 1 / 3, density: float = 0.01,
+                   margin: int = 3) -> Tuple[int, int]:
+  """The (positive) disparity range of a double image from the image alone.
+
+  The self-matching of steps 2 (module docstring) over lags [1, fraction * width] on a
+  copy area-downsampled to `width` px; among the left-right consistent disparities, those
+  whose 5-lag window holds >= `density` of them (surfaces; false matches spread over the
+  search), widened by `margin` px of the copy and scaled back (as
+  `matcher.estimate_range` does for anaglyphs).
+
+  Returns:
+    (min, max) ints with 1 <= min < max: the whole search when nothing is consistent.
+  """
+  config = config or DiplopiaConfig()
+  gray = image_range.as_unit_float(mixture, 'mixture').mean(axis=-1) * 255.0
+  full_width = gray.shape[1]
+  scale = max(1.0, full_width / width)
+  if scale > 1.0:
+    gray = cv2.resize(gray, (width, max(1, round(gray.shape[0] / scale))),
+                      interpolation=cv2.INTER_AREA)
+  reach = max(2, round(fraction * gray.shape[1]))
+  config = dataclasses.replace(config, matching=dataclasses.replace(
+      config.matching, min_disparity=1, max_disparity=reach))
+  matched = sgm.match_volume(self_matching_volume(gray, config), config.matching)
+  found = matched['disparity_left'][matched['consistent_left']]
+  counts = np.histogram(found, bins=np.arange(1, reach + 2))[0]  # counts[i]: lag i + 1.
+  share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)
+  dense = np.nonzero((share >= density) & (counts > 0))[0] + 1
+  low, high = (dense.min() - margin, dense.max() + margin) if dense.size else (1, reach)
+  low = max(1, math.floor(low * scale))
+  return low, max(low + 1, min(math.ceil(high * scale), full_width - 1))
+
+
+def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
+                   config: Optional[DiplopiaConfig] = None) -> Dict[str, object]:
+  """Separates a double image I = (L + R) / 2 into two views and disparities.
+
+  Args:
+    mixture: uint8 [H, W, 3] RGB, or float in [0, 1].
+    disparity_range: (min, max) pixels to search, min >= 1 (the average is symmetric in
+      the views, so disparities are positive by convention; lag 0 matches every image to
+      itself); None: the config's range.
+    config: parameters (default `DiplopiaConfig()`).
+
+  Returns:
+    'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
+    [H, W], pixels, positive; 'disparity_range': the (min, max) searched;
+    'global_shift': int, the power-cepstrum peak, pixels.
+
+  Raises:
+    ValueError: a range with min < 1 or min >= max.
+  """
+  config = config or DiplopiaConfig()
+  if disparity_range is not None:
+    low, high = disparity_range
+    if not 1 <= low < high:
+      raise ValueError(f'A diplopia disparity range must satisfy 1 <= min < max (the views '
+                       f'of an average are ordered by positive disparity), got {low},{high}.')
+    config = dataclasses.replace(config, matching=dataclasses.replace(
+        config.matching, min_disparity=int(low), max_disparity=int(high)))
+  image = image_range.as_unit_float(mixture, 'mixture')
+  gray = image.mean(axis=-1) * 255.0
+  matched = sgm.match_volume(self_matching_volume(gray, config), config.matching)
+  layers = separate_layers(image, matched['disparity_right'], config)
+  return {'left': image_range.unit_to_u8(layers['left']),
+          'right': image_range.unit_to_u8(layers['right']),
+          'disparity_left': matched['disparity_left'],
+          'disparity_right': matched['disparity_right'],
+          'disparity_range': (config.matching.min_disparity, config.matching.max_disparity),
+          'global_shift': global_shift(gray, max(2, config.matching.min_disparity),
+                                       config.matching.max_disparity)}

@@ -1,0 +1,102 @@
+"""Runs the `census_sgm` kernels on a thread pool, in horizontal strips of bounded memory.
+
+Threads: census codes (channels x row blocks) and SGM strips are shared among `threads`
+Python threads; the kernels release the GIL, so they run in parallel without numba's own
+threading layer (nothing to configure, and no clash with TensorFlow's thread pools).
+
+Memory: a running strip holds 2 bytes per searched cell of its rows (the sum of its
+window widths) plus row buffers of 17 bytes per cell of its widest window over one image
+row; at most `threads` strips run at a time. `strip_bounds` cuts the strips so that they
+hold equal numbers of cells (equal work too), at least one per thread and more where one
+would pass `max_strip_bytes`. Each strip aggregates `overlap` extra rows above and below,
+where its vertical paths start; one strip (no overlap) reproduces `sgm.match` exactly.
+"""
+
+import concurrent.futures
+from typing import Tuple
+
+import numpy as np
+
+from mixstereo_tf.classical import census_sgm
+
+
+def _run(fn, tasks, threads: int) -> None:
+  """fn(task) for every task, on `threads` threads (in this thread when threads == 1)."""
+  if threads == 1 or len(tasks) == 1:
+    for task in tasks:
+      fn(task)
+    return
+  with concurrent.futures.ThreadPoolExecutor(min(threads, len(tasks))) as pool:
+    list(pool.map(fn, tasks))
+
+
+def census_codes(channels: np.ndarray, height: int, width: int,
+                 threads: int) -> np.ndarray:
+  """Census codes of every channel, as `sgm.census_transform` (reflected borders).
+
+  Args:
+    channels: float32 [H, W, K].
+    height, width: odd census window (at most 65 pixels).
+    threads: worker threads (channels x row blocks are shared among them).
+
+  Returns:
+    uint64 [K, H, W].
+  """
+  h, w, k = channels.shape
+  ry, rx = height // 2, width // 2
+  out = np.empty((k, h, w), np.uint64)
+  bounds = np.linspace(0, h, min(h, threads) + 1).round().astype(int)
+  padded = [np.pad(channels[..., c], ((ry, ry), (rx, rx)), mode='reflect') for c in range(k)]
+  tasks = [(c, a, b) for c in range(k) for a, b in zip(bounds[:-1], bounds[1:])]
+  _run(lambda t: census_sgm.census_rows(padded[t[0]][t[1]:t[2] + 2 * ry], height, width,
+                                        out[t[0], t[1]:t[2]]), tasks, threads)
+  return out
+
+
+def strip_bounds(widths: np.ndarray, threads: int, strips: int,
+                 max_strip_bytes: int) -> np.ndarray:
+  """Row bounds [0, ..., H] of the strips, cut so that they hold equal numbers of cells.
+
+  strips > 0 is taken as given; 0 picks max(threads, cells * 2 bytes / max_strip_bytes).
+  """
+  h = widths.shape[0]
+  cells = np.concatenate([[0], np.cumsum(widths.sum(axis=1, dtype=np.int64))])
+  if not strips:
+    strips = max(threads, -(-2 * int(cells[-1]) // max_strip_bytes))
+  strips = min(strips, h)
+  rows = np.interp(np.linspace(0, cells[-1], strips + 1), cells, np.arange(h + 1))
+  return np.unique(np.rint(rows).astype(np.int64))
+
+
+def disparities(codes_left: np.ndarray, codes_right: np.ndarray, lo: np.ndarray,
+                widths: np.ndarray, p1: int, p2: int, out_of_image_cost: int,
+                threads: int, bounds: np.ndarray,
+                overlap: int) -> Tuple[np.ndarray, np.ndarray]:
+  """Raw left and right winners of SGM over per-pixel disparity windows.
+
+  Args:
+    codes_left, codes_right: uint64 [K_L, H, W], [K_R, H, W] census codes.
+    lo, widths: int32 [H, W]: pixel (y, x) searches lo + [0, widths) (widths >= 1).
+    p1, p2: SGM penalties; out_of_image_cost: cost of a match outside the right image.
+    threads: worker threads; bounds: strip row bounds (`strip_bounds`); overlap: extra
+      rows above and below each strip.
+
+  Returns:
+    float32 [H, W] disparity_left (the left pixel x matches the right pixel x - d) and
+    disparity_right (the right pixel x matches the left pixel x + d; NaN where no left
+    pixel's window reaches it), signed pixels, parabola-refined, not filtered.
+  """
+  h, w = lo.shape
+  dl = np.empty((h, w), np.float32)
+  dr = np.empty((h, w), np.float32)
+  lo = np.ascontiguousarray(lo, np.int32)
+  widths = np.ascontiguousarray(widths, np.int32)
+
+  def strip(s):
+    a, b = int(bounds[s]), int(bounds[s + 1])
+    census_sgm.sgm_strip(codes_left, codes_right, lo, widths, max(0, a - overlap),
+                         min(h, b + overlap), a, b, p1, p2, np.uint8(out_of_image_cost),
+                         dl, dr)
+
+  _run(strip, list(range(len(bounds) - 1)), threads)
+  return dl, dr

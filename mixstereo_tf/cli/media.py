@@ -1,0 +1,209 @@
+"""Reading inputs and writing results of the unmix tool: images, videos, disparity files.
+
+Images are uint8 RGB `[H, W, 3]` (docs/DESIGN.md reader convention); disparities float32
+`[H, W]` in pixels, positive. Video files are read and written by `video_io` (PyAV).
+"""
+
+import collections
+import dataclasses
+import glob
+import os
+from typing import Dict, Iterator, List, Optional, Sequence, Tuple, Union
+
+import cv2
+import numpy as np
+
+from mixstereo_tf.core import colormap
+from mixstereo_tf.data import image_io
+
+LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
+IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
+                    '.tiff', '.webp')
+VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv')
+
+
+def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
+  """Writes disparity KITTI-style: uint16 PNG holding round(d * 256), 0 = invalid.
+
+  Values <= 0 and NaN are stored as 0 (invalid); positive values are stored as at least 1
+  so a valid estimate never reads back as invalid; values are clipped to 65535 (255.996 px).
+
+  Args:
+    path: output .png path.
+    disparity: [H, W] (or [H, W, 1]) float pixels.
+  """
+  disparity = np.asarray(disparity, np.float64)
+  disparity = disparity.reshape(disparity.shape[:2])
+  disparity = np.nan_to_num(disparity, nan=0.0, posinf=65535.0 / 256.0, neginf=0.0)
+  stored = np.clip(np.round(disparity * 256.0), 0, 65535)
+  stored = np.where(disparity > 0, np.maximum(stored, 1), 0).astype(np.uint16)
+  if not cv2.imwrite(path, stored):
+    raise ValueError(f'Cannot write PNG file: {path}')
+
+
+def write_image(path: str, image: np.ndarray) -> None:
+  """Writes a uint8 RGB image (format from the extension)."""
+  if not cv2.imwrite(path, np.ascontiguousarray(image[:, :, ::-1])):
+    raise ValueError(f'Cannot write image file: {path}')
+
+
+def compose(left: np.ndarray, right: np.ndarray,
+            layout: str) -> Union[np.ndarray, Tuple[np.ndarray, np.ndarray]]:
+  """Arranges two equally sized views [H, W, C].
+
+  Layouts: 'separate' returns (left, right); 'sbs' [H, 2W, C] left then right; 'sbs_half'
+  [H, W, C], each view squeezed to half width (left (W + 1) // 2 columns, right W // 2;
+  area interpolation), the frame keeping the input size; 'tb' [2H, W, C] left on top.
+  """
+  if left.shape != right.shape:
+    raise ValueError(f'Views differ in shape: {left.shape} vs {right.shape}.')
+  if layout == 'separate':
+    return left, right
+  if layout == 'sbs':
+    return np.concatenate([left, right], axis=1)
+  if layout == 'tb':
+    return np.concatenate([left, right], axis=0)
+  if layout == 'sbs_half':
+    height, width = left.shape[:2]
+    halves = [cv2.resize(view, (w, height), interpolation=cv2.INTER_AREA).reshape(
+        height, w, *view.shape[2:]) for view, w in ((left, (width + 1) // 2),
+                                                     (right, width // 2)) if w > 0]
+    return np.concatenate(halves, axis=1)
+  raise ValueError(f'Unknown layout {layout!r}; valid: {", ".join(LAYOUTS)}.')
+
+
+def layout_images(left: np.ndarray, right: np.ndarray, layout: str) -> List[Tuple[str, np.ndarray]]:
+  """`compose` as (file-name suffix, image) pairs: left/right for 'separate', else layout."""
+  composed = compose(left, right, layout)
+  if layout == 'separate':
+    return [('left', composed[0]), ('right', composed[1])]
+  return [(layout, composed)]
+
+
+PNG16_LIMIT = 65535.0 / 256.0  # The largest disparity a KITTI-style uint16 PNG holds.
+
+
+def display_range(disparity: np.ndarray,
+                  max_display_disparity: Optional[float] = None) -> Tuple[float, float]:
+  """The colour map's (low, high): (0, max_display_disparity) when given, else the range
+  the disparity map actually covers (its 0.5 and 99.5 percentiles, at least 1 px wide)."""
+  if max_display_disparity:
+    return 0.0, float(max_display_disparity)
+  finite = np.asarray(disparity, np.float32)
+  finite = finite[np.isfinite(finite)]
+  if not finite.size:
+    return 0.0, 1.0
+  low, high = (float(v) for v in np.percentile(finite, [0.5, 99.5]))
+  return low, max(high, low + 1.0)
+
+
+def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: str,
+                        layout: str, max_display_disparity: Optional[float] = None
+                        ) -> Dict[str, object]:
+  """Writes one image's results (mixstereo_tf/unmix_files.py).
+
+  Args:
+    outputs: {'left', 'right': uint8 [H, W, 3], 'disparity_left': [H, W] signed pixels}.
+    output_dir: existing folder.
+    name: the file-name prefix.
+    layout: one of LAYOUTS.
+    max_display_disparity: a fixed colour-map range 0..this; None: the range found.
+
+  Returns:
+    {'files': the paths written, 'display_range': the colour map's (low, high),
+    'disparity16': why no uint16 PNG was written, when none was (it holds 0..255.996 px:
+    negative or larger disparities are not representable; the .npy holds them).}
+  """
+  paths = []
+  for suffix, image in layout_images(outputs['left'], outputs['right'], layout):
+    paths.append(os.path.join(output_dir, f'{name}_{suffix}.png'))
+    write_image(paths[-1], image)
+  disparity = np.asarray(outputs['disparity_left'], np.float32)
+  low, high = display_range(disparity, max_display_disparity)
+  paths.append(os.path.join(output_dir, f'{name}_disparity.png'))
+  write_image(paths[-1], colormap.colorize(disparity, high, low))
+  written = {'display_range': [round(low, 3), round(high, 3)]}
+  smallest, largest = float(np.nanmin(disparity)), float(np.nanmax(disparity))
+  if smallest >= 0.0 and largest <= PNG16_LIMIT:
+    paths.append(os.path.join(output_dir, f'{name}_disparity16.png'))
+    write_disparity_png16(paths[-1], disparity)
+  else:
+    written['disparity16'] = (f'not written: the disparities span {smallest:.1f}..'
+                              f'{largest:.1f} px, outside the 0..{PNG16_LIMIT:.3f} px a '
+                              'KITTI-style uint16 PNG holds; see the .npy')
+  paths.append(os.path.join(output_dir, f'{name}_disparity.npy'))
+  np.save(paths[-1], disparity)
+  written['files'] = [os.path.basename(p) for p in paths]
+  return written
+
+
+@dataclasses.dataclass(frozen=True)
+class MediaItem:
+  """One input: an image or a video file; `name` prefixes its outputs, unique in a run."""
+  path: str
+  is_video: bool
+  name: str
+
+
+def _extension(path: str) -> str:
+  return os.path.splitext(path)[1].lower()
+
+
+def output_names(paths: Sequence[str]) -> List[str]:
+  """Output-name prefixes for input paths, distinct so no input overwrites another's files.
+
+  The file stem, unless several inputs share it (`a.png` and `a.jpg`): then stem + '_' +
+  extension (`a_png`, `a_jpg`). A name still taken (the same file name in two folders of a
+  glob, or another input's stem) gets '_2', '_3', ... in input order. Names are compared
+  case-insensitively, so outputs also stay apart on case-insensitive file systems.
+  """
+  stems = [os.path.splitext(os.path.basename(path))[0] for path in paths]
+  shared = collections.Counter(stem.casefold() for stem in stems)
+  wanted = [stem if shared[stem.casefold()] == 1 else f'{stem}_{os.path.splitext(path)[1][1:]}'
+            for stem, path in zip(stems, paths)]
+  reserved = {name.casefold() for name in wanted}
+  names, taken = [], set()
+  for name in wanted:
+    unique, number = name, 1
+    # A numbered name must not take a name another input wants as it is.
+    while unique.casefold() in taken or (number > 1 and unique.casefold() in reserved):
+      number += 1
+      unique = f'{name}_{number}'
+    taken.add(unique.casefold())
+    names.append(unique)
+  return names
+
+
+def iter_inputs(spec: str) -> Iterator[MediaItem]:
+  """Expands an input specification into items, without reading them.
+
+  Args:
+    spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images, sorted
+      by name; other files ignored) or a glob pattern (matching images and videos, sorted).
+      Items are named by `output_names`.
+
+  Raises:
+    ValueError: nothing exists at `spec`, or the folder / pattern holds no usable file.
+  """
+  if os.path.isdir(spec):
+    paths = sorted(os.path.join(spec, name) for name in os.listdir(spec)
+                   if _extension(name) in IMAGE_EXTENSIONS
+                   and os.path.isfile(os.path.join(spec, name)))
+    if not paths:
+      raise ValueError(f'No images ({" ".join(IMAGE_EXTENSIONS)}) in folder {spec}')
+  elif os.path.isfile(spec):
+    paths = [spec]
+  elif glob.has_magic(spec):
+    paths = sorted(p for p in glob.glob(spec) if os.path.isfile(p)
+                   and _extension(p) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)
+    if not paths:
+      raise ValueError(f'No images or videos match the pattern {spec}')
+  else:
+    raise ValueError(f'Input not found: {spec}')
+  for path, name in zip(paths, output_names(paths)):
+    yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS, name)
+
+
+def read_image(path: str) -> np.ndarray:
+  """uint8 RGB [H, W, 3] (gray and alpha images converted); ValueError naming bad files."""
+  return image_io.read_image(path)

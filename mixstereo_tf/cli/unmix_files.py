@@ -1,0 +1,222 @@
+"""Unmixing files: every image and video of an input specification, results to a folder.
+
+Outputs per input `<name>` in the output folder, where `<name>` is the file stem, or stem
++ '_' + extension when inputs share a stem (`media.output_names`): the views
+(`<name>_left.png` and `<name>_right.png` for the 'separate' layout, else
+`<name>_<layout>.png`), the colour-mapped left disparity `<name>_disparity.png` (over the
+range found, or a fixed one), KITTI-style `<name>_disparity16.png` (uint16, d * 256; only
+when every disparity lies in 0..255.996 px) and float32 signed pixels
+`<name>_disparity.npy`, and a side-car `<name>_info.json` (mixture used and detected,
+range searched, scale, method, seconds; `write_info`). Per video, in the input's container
+(`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps, rotation and audio streams
+(copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`), `<name>_disparity<ext>`
+and `<name>_info.json` (the first unmixed frame's info, frames, frame rate, rotation, audio
+streams, the scene cuts found in this run, files). Videos are written resumably (`video_job`). Progress (`progress.ProgressBar`) is shown for several
+inputs and for every video's frames.
+
+Video frames are unmixed with temporal consistency (`temporal`, unless
+`TemporalConfig.enabled` is off): the encoding and the range are decided once per shot and
+each frame gets the previous frame's disparity as a prior. Every resumable segment starts
+a new shot, so a resumed run starts each segment from the state an uninterrupted run has
+there.
+"""
+
+import dataclasses
+import json
+import os
+import time
+from typing import Dict, List, Optional, TextIO, Tuple
+
+from absl import logging
+import cv2
+import tensorflow as tf
+
+from mixstereo_tf.cli import media
+from mixstereo_tf.cli import progress
+from mixstereo_tf.core import colormap
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import jobs
+from mixstereo_tf.video import streams
+from mixstereo_tf.video import temporal
+
+
+@dataclasses.dataclass
+class UnmixReport:
+  """What `unmix_inputs` did: counts, failures as (path, reason), timings in seconds."""
+  processed: int = 0
+  frames: int = 0
+  failures: List[Tuple[str, str]] = dataclasses.field(default_factory=list)
+  seconds: float = 0.0
+  unmix_seconds: float = 0.0
+
+  @property
+  def frames_per_second(self) -> float:
+    """Frames over the whole run, reading and writing included."""
+    return self.frames / self.seconds if self.seconds > 0 else 0.0
+
+
+def failure_message(report: UnmixReport) -> Optional[str]:
+  """The error that ends the run with a non-zero status: any input failed."""
+  if not report.failures:
+    return None
+  paths = ', '.join(path for path, _ in report.failures[:5])
+  more = ', ...' if len(report.failures) > 5 else ''
+  return (f'error: {len(report.failures)} of {report.processed + len(report.failures)} '
+          f'input(s) failed: {paths}{more}')
+
+
+def _reason(error: Exception) -> str:
+  """A one-line reason for a failed input (TensorFlow messages can span many lines)."""
+  message = error.message if isinstance(error, tf.errors.OpError) else str(error)
+  lines = message.strip().splitlines()
+  return f'{type(error).__name__}: {lines[0] if lines else ""}'
+
+
+# What one input may raise without stopping the others: unreadable or malformed files
+# (ValueError, cv2.error, FFmpeg's errors), failures inside TensorFlow (e.g. an image too
+# large for memory) and file-system errors while reading or writing.
+_INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError)
+
+
+def _video_settings(unmixer: predictors.Unmixer) -> Dict[str, object]:
+  """What identifies an unmixer in a video job's manifest when the caller gives nothing."""
+  return {'method': unmixer.method, 'mixture': unmixer.mixture,
+          'max_disparity': unmixer.max_disparity, 'restore_colour': unmixer.restore_colour}
+
+
+def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
+                 layout: str, max_disparity: float, settings: Dict[str, object],
+                 video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
+                 report: UnmixReport, temporal_config: temporal.TemporalConfig) -> int:
+  """Unmixes every frame of a video into layout and disparity videos (resumable, see
+  `video_job`), writes `<name>_info.json`; returns the frames unmixed in this run.
+
+  Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
+  encoding, range and prior; each segment's first frame starts a shot)."""
+  start = time.perf_counter()
+  shots = temporal.VideoState(temporal_config)
+  extension = os.path.splitext(item.path)[1].lower()
+  keys = (['left', 'right'] if layout == 'separate' else [layout]) + ['disparity']
+  outputs = {key: os.path.join(output_dir, f'{item.name}_{key}{extension}') for key in keys}
+  state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
+
+  def on_start(info, done):
+    state['bar'] = progress.ProgressBar(info.frame_count, os.path.basename(item.path),
+                                        progress_stream)
+    state['done'] = done
+
+  def render(frame):
+    unmix_start = time.perf_counter()
+    index = state['done'] + state['rendered']
+    hint = shots.begin(frame, cut=index % video_config.segment_frames == 0)
+    result = unmixer(frame, hint=hint)
+    shots.end(result)
+    report.unmix_seconds += time.perf_counter() - unmix_start
+    if state['info'] is None:
+      state['info'] = dict(result.get('info', {}))
+    images = dict(media.layout_images(result['left'], result['right'], layout))
+    images['disparity'] = colormap.colorize(result['disparity_left'], max_disparity)
+    state['rendered'] += 1
+    state['bar'].update(state['done'] + state['rendered'], state['rendered'])
+    return images
+
+  job = jobs.VideoJob(item.path, outputs,
+                           dict(settings, layout=layout, max_disparity=max_disparity,
+                                temporal=dataclasses.asdict(temporal_config)),
+                           video_config)
+  try:
+    done = jobs.run(job, render, on_start)
+    # The container's frame count may be wrong or missing.
+    state['bar'].update(done['frames'], state['rendered'], force=True)
+  finally:
+    if state['bar']:
+      state['bar'].close()
+  info = done['info']
+  write_info(output_dir, item, dict(
+      state['info'] or {}, frames=done['frames'], resumed_frames=done['resumed_frames'],
+      frame_rate=str(info.frame_rate), rotation=info.rotation,
+      temporal=temporal_config.enabled,
+      scene_cuts=[state['done'] + index for index in shots.cuts],
+      audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
+      files=[os.path.basename(path) for path in outputs.values()]))
+  return state['rendered']
+
+
+def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object]) -> str:
+  """Writes `<name>_info.json` beside an input's results: what was done (the mixture used
+  and detected, with its confidence, the disparity range searched, the network's shift and
+  scale, the method, the seconds spent) and the files written."""
+  path = os.path.join(output_dir, f'{item.name}_info.json')
+  with open(path, 'w', encoding='utf-8') as f:
+    json.dump(dict(info, input=item.path), f, indent=2, sort_keys=True)
+  return path
+
+
+def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
+                 layout: str = 'separate', max_display_disparity: Optional[float] = None,
+                 progress_stream: Optional[TextIO] = None,
+                 video_config: jobs.VideoConfig = jobs.VideoConfig(),
+                 settings: Optional[Dict[str, object]] = None,
+                 temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()
+                 ) -> UnmixReport:
+  """Unmixes every image / video of `input_spec` (see `media.iter_inputs`).
+
+  An input that cannot be read, unmixed or written is logged with its path and the reason,
+  recorded in `UnmixReport.failures` and skipped; the others still run.
+
+  Videos are written in resumable segments (`video_job`, `video_config`): re-running the
+  same call after an interruption continues from the last finished segment, as long as
+  the input and `settings` (a JSON-serialisable description of the unmixer; default its
+  method, mixture and range) are unchanged. `temporal_config`: a video's per-shot
+  decisions and disparity prior (`temporal`; on by default).
+
+  `max_display_disparity` fixes the colour maps to 0..that many pixels; by default each
+  image's map spans the disparities found (videos: the unmixer's range). Each image also
+  gets `<name>_info.json` (`write_info`).
+  Progress (`ProgressBar`) is drawn on `progress_stream` when it is a terminal (the CLI
+  passes stderr), else logged.
+
+  Raises:
+    ValueError: bad layout / display range, or `input_spec` names nothing usable.
+  """
+  if layout not in media.LAYOUTS:
+    raise ValueError(f'Unknown layout {layout!r}; valid: {", ".join(media.LAYOUTS)}.')
+  if max_display_disparity is not None and not max_display_disparity > 0:
+    raise ValueError(f'max_display_disparity must be positive, got {max_display_disparity}.')
+  max_disparity = max_display_disparity or unmixer.max_disparity
+  items = list(media.iter_inputs(input_spec))
+  os.makedirs(output_dir, exist_ok=True)
+  report = UnmixReport()
+  run_start = time.perf_counter()
+  bar = progress.ProgressBar(len(items), stream=progress_stream) if len(items) > 1 else None
+  for index, item in enumerate(items, 1):
+    try:
+      if item.is_video:
+        if bar:
+          bar.clear()  # The video draws its own frame progress.
+        frames = _unmix_video(unmixer, item, output_dir, layout, max_disparity,
+                              settings or _video_settings(unmixer), video_config,
+                              progress_stream, report, temporal_config)
+      else:
+        image = media.read_image(item.path)
+        unmix_start = time.perf_counter()
+        outputs = unmixer(image)
+        report.unmix_seconds += time.perf_counter() - unmix_start
+        written = media.write_image_outputs(outputs, output_dir, item.name, layout,
+                                            max_display_disparity)
+        write_info(output_dir, item, dict(outputs.get('info', {}), **written))
+        frames = 1
+    except _INPUT_ERRORS as e:
+      if bar:
+        bar.clear()
+      logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, _reason(e))
+      report.failures.append((item.path, _reason(e)))
+    else:
+      report.processed += 1
+      report.frames += frames
+    if bar:
+      bar.update(index, report.frames)
+  if bar:
+    bar.close()
+  report.seconds = time.perf_counter() - run_start
+  return report

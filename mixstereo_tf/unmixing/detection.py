@@ -1,0 +1,297 @@
+"""Which anaglyph encoding made an image, from the image alone, with a confidence.
+
+    found = detect(image)   # found.name: an encoding of CANDIDATES, or None
+    found.confidence, found.reason, found.scores
+
+Two questions, each answered by a physical property of the encodings (`mixtures`):
+  1. **Glasses (family).** An anaglyph's channels come from two views: the channels of one
+     eye are aligned with each other, those of different eyes are displaced by the
+     disparities. On a copy area-downsampled to DetectConfig.width px, every pair of
+     channels is matched with the census matcher over +- reach_fraction of the width; a
+     pair's *displacement* is the fraction of left-right consistent pixels with |d| >= 1.5.
+     Family f (its odd channel: R for red-cyan, G for green-magenta, B for amber-blue)
+     scores min(displacement of the odd channel against the other two) - displacement of
+     the other two against each other. An ordinary photo, a gray photo or a diplopia image
+     (every channel holds both views, aligned) scores ~0 for every family and is refused.
+  2. **Variant (colour, gray, half-colour, optimized).** The odd channel is matched
+     against the mean of the other two; at consistent, smooth pixels the colour c of the
+     surface is seen as o = [odd channel at x, other channels at x - d]. Under encoding h
+     (matrices A_L, A_R) o = clip(M_h c), M_h = A_L + A_R, c in [0, 1]^3: the colour
+     encoding explains every o; gray (R = G = B), optimized (a plane) and half-colour (a
+     slab 0.299 thick) explain less. The smallest set that explains the samples wins,
+     ordered by rank and volume |det M_h|; colour is the fallback. Gray: the two channels
+     of one eye equal on singular_share of the pixels. Others: for c uniform in the box,
+     a sample inside the set (within `noise`) is 1 / V times likelier than under colour
+     (V = max(|det M_h|, 2 noise)) and one outside costs `outside_penalty` nats, so the set
+     explains the samples when its outside share is at most log(1/V) / (log(1/V) +
+     outside_penalty). A colour anaglyph of a scene without saturated colours lies inside
+     the half-colour sets as well and is reported as half-colour.
+  3. **Dubois ghosts.** Dubois matrices leak a little of the odd eye into the other
+     channels (red-cyan: G gets -0.094 of the left view). Regressing the high-passed other
+     channels at a right pixel on the high-passed odd channel at the matching left pixel and
+     at the same pixel, the second coefficient is that leak (0 for colour, gray,
+     half-colour; `dubois_leak`). Its projection on a Dubois encoding's expected leak, as
+     a fraction of it, chooses the Dubois encoding at >= ghost_fraction and rules it
+     out below; the colour samples then choose among the others.
+Confidence: the family's margin through a logistic, times the variant's: the explained
+share's distance to its threshold through a logistic of scale share_softness (1 for gray
+and Dubois decisions). Dubois red-cyan images are reported as 'dubois_ffmpeg': the two
+Dubois matrices of `mixtures` differ by < 0.03 per coefficient, which an image cannot tell
+apart.
+"""
+
+import concurrent.futures
+import dataclasses
+from typing import Dict, Optional, Tuple
+
+import cv2
+import numpy as np
+
+from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.restoration import dubois_leak
+
+# The channel each family's odd eye owns (red-cyan: R alone is the left eye).
+FAMILY_ODD_CHANNEL = {'red_cyan': 0, 'green_magenta': 1, 'amber_blue': 2}
+CANDIDATES = tuple(name for name in mixtures.ANAGLYPH_NAMES if name != 'dubois')
+_PAIRS = ((0, 1), (0, 2), (1, 2))
+
+
+@dataclasses.dataclass(frozen=True)
+class DetectConfig:
+  """Parameters of `detect` (module docstring); chosen on training scenes.
+
+  Attributes:
+    width: the analysed copy's width, pixels.
+    reach_fraction: channels are matched over +- this fraction of that width.
+    min_family_score: below this family score the image is not an anaglyph.
+    family_softness: the logistic's scale on the family margin.
+    noise: the colour residual's standard deviation, [0, 1] units.
+    singular_share: a gray encoding is chosen when this share of pixels has the two
+      channels of one eye equal within noise / 2 ...
+    outside_penalty: ... another smaller encoding by its share of colour samples outside
+      it, each costing this many nats (step 2).
+    share_softness: the logistic's scale on the explained share's margin.
+    samples: at most this many colour samples.
+    ghost_sigma: the Gaussian high-pass of the ghost regression, pixels of the copy.
+    ghost_correlation: ... over pixels matched with at least this correlation ...
+    ghost_min_shift: ... at least this many pixels of displacement ...
+    ghost_collinearity: ... and regressors correlated by less than this (`dubois_leak`).
+    ghost_fraction: a Dubois encoding is chosen when at least this fraction of its
+      expected leak is observed.
+  """
+  width: int = 320
+  reach_fraction: float = 0.2
+  min_family_score: float = 0.08
+  family_softness: float = 0.03
+  noise: float = 0.025
+  singular_share: float = 0.9
+  outside_penalty: float = 40.0
+  share_softness: float = 0.01
+  samples: int = 20000
+  ghost_sigma: float = 2.0
+  ghost_correlation: float = 0.85
+  ghost_min_shift: int = 3
+  ghost_collinearity: float = 0.3
+  ghost_fraction: float = 0.3
+
+
+@dataclasses.dataclass(frozen=True)
+class Detection:
+  """What `detect` found.
+
+  Attributes:
+    name: the encoding (of CANDIDATES), or None when the image is not an anaglyph.
+    confidence: in [0, 1]: of `name`, or that the image is no anaglyph when name is None.
+    reason: one line saying why.
+    scores: family scores ('family:<name>'), Dubois leaks ('ghost:<name>', as a fraction
+      of the expected) and explained shares (encoding names).
+    also_fits: the family's colour encoding when a smaller set (half-colour, optimized)
+      was chosen: the colour encoding explains every image, so it fits as well.
+  """
+  name: Optional[str]
+  confidence: float
+  reason: str
+  scores: Dict[str, float]
+  also_fits: Optional[str] = None
+
+
+def _small(image: np.ndarray, width: int) -> np.ndarray:
+  """float32 [h, w, 3] on 0..255, area-downsampled to at most `width` columns."""
+  image = np.asarray(image)
+  if image.ndim != 3 or image.shape[2] != 3:
+    raise ValueError(f'detect needs an [H, W, 3] RGB image, got shape {image.shape}.')
+  image = image.astype(np.float32) * (1.0 if image.dtype == np.uint8 else 255.0)
+  h, w = image.shape[:2]
+  if w > width:
+    image = cv2.resize(image, (width, max(1, round(h * width / w))),
+                       interpolation=cv2.INTER_AREA)
+  return np.ascontiguousarray(image)
+
+
+def _match(a: np.ndarray, b: np.ndarray, reach: int) -> dict:
+  return matcher.match(a, b, -reach, reach, matcher.MatcherConfig(threads=1))
+
+
+def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
+  """{family: score} (step 1 of the module docstring) of a 0..255 image."""
+  reach = max(2, round(config.reach_fraction * small.shape[1]))
+  match_pair = lambda pair: _match(small[..., pair[0]], small[..., pair[1]], reach)
+  # The pairs in threads: each match is one strip (the same result on any machine) and
+  # numba releases the GIL.
+  with concurrent.futures.ThreadPoolExecutor(len(_PAIRS)) as pool:
+    outs = list(pool.map(match_pair, _PAIRS))
+  displaced = {}
+  for pair, out in zip(_PAIRS, outs):
+    moved = out['consistent_left'] & (np.abs(out['disparity_left']) >= 1.5)
+    displaced[pair] = float(moved.mean())
+  scores = {}
+  for family, odd in FAMILY_ODD_CHANNEL.items():
+    others = tuple(c for c in range(3) if c != odd)
+    cross = min(displaced[tuple(sorted((odd, o)))] for o in others)
+    scores[family] = cross - displaced[others]
+  return scores
+
+
+def eye_match(small: np.ndarray, odd: int, config: DetectConfig) -> Tuple[np.ndarray, ...]:
+  """(ys, xs, xr): the odd channel's left-right consistent pixels (y, x) and the columns xr
+  = x - d where the mean of the other channels sees the same surface."""
+  others = [c for c in range(3) if c != odd]
+  reach = max(2, round(config.reach_fraction * small.shape[1]))
+  out = _match(small[..., odd], small[..., others].mean(axis=2), reach)
+  ys, xs = np.nonzero(out['consistent_left'])
+  xr = np.rint(xs - out['disparity_left'][ys, xs]).astype(int)
+  keep = (xr >= 0) & (xr < small.shape[1])
+  return ys[keep], xs[keep], xr[keep]
+
+
+def colour_samples(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
+                   config: DetectConfig) -> np.ndarray:
+  """[N, 3] colours o in [0, 1] (step 2): the odd channel at x, the others at x - d."""
+  others = [c for c in range(3) if c != odd]
+  smooth = cv2.blur(small, (3, 3)) / 255.0
+  grad = sum(np.abs(cv2.Sobel(smooth[..., c], cv2.CV_32F, 1, 0)) +
+             np.abs(cv2.Sobel(smooth[..., c], cv2.CV_32F, 0, 1)) for c in range(3))
+  ys, xs, xr = matched
+  flat = (grad[ys, xs] <= np.median(grad)) & (grad[ys, xr] <= np.median(grad))
+  ys, xs, xr = ys[flat], xs[flat], xr[flat]
+  if ys.size > config.samples:
+    pick = np.random.default_rng(0).choice(ys.size, config.samples, replace=False)
+    ys, xs, xr = ys[pick], xs[pick], xr[pick]
+  obs = np.empty((ys.size, 3), np.float64)
+  obs[:, odd] = smooth[ys, xs, odd]
+  obs[:, others] = smooth[ys, xr][:, others]
+  return obs
+
+
+def _matrix(name: str) -> np.ndarray:
+  spec = mixtures.get_mixture(name)
+  return np.asarray(spec.left_matrix) + np.asarray(spec.right_matrix)
+
+
+def _fit(obs: np.ndarray, name: str) -> np.ndarray:
+  """Squared residuals [N] of colour samples against clip(M c), c in the unit box."""
+  m, clip = _matrix(name), mixtures.get_mixture(name).clip
+  c = np.clip(obs @ np.linalg.pinv(m).T, 0.0, 1.0)
+  step = 1.0 / np.linalg.norm(m, 2) ** 2
+  for _ in range(60):  # Projected gradient on |clip(M c) - o|^2 over the unit box.
+    predicted = m @ c.T
+    inside = ((predicted > 0) & (predicted < 1)) if clip else 1.0
+    c = np.clip(c - step * ((np.clip(predicted, 0, 1) - obs.T) * inside).T @ m, 0.0, 1.0)
+  return ((obs - np.clip(c @ m.T, 0.0, 1.0)) ** 2).sum(axis=1)
+
+
+def explained_share(small: np.ndarray, obs: np.ndarray, name: str,
+                    config: DetectConfig) -> float:
+  """The share of the image a smaller encoding explains (step 2): gray ones, the pixels
+  whose two channels of one eye are equal within noise / 2; others, the colour samples
+  within noise of their set."""
+  spec = mixtures.get_mixture(name)
+  if not spec.transmits_colour:
+    pair = next(eye for eye in spec.eye_channels if len(eye) == 2)
+    same = np.abs(small[..., pair[0]] - small[..., pair[1]]) <= 255.0 * config.noise / 2
+    return float(same.mean())
+  if len(obs) < 50:
+    return 0.0
+  return float((_fit(obs, name) <= config.noise ** 2).mean())
+
+
+def _size(name: str) -> Tuple[int, float]:
+  """(rank, |det|) of an encoding's M: smaller sets first."""
+  m = _matrix(name)
+  return int(np.linalg.matrix_rank(m, tol=1e-3)), abs(float(np.linalg.det(m)))
+
+
+def _logistic(value: float) -> float:
+  return float(1.0 / (1.0 + np.exp(-value)))
+
+
+def needed_share(name: str, config: DetectConfig) -> float:
+  """The share of the image a smaller encoding must explain to be chosen (step 2)."""
+  if not mixtures.get_mixture(name).transmits_colour:
+    return config.singular_share
+  gain = -np.log(max(_size(name)[1], 2.0 * config.noise))
+  return 1.0 - gain / (gain + config.outside_penalty)
+
+
+def choose_variant(small: np.ndarray, obs: np.ndarray, names, config: DetectConfig
+                   ) -> Tuple[str, float, Dict[str, float]]:
+  """(encoding, confidence, explained shares): the smallest of `names` (encodings that
+  transmit colour) that explains the samples, else the largest (step 2)."""
+  ordered = sorted(names, key=_size)
+  shares, closest = {}, -np.inf
+  for name in ordered[:-1]:
+    shares[name] = explained_share(small, obs, name, config)
+    margin = (shares[name] - needed_share(name, config)) / config.share_softness
+    if margin >= 0:
+      return name, _logistic(margin), shares
+    closest = max(closest, margin)
+  return ordered[-1], _logistic(-closest), shares
+
+
+def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
+  """The anaglyph encoding of an [H, W, 3] RGB image (uint8, or float in [0, 1])."""
+  small = _small(image, config.width)
+  if min(small.shape[:2]) < 16:
+    raise ValueError(f'detect needs an image of at least 16x16 px after downsampling to '
+                     f'{config.width} px wide; got {small.shape[1]}x{small.shape[0]}.')
+  families = family_scores(small, config)
+  scores = {f'family:{k}': round(v, 4) for k, v in families.items()}
+  family = max(families, key=families.get)
+  runner_up = max(v for k, v in families.items() if k != family)
+  margin = min(families[family] - config.min_family_score, families[family] - runner_up)
+  family_confidence = float(1.0 / (1.0 + np.exp(-margin / config.family_softness)))
+  if families[family] < config.min_family_score:
+    return Detection(None, 1.0 - family_confidence,
+                     f'no colour channel is displaced against the others (best family '
+                     f'{family}: {families[family]:.3f} < {config.min_family_score})', scores)
+  odd = FAMILY_ODD_CHANNEL[family]
+  matched = eye_match(small, odd, config)
+  obs = colour_samples(small, odd, matched, config)
+  names = [n for n in CANDIDATES if mixtures.get_mixture(n).family == family]
+  gray = {n: explained_share(small, obs, n, config) for n in names
+          if not mixtures.get_mixture(n).transmits_colour}
+  scores.update({n: round(v, 4) for n, v in gray.items()})
+  ghost = dubois_leak.observed(small, odd, matched, config.ghost_sigma,
+                               config.ghost_correlation, config.ghost_min_shift,
+                               config.ghost_collinearity)
+  expected = {n: dubois_leak.expected(n, odd) for n in names}
+  leaky = {n: float(ghost @ e / (e @ e)) for n, e in expected.items() if np.abs(e).max() > 0.01}
+  scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})
+  fitting = [n for n, share in gray.items() if share >= needed_share(n, config)]
+  also_fits = None
+  if fitting:  # Equal channels are the surest sign; a leak is measured less surely.
+    name, variant_confidence = fitting[0], 1.0
+  else:
+    if any(t >= config.ghost_fraction for t in leaky.values()):
+      names = [max(leaky, key=leaky.get)]
+    else:
+      names = [n for n in names if n not in leaky and n not in gray]
+    name, variant_confidence, shares = choose_variant(small, obs, names, config)
+    scores.update({n: round(v, 4) for n, v in shares.items()})
+    largest = max(names, key=_size)
+    also_fits = largest if name != largest else None
+  return Detection(name, family_confidence * variant_confidence,
+                   f'{family} channels displaced (score {families[family]:.3f}); '
+                   f'{len(obs)} colour samples: {name} is the smallest encoding that '
+                   'explains them', scores, also_fits)

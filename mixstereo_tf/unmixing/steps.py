@@ -1,0 +1,198 @@
+"""One mixture image through a predictor: its encoding, its disparity range, the network's
+plan around that range, the restoration of both views, and what was done (`info`).
+
+Steps, shared by the model and the classical method:
+  1. the encoding: the one asked for, or detected from the image (`detection`); an asked
+     encoding that the detector confidently contradicts is logged as a warning;
+  2. the disparity range: the one asked for, or estimated from the image's eye channels
+     (`matcher.estimate_range`; anaglyphs only);
+  3. the model: the mixture's right-eye channels shifted and the image reduced so the
+     range fits the network's levels (`disparity_range.plan`), the outputs brought back to
+     the input's pixels, then both views restored from the encoding's matrices with the
+     network's views as the prior (`restoration`); the classical method: `baselines`.
+Outputs: 'left', 'right' uint8 [H, W, 3], 'disparity_left', 'disparity_right' float32
+[H, W] signed pixels, and 'info' (a JSON-able dict: mixture, detection, disparity range,
+shift, scale, seconds).
+
+A video frame may come with a `hints.FrameHint`: its shot's encoding and range replace
+steps 1 and 2, and its prior (the previous frame's left disparity) goes to the solver (the
+classical matcher searches around it; the model does not use it).
+"""
+
+import time
+from typing import Callable, Dict, Optional, Sequence, Tuple, Union
+
+from absl import logging
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf import classical
+from mixstereo_tf.classical import anaglyph
+from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import hints
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.models import refiner
+from mixstereo_tf.restoration import views
+from mixstereo_tf.unmixing import detection
+from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import tiling
+
+AUTO = 'auto'
+# The refined views' share of the restoration prior of a refiner's anaglyph (the rest: the
+# classical colour transfer); chosen on validation examples, neither training nor
+# evaluation data (experiments/results/pretrained_ablations.md).
+REFINED_VIEW_WEIGHT = 0.25
+# A named encoding the detector contradicts with at least this confidence is warned about.
+WARN_CONFIDENCE = 0.9
+Range = Union[None, str, Tuple[int, int]]  # disparity_range.parse's values.
+
+
+def resolve_mixture(image: np.ndarray, requested: str,
+                    allowed: Sequence[str]) -> Tuple[str, Dict[str, object]]:
+  """(encoding to unmix with, detection info) for an image.
+
+  Args:
+    image: uint8 [H, W, 3] mixture.
+    requested: a mixture name, or 'auto' to detect it.
+    allowed: the encodings the predictor can unmix.
+
+  Raises:
+    ValueError: 'auto' on an image that is not an anaglyph, or an encoding outside
+      `allowed`.
+  """
+  found = detection.detect(image)
+  info = {'detected': found.name, 'confidence': round(found.confidence, 3)}
+  if requested == AUTO:
+    if found.name is None:
+      raise ValueError(f'This image does not look like an anaglyph ({found.reason}); name '
+                       'its mixture with PredictorConfig.mixture (e.g. diplopia).')
+    name = found.name
+    if found.also_fits:
+      info['also_fits'] = found.also_fits
+      logging.warning('Detected %s, the smallest encoding that explains the image; %s fits '
+                      'it as well. Name the mixture if you know it: %s read as %s loses '
+                      'much more colour than the other way round.', name, found.also_fits,
+                      found.also_fits, name)
+  else:
+    name = requested
+    if found.confidence >= WARN_CONFIDENCE and found.name != name and (
+        found.name is not None or mixtures.get_mixture(name).is_anaglyph):
+      logging.warning('The image was given as %r but looks like %s (confidence %.2f).',
+                      name, found.name or 'no anaglyph', found.confidence)
+  if name not in allowed:
+    raise ValueError(f'The image is a {name!r} mixture; this predictor unmixes '
+                     f'{", ".join(allowed)}.')
+  return name, info
+
+
+def estimate_range(image: np.ndarray, name: str, requested: Range,
+                   default: Tuple[int, int]) -> Tuple[int, int]:
+  """The range asked for; the method's `default` for disparity_range.NETWORK and for
+  monocular mixtures; else estimated from the image (an anaglyph's eye channels, a double
+  image's self-matching)."""
+  if requested == disparity_range.NETWORK:
+    return default
+  if requested is not None:
+    return requested
+  if name == 'diplopia':
+    return diplopia.estimate_range(image)
+  if not mixtures.get_mixture(name).is_anaglyph:
+    return default
+  left_eye, right_eye = anaglyph.eye_images(image_range.u8_to_unit(image), name)
+  return matcher.estimate_range(left_eye, right_eye)
+
+
+def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.ndarray,
+                name: str, search: Tuple[int, int], levels: int,
+                max_pixels: Optional[int], restore: bool) -> Dict[str, object]:
+  """The network around a disparity range, then the restoration (module docstring)."""
+  spec = mixtures.get_mixture(name)
+  height, width = image.shape[:2]
+  chosen = disparity_range.plan(search, levels, height, width, max_pixels,
+                                can_shift=spec.is_anaglyph)
+  network_input = disparity_range.to_network(
+      image, spec.eye_channels[1] if spec.is_anaglyph else (), chosen)
+  raw = graph(tf.constant(network_input))
+  outputs = disparity_range.from_network(
+      {'left': raw['left'].numpy(), 'right': raw['right'].numpy(),
+       'disparity_left': raw['disparity'].numpy(),
+       'disparity_right': raw['disparity_right'].numpy()}, chosen, height, width)
+  if restore and spec.is_anaglyph:
+    restored = views.restore_views(
+        image_range.u8_to_unit(image), name, outputs['disparity_left'],
+        outputs['disparity_right'], image_range.u8_to_unit(outputs['left']),
+        image_range.u8_to_unit(outputs['right']))
+    outputs.update({k: image_range.unit_to_u8(restored[k]) for k in ('left', 'right')})
+  outputs['info'] = {'shift': chosen.shift, 'scale': round(chosen.scale, 4)}
+  return outputs
+
+
+def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, name: str,
+                  search: Range, hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
+  """The hybrid (`models/refiner.py`): the classical method, the refiner on its result
+  (in tiles), then, for anaglyphs, both views restored from the refined disparities with,
+  as the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
+  the rest of the classical colour transfer (each alone was worse on some encodings);
+  'consistent_left' is that restoration's left-right check of the refined disparities."""
+  base = classical_unmix(image, name, search, hint)
+  refined = tiling.apply(network, refiner.network_input(
+      image, base['left'], base['right'], base['disparity_left'],
+      base['disparity_right']), multiple)
+  outputs = {key: image_range.signed_to_u8(refined[key]) for key in ('left', 'right')}
+  for key in ('disparity_left', 'disparity_right'):
+    outputs[key] = refined[key][..., 0]
+  if mixtures.get_mixture(name).is_anaglyph:
+    mixture01 = image_range.u8_to_unit(image)
+    disparities = outputs['disparity_left'], outputs['disparity_right']
+    transfer = views.restore_views(mixture01, name, *disparities)
+    weight = REFINED_VIEW_WEIGHT
+    prior = [weight * image_range.u8_to_unit(outputs[k]) + (1 - weight) * transfer[k]
+             for k in ('left', 'right')]
+    checked = transfer['consistent_left'], transfer['consistent_right']
+    restored = views.restore_views(mixture01, name, *disparities, *prior,
+                                   consistent=checked)
+    outputs.update({k: image_range.unit_to_u8(restored[k]) for k in ('left', 'right')})
+    outputs['consistent_left'] = restored['consistent_left']  # For the next frame's prior.
+  return outputs
+
+
+def classical_unmix(image: np.ndarray, name: str, search: Range,
+                    hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
+  """The training-free method; a `hint`'s prior: a left disparity to search around in its
+  prior_window (anaglyphs; NaN: no prior there); its full_search_cells: the
+  matcher's coarse-to-fine threshold (a shot's first frame). Anaglyphs also give
+  'consistent_left', the matcher's left-right check (`temporal.VideoState` drops the
+  prior where it failed)."""
+  prior = hint.prior if hint is not None else None
+  window = hint.prior_window if prior is not None else None
+  cells = hint.full_search_cells if hint is not None else None
+  out = classical.unmix_classical(image, name, search, prior=prior, prior_window=window,
+                                  full_search_cells=cells)
+  keys = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
+  return {key: out[key] for key in keys if key in out}
+
+
+def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
+        requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
+        solve: Callable[..., Dict[str, object]],
+        hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
+  """Steps 1-3 for one image; `default_range(encoding)` is the method's own range;
+  `solve(image, name, range, hint)` is the method's step 3. A `hint`'s mixture and range
+  (a video shot's) replace steps 1 and 2; `solve` may use its prior."""
+  start = time.perf_counter()
+  hint = hint or hints.FrameHint()
+  if hint.mixture is not None:
+    name, info = hint.mixture, dict(hint.detection or {})
+  else:
+    name, info = resolve_mixture(image, requested_mixture, allowed)
+  search = hint.disparity_range
+  if search is None:
+    search = estimate_range(image, name, requested_range, default_range(name))
+  outputs = solve(image, name, search, hint)
+  info = dict(info, method=method, mixture=name, disparity_range=list(search),
+              prior=hint.prior is not None, **outputs.get('info', {}))
+  info['seconds'] = round(time.perf_counter() - start, 3)
+  outputs['info'] = info
+  return outputs

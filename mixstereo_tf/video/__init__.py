@@ -1,0 +1,1 @@
+"""Video: decoding and encoding with audio, the per-file job, the temporal prior."""

@@ -1,0 +1,181 @@
+"""Temporal consistency for videos: scene cuts and per-shot decisions.
+
+A video is a sequence of shots. Within a shot the encoding and the disparity range do not
+change and consecutive disparities are close, so `VideoState` keeps, per shot:
+  * the encoding, resolved (detected for 'auto') once at the shot's first frame;
+  * the disparity range, estimated once at the shot's first frame;
+  * the previous frame's left disparity, handed to the solver as a prior (the classical
+    matcher searches around it, `matcher.match(..., prior)`), except where that frame's
+    match failed the left-right check (NaN: those pixels search the valid prior's range
+    nearby, or the whole range where none is near).
+Everything is reset at a scene cut. A cut is found between consecutive frames when the
+distance of their colour histograms exceeds `TemporalConfig.cut_threshold`
+(`histogram_distance`): per channel, 16-bin histograms of a copy at most 160 px wide,
+half the L1 distance of the normalised histograms (0: same colours, 1: disjoint), averaged
+over the channels. Histograms ignore where colours are, so camera motion within a shot
+barely moves them while a change of scene does.
+
+    state = VideoState(TemporalConfig())
+    for image in frames:
+      hint = state.begin(image)             # FrameHint: None fields at a shot's start
+      outputs = unmixer(image, hint=hint)   # uses hint.mixture, .disparity_range, .prior
+      state.end(outputs)                    # records what the shot decided
+"""
+
+import dataclasses
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import cv2
+import numpy as np
+
+from mixstereo_tf.core import hints
+
+
+@dataclasses.dataclass(frozen=True)
+class TemporalConfig:
+  """Temporal consistency of video unmixing.
+
+  Attributes:
+    enabled: off: every frame is unmixed alone (encoding, range and disparity per frame).
+    cut_threshold: histogram distance (0..1, `histogram_distance`) above which two
+      consecutive frames belong to different shots.
+    bins: histogram bins per colour channel.
+    analysis_width: frames are area-reduced to at most this width before the histograms.
+    use_prior: hand the previous frame's left disparity to the solver.
+    prior_radius, prior_spread: the classical matcher's window around the prior (pixels
+      added to the prior's [min, max] over (2 * spread + 1)^2 pixels); narrower than a
+      still image's coarse-to-fine windows (`MatcherConfig.prior_radius` / `prior_spread`)
+      so that the prior holds the disparity steady.
+    first_frame_cells: a shot's first frame searches coarse-to-fine (`matcher.match`)
+      when a full search would pass this many cells (H * W * D): the frames after it
+      refine its disparities through the prior. On the 1280x720 benchmark clip (~120 px
+      range) a full search of the first frame took 1.7 s, four later frames' time, and was
+      less accurate than coarse-to-fine (docs/DESIGN.md).
+  """
+  enabled: bool = True
+  cut_threshold: float = 0.3
+  bins: int = 16
+  analysis_width: int = 160
+  use_prior: bool = True
+  prior_radius: int = 1
+  prior_spread: int = 2
+  first_frame_cells: int = 20_000_000
+
+  def __post_init__(self):
+    if not 0.0 < self.cut_threshold < 1.0:
+      raise ValueError(f'TemporalConfig.cut_threshold must lie in (0, 1), got '
+                       f'{self.cut_threshold}.')
+    if self.prior_radius < 0 or self.prior_spread < 0:
+      raise ValueError(f'TemporalConfig.prior_radius and prior_spread must be >= 0, got '
+                       f'{self.prior_radius} and {self.prior_spread}.')
+    if self.bins < 2 or self.analysis_width < 8:
+      raise ValueError(f'TemporalConfig needs bins >= 2 and analysis_width >= 8, got '
+                       f'{self.bins} and {self.analysis_width}.')
+    if self.first_frame_cells < 1:
+      raise ValueError(f'TemporalConfig.first_frame_cells must be >= 1, got '
+                       f'{self.first_frame_cells}.')
+
+
+def colour_histograms(image: np.ndarray, config: TemporalConfig = TemporalConfig()
+                      ) -> np.ndarray:
+  """Normalised per-channel histograms, float64 [3, bins], of a uint8 [H, W, 3] frame
+  area-reduced to at most `config.analysis_width` px wide."""
+  image = np.asarray(image)
+  if image.dtype != np.uint8 or image.ndim != 3 or image.shape[2] != 3:
+    raise ValueError(f'Expected a uint8 [H, W, 3] frame, got {image.dtype} {image.shape}.')
+  height, width = image.shape[:2]
+  if width > config.analysis_width:
+    size = (config.analysis_width, max(1, round(height * config.analysis_width / width)))
+    image = cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+  pixels = image.reshape(-1, 3).astype(np.int64) * config.bins // 256
+  counts = np.stack([np.bincount(pixels[:, c], minlength=config.bins) for c in range(3)])
+  return counts / float(pixels.shape[0])
+
+
+def histogram_distance(a: np.ndarray, b: np.ndarray) -> float:
+  """Half the L1 distance of two [3, bins] normalised histograms, averaged over channels:
+  0 for the same colour distribution, 1 for disjoint ones."""
+  return float(0.5 * np.abs(a - b).sum(axis=1).mean())
+
+
+def find_cuts(frames: Sequence[np.ndarray], config: TemporalConfig = TemporalConfig()
+              ) -> List[int]:
+  """Indices of the frames that start a new shot (frame 0 excluded)."""
+  cuts, previous = [], None
+  for index, frame in enumerate(frames):
+    histograms = colour_histograms(frame, config)
+    if previous is not None and histogram_distance(previous, histograms) > config.cut_threshold:
+      cuts.append(index)
+    previous = histograms
+  return cuts
+
+
+class VideoState:
+  """The running per-shot state of one video (see the module docstring).
+
+  Attributes:
+    config: the TemporalConfig.
+    frames: frames begun so far.
+    shot_starts: the indices of the frames that started a shot (0 first).
+    cuts: the indices of the frames where the histograms found a scene cut.
+  """
+
+  def __init__(self, config: TemporalConfig = TemporalConfig()):
+    self.config = config
+    self.frames = 0
+    self.shot_starts: List[int] = []
+    self.cuts: List[int] = []
+    self._histograms = None
+    self._shot: Dict[str, object] = {}
+    self._prior: Optional[np.ndarray] = None
+
+  def begin(self, image: np.ndarray, cut: bool = False) -> hints.FrameHint:
+    """The hint for the next frame; `cut=True` starts a new shot whatever the histograms
+    say (e.g. at a resumable segment's start). With `config.enabled` off: an empty hint
+    (every frame decided alone), and no histograms are computed."""
+    if not self.config.enabled:
+      self.shot_starts.append(self.frames)
+      self.frames += 1
+      return hints.FrameHint()
+    histograms = colour_histograms(image, self.config)
+    found = self._histograms is not None and (
+        histogram_distance(self._histograms, histograms) > self.config.cut_threshold)
+    if found:
+      self.cuts.append(self.frames)
+    starts = cut or found or self._histograms is None
+    if starts:
+      self.shot_starts.append(self.frames)
+      self._shot, self._prior = {}, None
+    self._histograms = histograms
+    self.frames += 1
+    prior = self._prior if self.config.use_prior else None
+    if prior is not None and prior.shape != image.shape[:2]:
+      prior = None
+    return hints.FrameHint(mixture=self._shot.get('mixture'), detection=self._shot.get('detection'),
+                     disparity_range=self._shot.get('disparity_range'), prior=prior,
+                     prior_window=(self.config.prior_radius, self.config.prior_spread),
+                     full_search_cells=self.config.first_frame_cells if starts else None)
+
+  def end(self, outputs: Dict[str, object]) -> None:
+    """Records the unmixed frame: its 'info' (mixture, detection, disparity range) when it
+    started the shot, and its 'disparity_left' as the next frame's prior, NaN where its
+    'consistent_left' (when given) says the match failed the left-right check: there the
+    next frame searches the valid prior's range nearby (or everything), so a wrong
+    disparity is not inherited."""
+    if not self.config.enabled:
+      return
+    info = outputs.get('info', {})
+    if not self._shot and 'mixture' in info:
+      search = info.get('disparity_range')
+      self._shot = {'mixture': info['mixture'],
+                    'detection': {k: info[k] for k in ('detected', 'confidence', 'also_fits')
+                                  if k in info},
+                    'disparity_range': tuple(int(d) for d in search) if search else None}
+    disparity = outputs.get('disparity_left')
+    if disparity is None or not np.isfinite(disparity).all():
+      self._prior = None
+      return
+    self._prior = np.array(disparity, np.float32)
+    consistent = outputs.get('consistent_left')
+    if consistent is not None:
+      self._prior[~np.asarray(consistent, bool)] = np.nan

@@ -1,0 +1,73 @@
+"""Tests for mixstereo_tf.artifacts.runs: the run directory, RunInfo and checkpoint lookup."""
+
+import json
+import os
+import shutil
+
+import numpy as np
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf.artifacts import runs
+from tests.unmixing import predictors_test
+
+TINY = predictors_test.TINY
+
+
+@pytest.fixture(scope='module')
+def run(tmp_path_factory):
+  path = str(tmp_path_factory.mktemp('run'))
+  model, prefix = predictors_test.make_run_dir(path)
+  return path, model, prefix
+
+
+def test_load_run_restores_the_weights(run):
+  path, model, prefix = run
+  for source in (path, prefix):
+    loaded, info = runs.load_run(source)
+    assert info == runs.RunInfo('anaglyph', 64, 128, TINY)
+    for saved, restored in zip(model.variables, loaded.variables):
+      np.testing.assert_array_equal(saved.numpy(), restored.numpy())
+
+
+def test_load_run_errors(tmp_path, run):
+  path, model, prefix = run
+  with pytest.raises(ValueError, match='No checkpoint'):
+    runs.load_run(str(tmp_path))
+  with pytest.raises(ValueError, match='neither a run directory nor a checkpoint prefix'):
+    runs.load_run(prefix + '-nope')
+  no_config = tmp_path / 'no_config'
+  shutil.copytree(path, no_config)
+  os.remove(no_config / 'config.json')
+  with pytest.raises(ValueError, match='config.json'):
+    runs.load_run(str(no_config))
+  broken = tmp_path / 'broken'
+  shutil.copytree(path, broken)
+  (broken / 'config.json').write_text(json.dumps({'model': TINY.to_dict()}))
+  with pytest.raises(ValueError, match='pipeline'):
+    runs.load_run(str(broken))
+  # A checkpoint with only the separation network's weights cannot restore the model.
+  partial = tmp_path / 'partial'
+  partial.mkdir()
+  shutil.copy(os.path.join(path, 'config.json'), partial)
+  part = tf.train.Checkpoint(model=tf.train.Checkpoint(separation=model.separation))
+  with pytest.raises(ValueError, match='weights'):
+    runs.load_run(part.write(str(partial / 'ckpt-1')))
+
+
+def test_resolve_checkpoint_takes_a_directory_or_a_prefix(run, tmp_path):
+  path, _, prefix = run
+  assert runs.resolve_checkpoint(path) == (path, prefix)
+  assert runs.resolve_checkpoint(prefix) == (path, prefix)
+  (tmp_path / 'empty').mkdir()
+  with pytest.raises(ValueError, match='No checkpoint in'):
+    runs.resolve_checkpoint(str(tmp_path / 'empty'))
+
+
+def test_write_run_files_and_read_run_info_round_trip(tmp_path):
+  info = runs.RunInfo('diplopia', 32, 64, TINY)
+  runs.write_run_files(str(tmp_path / 'r'), '--x=1\n', model=TINY,
+                       pipeline={'mixture': 'diplopia', 'crop_height': 32, 'crop_width': 64})
+  assert runs.read_run_info(str(tmp_path / 'r')) == info
+  assert (tmp_path / 'r' / runs.FLAGS_FILE).read_text() == '--x=1\n'
+  assert json.loads((tmp_path / 'r' / runs.CONFIG_FILE).read_text())['model'] == TINY.to_dict()

@@ -1,0 +1,175 @@
+"""Classical de-anaglyph / de-diplopia baselines on synthetic scenes with known disparity."""
+
+import cv2
+import numpy as np
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf import classical
+from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import matcher
+from mixstereo_tf.classical import sgm
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.evaluation import metrics
+
+_H, _W = 64, 96
+_RECT = (16, 48, 32, 72)  # y0, y1, x0, x1 of the foreground in the left view.
+
+
+def _texture(rng, height, width):
+  """Smooth random colour texture, channels correlated like natural images, [0, 255]."""
+  def blur():
+    noise = cv2.GaussianBlur(rng.normal(size=(height, width)).astype(np.float32), (0, 0), 1.5)
+    return noise / noise.std()
+
+  base = blur()
+  channels = [0.8 * base + 0.4 * blur() + rng.uniform(-0.5, 0.5) for _ in range(3)]
+  return np.clip(127.5 + 40.0 * np.stack(channels, -1), 0, 255)
+
+
+def _scene(d_bg, d_fg, seed=0):
+  """Background plane (disparity d_bg) behind a fronto-parallel rectangle (d_fg).
+
+  Returns uint8 left, right, the true left disparity [H, W] and the non-occluded left mask.
+  """
+  rng = np.random.default_rng(seed)
+  background = _texture(rng, _H, _W + d_bg)
+  foreground = _texture(rng, _H, _W)
+  y0, y1, x0, x1 = _RECT
+  left, right = background[:, :_W].copy(), background[:, d_bg:].copy()
+  left[y0:y1, x0:x1] = foreground[y0:y1, x0:x1]
+  right[y0:y1, x0 - d_fg:x1 - d_fg] = foreground[y0:y1, x0:x1]
+  d_left = np.full((_H, _W), d_bg, np.float32)
+  d_left[y0:y1, x0:x1] = d_fg
+  d_right = np.full((_H, _W), d_bg, np.float32)
+  d_right[y0:y1, x0 - d_fg:x1 - d_fg] = d_fg
+  match = np.arange(_W)[None, :] - d_left.astype(np.int64)
+  nonocc = (match >= 0) & (np.take_along_axis(d_right, np.clip(match, 0, _W - 1), 1) == d_left)
+  return np.rint(left).astype(np.uint8), np.rint(right).astype(np.uint8), d_left, nonocc
+
+
+def _mix(name, left, right):
+  to_tf = lambda a: image_range.u8_to_signed(tf.constant(a))
+  return image_range.signed_to_u8(mixtures.mix(name, to_tf(left), to_tf(right)).numpy())
+
+
+def test_fill_holes_takes_the_smaller_neighbour():
+  disparity = np.array([[9., 0., 0., 4., 0.], [0., 7., 0., 0., 0.]], np.float32)
+  valid = disparity > 0
+  np.testing.assert_array_equal(sgm.fill_holes(disparity, valid),
+                                [[9, 4, 4, 4, 4], [7, 7, 7, 7, 7]])
+
+
+def test_lr_check_flags_an_inconsistent_pixel():
+  d_left = np.full((1, 8), 2.0, np.float32)
+  d_right = d_left.copy()
+  d_right[0, 3] = 5.0  # Left pixel 5 matches right pixel 3.
+  ok_left, ok_right = sgm.lr_check(d_left, d_right, 1.0)
+  np.testing.assert_array_equal(ok_left[0], [0, 0, 1, 1, 1, 0, 1, 1])
+  np.testing.assert_array_equal(ok_right[0], [1, 1, 1, 0, 1, 1, 0, 0])
+
+
+def _y_psnr(image, truth):
+  luma = np.array(mixtures.LUMA)
+  return metrics.psnr(image.astype(np.float64) @ luma, truth.astype(np.float64) @ luma)
+
+
+@pytest.mark.parametrize('name', ['anaglyph', 'green_magenta', 'amber_blue'])
+def test_anaglyph_disparity_and_colours(name):
+  left, right, d_left, nonocc = _scene(d_bg=3, d_fg=8)
+  mixture = _mix(name, left, right)
+  out = classical.unmix_classical(mixture, name)
+  bad1 = metrics.bad_pixel_rate(out['disparity_left'], d_left, nonocc, 1.0)
+  trivial = metrics.bad_pixel_rate(np.full_like(d_left, np.median(d_left)), d_left, nonocc, 1.0)
+  assert bad1 < 0.15 and bad1 < trivial / 2, (bad1, trivial)
+  assert out['left'].dtype == np.uint8 and out['disparity_right'].shape == (_H, _W)
+  for view, truth in (('left', left), ('right', right)):
+    gain = metrics.psnr(out[view], truth) - metrics.psnr(mixture, truth)
+    assert gain >= 6.0, (view, gain)
+
+
+def test_diplopia_constant_shift_and_layers():
+  left, right, d_left, nonocc = _scene(d_bg=5, d_fg=5)
+  mixture = _mix('diplopia', left, right)
+  out = diplopia.unmix_diplopia(mixture)
+  assert out['global_shift'] == 5
+  interior = nonocc & (np.arange(_W)[None, :] >= 8)
+  assert abs(np.median(out['disparity_left'][interior]) - 5.0) < 1.0
+  assert metrics.bad_pixel_rate(out['disparity_left'], d_left, interior, 1.0) < 0.25
+  for view, truth in (('left', left), ('right', right)):
+    gain = metrics.psnr(out[view], truth) - metrics.psnr(mixture, truth)
+    assert gain >= 1.0, (view, gain)
+
+
+def test_diplopia_layers_with_true_shift_beat_the_mixture():
+  left, right, _, _ = _scene(d_bg=5, d_fg=5)
+  mixture01 = _mix('diplopia', left, right) / 255.0
+  layers = diplopia.separate_layers(mixture01, np.full((_H, _W), 5.0),
+                                    diplopia.DiplopiaConfig())
+  gain = (metrics.psnr(image_range.unit_to_u8(layers['left']), left) -
+          metrics.psnr(mixture01 * 255.0, left))
+  assert gain >= 4.0, gain
+
+
+@pytest.mark.parametrize('name', ['gray', 'half_color', 'dubois', 'dubois_ffmpeg',
+                                  'green_magenta_half', 'amber_blue_dubois'])
+def test_lossy_encodings_beat_the_mixture_in_luminance(name):
+  left, right, d_left, nonocc = _scene(d_bg=3, d_fg=8, seed=2)
+  mixture = _mix(name, left, right)
+  out = classical.unmix_classical(mixture, name)
+  bad1 = metrics.bad_pixel_rate(out['disparity_left'], d_left, nonocc, 1.0)
+  assert bad1 < 0.2, bad1
+  for view, truth in (('left', left), ('right', right)):
+    gain = _y_psnr(out[view], truth) - _y_psnr(mixture, truth)
+    assert gain >= 3.0, (view, gain)
+  if name == 'gray':  # No colour was transmitted: the views come back (nearly) gray.
+    for view in ('left', 'right'):
+      tint = np.abs(out[view].astype(float) - out[view].mean(-1, keepdims=True))
+      assert tint.mean() < 1.0 and np.percentile(tint, 99) < 4.0, (view, tint.max())
+
+
+def test_window_aligned_pair_has_negative_disparities():
+  """Shifting the right view by 6 px makes the background -3 and the rectangle +2."""
+  left, right, d_left, nonocc = _scene(d_bg=3, d_fg=8, seed=1)
+  shifted = np.concatenate([np.repeat(right[:, :1], 6, 1), right[:, :-6]], axis=1)
+  mixture = _mix('anaglyph', left[:, 6:], shifted[:, 6:])
+  truth = d_left[:, 6:] - 6
+  inside = np.arange(_W - 6)[None, :] - truth <= _W - 7  # The match lies inside the image.
+  valid = nonocc[:, 6:] & inside
+  out = classical.unmix_classical(mixture, 'anaglyph')
+  low, high = out['disparity_range']
+  assert low <= -3 and high >= 2
+  background, foreground = valid & (truth < 0), valid & (truth > 0)
+  assert abs(np.median(out['disparity_left'][background]) + 3) < 0.5
+  assert abs(np.median(out['disparity_left'][foreground]) - 2) < 0.5
+  assert metrics.bad_pixel_rate(out['disparity_left'], truth, valid, 1.0) < 0.25
+  given = classical.unmix_classical(mixture, 'anaglyph', disparity_range=(-5, 4))
+  assert given['disparity_range'] == (-5, 4)
+  assert given['disparity_left'].min() >= -5 - 0.5
+
+
+@pytest.mark.parametrize('name', ['monocular', 'nonsense'])
+def test_unsupported_mixture_raises(name):
+  with pytest.raises(ValueError, match=name):
+    classical.unmix_classical(np.zeros((8, 16, 3), np.uint8), name)
+
+
+def test_bad_image_raises():
+  with pytest.raises(ValueError, match='mixture'):
+    classical.unmix_classical(np.zeros((8, 16), np.uint8), 'anaglyph')
+  with pytest.raises(ValueError, match=r'\[0, 1\]'):
+    classical.unmix_classical(np.full((8, 16, 3), 2.0), 'diplopia')
+
+
+def test_full_search_cells_and_prior_window_reach_the_matcher(monkeypatch):
+  left, right, _, _ = _scene(2, 6)
+  seen = []
+  original = matcher.match
+  monkeypatch.setattr(matcher, 'match', lambda *args: seen.append(args[4]) or original(*args))
+  classical.unmix_classical(_mix('anaglyph', left, right), 'anaglyph', (0, 10),
+                            prior=np.full((_H, _W), 4.0, np.float32), prior_window=(1, 2),
+                            full_search_cells=1000)
+  assert (seen[0].full_search_cells, seen[0].prior_radius, seen[0].prior_spread) == (1000, 1, 2)
+  classical.unmix_classical(_mix('anaglyph', left, right), 'anaglyph', (0, 10))
+  assert seen[1] == matcher.MatcherConfig()

@@ -1,0 +1,45 @@
+"""Tests for mixstereo_tf.cli.flags: flags declared once, parsing and error translation."""
+
+import re
+
+from absl import app
+from absl import flags
+import pytest
+
+from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.unmixing import predictors
+
+
+def test_scale_items_are_parsed_or_named():
+  assert cli_flags.parse_scene_scales(['tsukuba:16', ' Venus : 8.5']) == (('tsukuba', 16.0),
+                                                                         ('Venus', 8.5))
+  assert cli_flags.parse_scene_scales([]) == ()
+  for item in ('tsukuba', 'tsukuba:abc', 'venus:'):
+    with pytest.raises(app.UsageError, match=rf"--middlebury_scale: .*{re.escape(repr(item))}"):
+      cli_flags.parse_scene_scales(['cones:4', item])
+
+
+def test_groups_declare_each_flag_once():
+  cli_flags.define_predictor()
+  cli_flags.define_predictor()  # A second call (another tool in the process) is a no-op.
+  cli_flags.define_mixture()
+  assert flags.FLAGS['method'].default == predictors.PredictorConfig().method
+  assert flags.FLAGS['restore_colors'].help.startswith('Alias for --restore_colour')
+
+
+def test_usage_error_names_flags_instead_of_config_fields():
+  cli_flags.define_data()
+  cli_flags.define_predictor()
+  error = ValueError("PredictorConfig.method='classical' needs PredictorConfig.mixture; "
+                     'DataConfig.middlebury_scales: bad; EvalConfig.split_list missing; '
+                     'OtherConfig.nothing stays.')
+  text = str(cli_flags.usage_error(error, {'EvalConfig.split_list': 'data_dir'}))
+  assert text == ("--method='classical' needs --mixture; --middlebury_scale: bad; "
+                  '--data_dir missing; OtherConfig.nothing stays.')
+
+
+def test_defaults_come_from_the_config_dataclass():
+  assert cli_flags.defaults(predictors.PredictorConfig) == {
+      'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,
+      'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000,
+          'pretrained': None}

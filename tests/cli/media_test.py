@@ -1,0 +1,133 @@
+"""Tests for mixstereo_tf.cli.media: layouts, disparity files, input expansion."""
+
+import os
+
+import cv2
+import numpy as np
+import pytest
+
+from mixstereo_tf.cli import media
+from mixstereo_tf.data import image_io
+
+
+def _views(height=4, width=6):
+  left = np.zeros((height, width, 3), np.uint8)
+  left[..., 0] = 200
+  right = np.zeros((height, width, 3), np.uint8)
+  right[..., 2] = 100
+  return left, right
+
+
+def test_compose_layouts():
+  left, right = _views()
+  separate = media.compose(left, right, 'separate')
+  assert separate[0] is left and separate[1] is right
+  sbs = media.compose(left, right, 'sbs')
+  assert sbs.shape == (4, 12, 3)
+  np.testing.assert_array_equal(sbs[:, :6], left)
+  np.testing.assert_array_equal(sbs[:, 6:], right)
+  tb = media.compose(left, right, 'tb')
+  assert tb.shape == (8, 6, 3)
+  np.testing.assert_array_equal(tb[:4], left)
+  np.testing.assert_array_equal(tb[4:], right)
+
+
+def test_sbs_half_keeps_the_frame_size_and_squeezes_each_view():
+  left, right = _views(4, 7)
+  left[:, :, 1] = np.arange(7)[None, :] * 10  # A ramp: squeezing averages column pairs.
+  half = media.compose(left, right, 'sbs_half')
+  assert half.shape == (4, 7, 3)
+  np.testing.assert_array_equal(half[:, 4:], right[:, :3])  # Constant view: unchanged.
+  assert np.all(half[:, :4, 0] == 200)
+  # The left ramp 0..60 squeezed to 4 columns stays increasing and spans 0..60.
+  ramp = half[0, :4, 1].astype(int)
+  assert np.all(np.diff(ramp) > 0) and ramp[0] < 15 and ramp[-1] > 45
+
+
+def test_layout_images_names_and_unknown_layout():
+  left, right = _views()
+  assert [s for s, _ in media.layout_images(left, right, 'separate')] == ['left', 'right']
+  assert [s for s, _ in media.layout_images(left, right, 'tb')] == ['tb']
+  with pytest.raises(ValueError, match='sbs_half'):
+    media.compose(left, right, 'diagonal')
+  with pytest.raises(ValueError, match='shape'):
+    media.compose(left, right[:, :5], 'sbs')
+
+
+def test_png16_round_trip_kitti_convention(tmp_path):
+  disparity = np.array([[0.0, 1.0, 10.5, 37.25],
+                        [-3.0, np.nan, 300.0, 0.001]], np.float32)
+  path = str(tmp_path / 'd.png')
+  media.write_disparity_png16(path, disparity)
+  raw = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+  assert raw.dtype == np.uint16
+  np.testing.assert_array_equal(raw, [[0, 256, 2688, 9536], [0, 0, 65535, 1]])
+  decoded, valid = image_io.read_disparity(path, scale=256.0)
+  np.testing.assert_array_equal(valid, [[False, True, True, True], [False, False, True, True]])
+  np.testing.assert_allclose(decoded[0], [0.0, 1.0, 10.5, 37.25])
+
+
+def _write_png(path, value, shape=(8, 10, 3)):
+  cv2.imwrite(str(path), np.full(shape, value, np.uint8))
+
+
+def test_iter_inputs_folder_glob_single(tmp_path):
+  _write_png(tmp_path / 'b.png', 10)
+  _write_png(tmp_path / 'a.jpg', 20)
+  (tmp_path / 'notes.txt').write_text('not an image')
+  os.mkdir(tmp_path / 'sub.png')  # A folder with an image-like name is skipped.
+  items = list(media.iter_inputs(str(tmp_path)))
+  assert [os.path.basename(i.path) for i in items] == ['a.jpg', 'b.png']
+  assert [i.name for i in items] == ['a', 'b'] and not any(i.is_video for i in items)
+  items = list(media.iter_inputs(str(tmp_path / '*.png')))
+  assert [os.path.basename(i.path) for i in items] == ['b.png']
+  single = list(media.iter_inputs(str(tmp_path / 'a.jpg')))
+  assert len(single) == 1 and single[0].path == str(tmp_path / 'a.jpg')
+
+
+def test_output_names_are_unique_when_stems_collide():
+  assert media.output_names(['in/a.png', 'in/b.jpg']) == ['a', 'b']
+  # Shared stem: the extension joins the name (its case kept).
+  assert media.output_names(['in/a.JPG', 'in/a.png', 'in/b.png']) == ['a_JPG', 'a_png', 'b']
+  # Same file name in two folders of a glob: numbered in input order.
+  assert media.output_names(['x/a.png', 'y/a.png', 'z/a.png']) == ['a_png', 'a_png_2',
+                                                                     'a_png_3']
+  # A fallback equal to another input's stem, and names differing only in case, are
+  # numbered too (case-insensitive file systems would merge them).
+  assert media.output_names(['a.jpg', 'a.png', 'a_png.bmp']) == ['a_jpg', 'a_png', 'a_png_2']
+  assert media.output_names(['A.png', 'a.png']) == ['A_png', 'a_png_2']
+  # A numbered name never takes the plain name another input still wants.
+  assert media.output_names(['x/a.png', 'y/a.png', 'a_png_2.bmp']) == [
+      'a_png', 'a_png_3', 'a_png_2']
+
+
+def test_iter_inputs_names_collisions_in_a_folder(tmp_path):
+  _write_png(tmp_path / 'a.png', 10)
+  _write_png(tmp_path / 'a.jpg', 20)
+  _write_png(tmp_path / 'b.png', 30)
+  items = list(media.iter_inputs(str(tmp_path)))
+  assert [(os.path.basename(i.path), i.name) for i in items] == [
+      ('a.jpg', 'a_jpg'), ('a.png', 'a_png'), ('b.png', 'b')]
+
+
+def test_iter_inputs_errors(tmp_path):
+  with pytest.raises(ValueError, match='not found'):
+    list(media.iter_inputs(str(tmp_path / 'missing.png')))
+  with pytest.raises(ValueError, match='No images'):
+    list(media.iter_inputs(str(tmp_path)))
+  with pytest.raises(ValueError, match='match'):
+    list(media.iter_inputs(str(tmp_path / '*.png')))
+
+
+def test_read_image_gray_to_rgb(tmp_path):
+  path = str(tmp_path / 'gray.png')
+  cv2.imwrite(path, np.full((5, 6), 77, np.uint8))
+  image = media.read_image(path)
+  assert image.shape == (5, 6, 3) and np.all(image == 77)
+
+
+def test_iter_inputs_marks_videos(tmp_path):
+  (tmp_path / 'clip.mp4').write_bytes(b'')  # Only the name matters here.
+  _write_png(tmp_path / 'still.png', 5)
+  items = list(media.iter_inputs(str(tmp_path / '*')))
+  assert [(i.name, i.is_video) for i in items] == [('clip', True), ('still', False)]

@@ -1,0 +1,261 @@
+"""Tests for unmixing files: images, folders, globs and videos (mixstereo_tf.cli.unmix_files)."""
+
+import dataclasses
+import io
+import json
+import os
+
+import cv2
+import numpy as np
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf import models
+from mixstereo_tf.artifacts import graphs
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.cli import media
+from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.core import colormap
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import jobs
+from tests.unmixing import predictors_test
+from tests.video import streams_test
+
+INFO = runs.RunInfo('anaglyph', 64, 128, predictors_test.TINY)
+
+
+@pytest.fixture(scope='module')
+def model():
+  tf.keras.utils.set_random_seed(5)
+  return models.build_model(predictors_test.TINY)
+
+
+@pytest.fixture(scope='module')
+def setup(model):
+  graph = tf.function(graphs.serving_function(model))
+  return predictors.model_unmixer(graph, INFO, predictors.PredictorConfig(
+      mixture='anaglyph', disparity_range=(0, 7)))
+
+
+def _image(path, shape=(40, 50, 3), seed=0):
+  image = np.random.RandomState(seed).randint(0, 256, shape).astype(np.uint8)
+  media.write_image(str(path), image)
+  return image
+
+
+class _Terminal(io.StringIO):
+  """A stream that says it is a terminal, so progress is drawn on it."""
+
+  def isatty(self):
+    return True
+
+
+def test_every_layout_for_one_image(setup, tmp_path):
+  _image(tmp_path / 'scene.png')
+  expected = {'separate': ['scene_left.png', 'scene_right.png'], 'sbs': ['scene_sbs.png'],
+              'sbs_half': ['scene_sbs_half.png'], 'tb': ['scene_tb.png']}
+  shapes = {'scene_left.png': (40, 50, 3), 'scene_right.png': (40, 50, 3),
+            'scene_sbs.png': (40, 100, 3), 'scene_sbs_half.png': (40, 50, 3),
+            'scene_tb.png': (80, 50, 3)}
+  for layout, names in expected.items():
+    out = tmp_path / layout
+    report = unmix_files.unmix_inputs(setup, str(tmp_path / 'scene.png'), str(out), layout)
+    assert (report.processed, report.frames, report.failures) == (1, 1, [])
+    common = ['scene_disparity.png', 'scene_disparity16.png', 'scene_disparity.npy',
+              'scene_info.json']
+    assert sorted(os.listdir(out)) == sorted(names + common)
+    for name in names:
+      assert media.read_image(str(out / name)).shape == shapes[name]
+  # The three disparity files agree with each other and with the unmixer.
+  disparity = np.load(tmp_path / 'tb' / 'scene_disparity.npy')
+  direct = setup(media.read_image(str(tmp_path / 'scene.png')))['disparity_left']
+  np.testing.assert_allclose(disparity, direct, atol=1e-5)
+  raw = cv2.imread(str(tmp_path / 'tb' / 'scene_disparity16.png'), cv2.IMREAD_UNCHANGED)
+  assert raw.dtype == np.uint16
+  np.testing.assert_allclose(raw / 256.0, disparity, atol=1 / 512 + 1e-6)
+  colour = media.read_image(str(tmp_path / 'tb' / 'scene_disparity.png'))
+  low, high = media.display_range(disparity)  # The range the map covers.
+  np.testing.assert_array_equal(colour, colormap.colorize(disparity, high, low))
+  info = json.loads((tmp_path / 'tb' / 'scene_info.json').read_text())
+  assert (info['method'], info['mixture'], info['disparity_range']) == (
+      'model', 'anaglyph', [0, 7])
+  assert info['display_range'] == pytest.approx([low, high], abs=1e-3) and info['seconds'] > 0
+
+
+def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
+  folder = tmp_path / 'in'
+  folder.mkdir()
+  _image(folder / 'a.png')
+  (folder / 'b.png').write_bytes(b'\x89PNG\r\n\x1a\n truncated')
+  cv2.imwrite(str(folder / 'c.jpg'), np.full((33, 47), 90, np.uint8))  # Gray.
+  terminal = _Terminal()
+  report = unmix_files.unmix_inputs(setup, str(folder), str(tmp_path / 'out'), 'sbs_half',
+                                 progress_stream=terminal)
+  assert report.processed == 2 and report.frames == 2
+  assert '[##########] 3/3' in terminal.getvalue() and terminal.getvalue().endswith('\n')
+  assert [os.path.basename(p) for p, _ in report.failures] == ['b.png']
+  assert 'b.png' in report.failures[0][1]
+  assert unmix_files.failure_message(report) == (
+      f'error: 1 of 3 input(s) failed: {folder / "b.png"}')
+  assert media.read_image(str(tmp_path / 'out' / 'c_sbs_half.png')).shape == (33, 47, 3)
+  assert not os.path.exists(tmp_path / 'out' / 'b_disparity.npy')
+  # Nothing readable: the report asks for a non-zero exit.
+  os.remove(folder / 'a.png')
+  os.remove(folder / 'c.jpg')
+  report = unmix_files.unmix_inputs(setup, str(folder), str(tmp_path / 'out2'))
+  assert report.processed == 0 and len(report.failures) == 1
+  assert '1 of 1 input(s) failed' in unmix_files.failure_message(report)
+
+
+def _anaglyph_clip(path, mixture, frames=24):
+  """A stereo clip (a textured plane 3 px behind a box 6 px, both moving) encoded as
+  `mixture` anaglyph frames, with a sine audio track; returns the path."""
+  texture = cv2.resize(np.random.RandomState(4).rand(20, 60, 3).astype(np.float32), (240, 64),
+                       interpolation=cv2.INTER_CUBIC)
+  images = []
+  for index in range(frames):
+    shift = 2 * index
+    left = texture[:, shift + 20:shift + 116].copy()
+    right = texture[:, shift + 23:shift + 119].copy()  # Right x shows left x + 3.
+    left[20:44, 30:60] = right[20:44, 24:54] = texture[:24, 100 - shift:130 - shift]
+    left_u8, right_u8 = (image_range.unit_to_u8(np.clip(v, 0, 1)) for v in (left, right))
+    mixed = mixtures.mix(mixture, image_range.u8_to_signed(left_u8),
+                         image_range.u8_to_signed(right_u8))
+    images.append(image_range.signed_to_u8(mixed.numpy()))
+  return streams_test.make_video(path, images)
+
+
+class Interrupted(Exception):
+  """Stands in for Ctrl-C or a crash while unmixing."""
+
+
+def _failing_after(unmixer, frames):
+  """The unmixer, raising Interrupted once it has unmixed `frames` frames."""
+  count = [0]
+
+  def unmix(image, **hint):
+    if count[0] == frames:
+      raise Interrupted()
+    count[0] += 1
+    return unmixer(image, **hint)
+  return dataclasses.replace(unmixer, fn=unmix)
+
+
+@pytest.mark.parametrize('mixture, extension, layout', [('anaglyph', '.mp4', 'tb'),
+                                                        ('gray', '.mkv', 'separate')])
+def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extension, layout):
+  source = _anaglyph_clip(tmp_path / f'clip{extension}', mixture)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture=mixture, disparity_range=(0, 8)))
+  config = jobs.VideoConfig(segment_frames=10)
+  keys = ['left', 'right'] if layout == 'separate' else [layout]
+  names = [f'clip_{key}{extension}' for key in keys + ['disparity']]
+  terminal = _Terminal()
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'once'), layout,
+                                    progress_stream=terminal, video_config=config)
+  assert (report.processed, report.frames, report.failures) == (1, 24, [])
+  assert f'clip{extension}  [##########] 24/24  ' in terminal.getvalue() or (
+      extension == '.mkv')  # Matroska gives no frame count: '24 done'.
+  assert sorted(os.listdir(tmp_path / 'once')) == sorted(names + ['clip_info.json'])
+  source_info, _ = streams_test.read_all(source)
+  for name in names:
+    info, frames = streams_test.read_all(tmp_path / 'once' / name)
+    assert len(frames) == 24 and info.frame_rate == source_info.frame_rate == 12
+    assert frames[0].image.shape == ((128, 96, 3) if name.endswith(f'tb{extension}')
+                                     else (64, 96, 3))
+    np.testing.assert_array_equal(streams_test.audio_samples(tmp_path / 'once' / name),
+                                  streams_test.audio_samples(source))
+  info = json.loads((tmp_path / 'once' / 'clip_info.json').read_text())
+  assert (info['frames'], info['frame_rate'], info['audio_streams']) == (24, '12', 1)
+  assert info['method'] == 'classical' and info['files'] == names
+  # Interrupted after 13 frames: nothing under a final name; the re-run resumes at 10.
+  with pytest.raises(Interrupted):
+    unmix_files.unmix_inputs(_failing_after(unmixer, 13), source, str(tmp_path / 'again'),
+                             layout, video_config=config)
+  assert not any(os.path.exists(tmp_path / 'again' / name) for name in names)
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'again'), layout,
+                                    video_config=config)
+  assert (report.processed, report.frames) == (1, 14)
+  assert json.loads((tmp_path / 'again' / 'clip_info.json').read_text())['resumed_frames'] == 10
+  assert sorted(os.listdir(tmp_path / 'again')) == sorted(names + ['clip_info.json'])
+  for name in names:
+    _, once = streams_test.read_all(tmp_path / 'once' / name)
+    _, again = streams_test.read_all(tmp_path / 'again' / name)
+    assert [f.time for f in once] == [f.time for f in again]
+    for a, b in zip(once, again):
+      np.testing.assert_array_equal(a.image, b.image)
+
+
+def test_unreadable_video_is_named(setup, tmp_path):
+  (tmp_path / 'broken.mp4').write_bytes(b'not a video' * 100)
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'broken.mp4'), str(tmp_path / 'out'))
+  assert report.processed == 0 and report.failures[0][0] == str(tmp_path / 'broken.mp4')
+  assert report.failures[0][1].startswith('ValueError: Cannot open video file ')
+  assert 'broken.mp4' in report.failures[0][1]
+
+
+def test_classical_method(tmp_path):
+  setup = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='anaglyph'))
+  mixture = _image(tmp_path / 'x.png', (30, 44, 3))
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'x.png'), str(tmp_path / 'out'))
+  assert report.processed == 1 and not report.failures
+  left = media.read_image(str(tmp_path / 'out' / 'x_left.png'))
+  right = media.read_image(str(tmp_path / 'out' / 'x_right.png'))
+  np.testing.assert_array_equal(left[..., 0], mixture[..., 0])  # Red-cyan channels kept.
+  np.testing.assert_array_equal(right[..., 1:], mixture[..., 1:])
+  assert np.load(tmp_path / 'out' / 'x_disparity.npy').shape == (30, 44)
+
+
+def test_inputs_sharing_a_stem_keep_their_own_outputs(setup, tmp_path):
+  folder = tmp_path / 'in'
+  folder.mkdir()
+  _image(folder / 'a.png', seed=1)
+  _image(folder / 'a.jpg', seed=2)
+  out = tmp_path / 'out'
+  report = unmix_files.unmix_inputs(setup, str(folder / 'a.*'), str(out))
+  assert report.processed == 2 and not report.failures
+  assert sorted(os.listdir(out)) == sorted(
+      f'a_{ext}_{suffix}' for ext in ('png', 'jpg') for suffix in (
+          'left.png', 'right.png', 'disparity.png', 'disparity16.png', 'disparity.npy',
+          'info.json'))
+  for ext in ('png', 'jpg'):
+    expected = setup(media.read_image(str(folder / f'a.{ext}')))['disparity_left']
+    np.testing.assert_allclose(np.load(out / f'a_{ext}_disparity.npy'), expected, atol=1e-5)
+
+
+def test_tensorflow_and_file_system_errors_skip_only_their_input(tmp_path):
+  def unmix(image):
+    value = int(image[0, 0, 0])
+    if value == 10:
+      raise tf.errors.ResourceExhaustedError(None, None, 'OOM when allocating\n  (trace)')
+    if value == 20:
+      raise OSError(28, 'No space left on device')
+    if value == 40:
+      raise KeyError('a bug, not a bad input')
+    return {'left': image, 'right': image,
+            'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  folder = tmp_path / 'in'
+  folder.mkdir()
+  for name, value in (('a', 10), ('b', 20), ('c', 30)):
+    media.write_image(str(folder / f'{name}.png'), np.full((8, 8, 3), value, np.uint8))
+  unmixer = predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+  report = unmix_files.unmix_inputs(unmixer, str(folder), str(tmp_path / 'out'))
+  assert report.processed == 1 and os.path.exists(tmp_path / 'out' / 'c_left.png')
+  assert report.failures == [
+      (str(folder / 'a.png'), 'ResourceExhaustedError: OOM when allocating'),
+      (str(folder / 'b.png'), 'OSError: [Errno 28] No space left on device')]
+  assert unmix_files.failure_message(report).startswith('error: 2 of 3 input(s) failed: ')
+  # Anything else is a bug and stops the run rather than being reported as a bad input.
+  media.write_image(str(folder / 'd.png'), np.full((8, 8, 3), 40, np.uint8))
+  with pytest.raises(KeyError):
+    unmix_files.unmix_inputs(unmixer, str(folder), str(tmp_path / 'out2'))
+
+
+def test_failure_message_names_at_most_five_inputs():
+  assert unmix_files.failure_message(unmix_files.UnmixReport(processed=3)) is None
+  report = unmix_files.UnmixReport(processed=1, failures=[(f'{i}.png', 'bad') for i in range(7)])
+  assert unmix_files.failure_message(report) == (
+      'error: 7 of 8 input(s) failed: 0.png, 1.png, 2.png, 3.png, 4.png, ...')

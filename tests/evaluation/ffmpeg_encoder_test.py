@@ -1,0 +1,35 @@
+"""Tests of the independent encoder: FFmpeg's stereo3d against our matrices (mixtures)."""
+
+import numpy as np
+import pytest
+
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.evaluation import ffmpeg_encoder
+
+pytest.importorskip('imageio_ffmpeg')
+
+
+def _views():
+  rng = np.random.default_rng(0)
+  return (rng.integers(0, 256, (24, 32, 3), dtype=np.uint8),
+          rng.integers(0, 256, (24, 32, 3), dtype=np.uint8))
+
+
+@pytest.mark.parametrize('name', sorted(ffmpeg_encoder.FFMPEG_MODES))
+def test_ffmpeg_matches_our_operator(name):
+  """FFmpeg's integer matrices equal ours to 1/65536 and floor: at most 1 level apart
+  (Dubois: its own rounding of the clipped sums, at most 2)."""
+  left, right = _views()
+  theirs = ffmpeg_encoder.encode(left, right, name).astype(int)
+  ours = image_range.signed_to_u8(mixtures.mix(
+      name, image_range.u8_to_signed(left), image_range.u8_to_signed(right)).numpy())
+  assert np.abs(theirs - ours.astype(int)).max() <= (2 if 'dubois' in name else 1)
+
+
+def test_unknown_encoding_and_bad_views_are_refused():
+  left, right = _views()
+  with pytest.raises(ValueError, match='no .diplopia. anaglyph'):
+    ffmpeg_encoder.encode(left, right, 'diplopia')
+  with pytest.raises(ValueError, match='one size'):
+    ffmpeg_encoder.encode(left, right[:, :10], 'anaglyph')

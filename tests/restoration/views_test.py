@@ -1,0 +1,156 @@
+"""Known-answer tests of the restoration of both views from a mixture and disparities."""
+
+import numpy as np
+import pytest
+
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.restoration import views
+
+# A 1 % pull towards the prior (w_prior / w_match), to see how exact the views are when the
+# match is perfect; the default pulls 10 %, which real matches need
+# (`experiments/restoration_weight.py`).
+SLIGHT_PULL = views.RestoreConfig(prior_weight=0.01)
+
+
+def _pair(shift=3, height=24, width=40, seed=0):
+  """A textured pair with constant disparity `shift` ([0, 1] floats) and its masks."""
+  rng = np.random.default_rng(seed)
+  base = rng.uniform(0.1, 0.9, (height, width + shift, 1))
+  texture = np.clip(base * [1.0, 0.8, 0.6] + rng.uniform(-0.1, 0.1, (height, width + shift, 3)),
+                    0, 1).astype(np.float32)
+  left, right = texture[:, :width], texture[:, shift:]  # Left x is right x - shift.
+  d = np.full((height, width), float(shift), np.float32)
+  inside = np.broadcast_to(np.arange(width)[None, :] >= shift, (height, width))  # Match in image.
+  return left, right, d, inside
+
+
+def _mix(name, left, right):
+  spec = mixtures.get_mixture(name)
+  mixed = left @ np.asarray(spec.left_matrix).T + right @ np.asarray(spec.right_matrix).T
+  return np.clip(mixed, 0, 1).astype(np.float32)
+
+
+def test_sample_horizontal_shifts_and_replicates_edges():
+  image = np.arange(5, dtype=np.float32)[None, :].repeat(2, 0)
+  np.testing.assert_array_equal(views.sample_horizontal(image, np.full((2, 5), 1.5)),
+                                [[1.5, 2.5, 3.5, 4, 4]] * 2)
+  np.testing.assert_array_equal(views.sample_horizontal(image, np.full((2, 5), -2.0)),
+                                [[0, 0, 0, 1, 2]] * 2)
+
+
+def test_lr_consistency_flags_disagreement_and_the_border():
+  d = np.full((1, 8), 2.0, np.float32)
+  other = d.copy()
+  other[0, 4] = 6.0  # The left pixel 6 matches right 4, which disagrees.
+  ok_left, ok_right = views.lr_consistency(d, other)
+  np.testing.assert_array_equal(ok_left[0], [0, 0, 1, 1, 1, 1, 0, 1])
+  assert not ok_right[0, 6] and not ok_right[0, 7]  # x + 2 leaves the image.
+
+
+@pytest.mark.parametrize('name', ['anaglyph', 'green_magenta', 'amber_blue'])
+def test_channel_anaglyphs_are_recovered_exactly_where_both_views_see(name):
+  left, right, d, inside = _pair()
+  out = views.restore_views(_mix(name, left, right), name, d, d, config=SLIGHT_PULL)
+  assert out['consistent_left'][inside].all()
+  # Copied channels exactly; warped ones up to the prior's 1 % pull.
+  np.testing.assert_allclose(out['left'][inside], left[inside], atol=5e-3)
+  seen_right = np.arange(d.shape[1])[None, :] + d < d.shape[1] - 1
+  np.testing.assert_allclose(out['right'][np.broadcast_to(seen_right, d.shape)],
+                             right[np.broadcast_to(seen_right, d.shape)], atol=5e-3)
+  for view, truth, copied in (('left', left, mixtures.get_mixture(name).left_channels),
+                              ('right', right, mixtures.get_mixture(name).right_channels)):
+    for channel in copied:
+      np.testing.assert_array_equal(out[view][..., channel], truth[..., channel])
+
+
+def test_lossy_encodings_keep_their_luminance_and_gray_gives_gray():
+  left, right, d, inside = _pair(seed=1)
+  luma = np.asarray(mixtures.LUMA, np.float32)
+  gray = views.restore_views(_mix('gray', left, right), 'gray', d, d)
+  np.testing.assert_allclose(gray['left'][..., 0], gray['left'][..., 2], atol=1e-6)
+  np.testing.assert_allclose(gray['left'][inside] @ luma, left[inside] @ luma, atol=3e-3)
+  half = views.restore_views(_mix('half_color', left, right), 'half_color', d, d,
+                                   config=SLIGHT_PULL)
+  # Within 2 levels everywhere (a prior fitted at half resolution can push a near-black
+  # pixel's lost channels below 0, and the clip then lifts its luminance), 0.25 on average.
+  error = np.abs(half['left'][inside] @ luma - left[inside] @ luma)
+  assert error.max() < 8e-3 and error.mean() < 1e-3
+  # Colour came from the right view: the left view's colour is recovered, not only its Y.
+  assert np.abs(half['left'][inside] - left[inside]).mean() < 0.02
+
+
+def test_the_network_prior_fills_what_nothing_else_fixes():
+  left, right, d, inside = _pair(seed=2)
+  prior = np.full_like(left, 0.5)
+  out = views.restore_views(_mix('anaglyph', left, right), 'anaglyph', d, d, prior,
+                                  prior)
+  occluded = ~inside
+  np.testing.assert_allclose(out['left'][occluded][:, 0], left[occluded][:, 0], atol=2e-3)
+  np.testing.assert_allclose(out['left'][occluded][:, 1:], 0.5, atol=0.02)
+
+
+def test_a_given_left_right_check_is_the_one_used():
+  left, right, d, _ = _pair(seed=4)
+  mixture, prior = _mix('anaglyph', left, right), np.full_like(left, 0.5)
+  out = views.restore_views(mixture, 'anaglyph', d, d, prior, prior)
+  checked = out['consistent_left'], out['consistent_right']
+  again = views.restore_views(mixture, 'anaglyph', d, d, prior, prior,
+                                    consistent=checked)
+  np.testing.assert_array_equal(again['left'], out['left'])
+  np.testing.assert_array_equal(again['right'], out['right'])
+  # Nothing matched: the lost channels come from the prior alone.
+  nothing = tuple(np.zeros_like(c) for c in checked)
+  alone = views.restore_views(mixture, 'anaglyph', d, d, prior, prior,
+                                    consistent=nothing)
+  assert not alone['consistent_left'].any()
+  np.testing.assert_allclose(alone['left'][..., 1:], 0.5, atol=0.02)
+
+
+def _reference_solve(mixture, spec, d_left, d_right, consistent, priors, config):
+  """The module docstring's alternation, transcribed with NumPy solves per pixel."""
+  left, right = (p.copy() for p in priors)
+  matrices = np.asarray(spec.left_matrix), np.asarray(spec.right_matrix)
+  for _ in range(config.iterations):
+    for index in (0, 1):
+      own, other = matrices[index], matrices[1 - index]
+      view, other_view = (left, right) if index == 0 else (right, left)
+      offset = -d_left if index == 0 else d_right
+      c = consistent[index][..., None].astype(np.float64)
+      # Dubois: clipped mixture channels are no observations.
+      observed = ((mixture > 0.5 / 255) & (mixture < 254.5 / 255) if spec.clip
+                  else np.ones(mixture.shape, bool)).astype(np.float64)
+      rhs = (config.observation_weight * (observed * (mixture - other_view @ other.T)) @ own
+             + config.match_weight * c * views.sample_horizontal(other_view, offset)
+             + config.prior_weight * priors[index])
+      gram = config.observation_weight * np.einsum('yxc,ci,cj->yxij', observed, own, own) + (
+          config.prior_weight + config.match_weight * c[..., None]) * np.eye(3)
+      solved = np.linalg.solve(gram, rhs[..., None])[..., 0]
+      view += config.relaxation * (solved - view)
+      for view_channel, mixture_channel in (spec.left_channels if index == 0
+                                            else spec.right_channels).items():
+        view[..., view_channel] = mixture[..., mixture_channel]
+  return np.clip(left, 0, 1), np.clip(right, 0, 1)
+
+
+@pytest.mark.parametrize('name', ['anaglyph', 'half_color', 'gray', 'dubois'])
+@pytest.mark.parametrize('threads', [1, 3])
+def test_the_fused_solve_equals_the_equations_per_pixel(name, threads):
+  left, right, d, _ = _pair(shift=4, height=13)
+  spec = mixtures.get_mixture(name)
+  mixture = _mix(name, left, right)
+  d_left = d + np.linspace(0, 2, d.size, dtype=np.float32).reshape(d.shape).round()
+  consistent = views.lr_consistency(d_left, d_left, 1.0)
+  rng = np.random.default_rng(2)
+  priors = tuple(rng.uniform(size=left.shape).astype(np.float32) for _ in range(2))
+  config = views.RestoreConfig(iterations=3, threads=threads)
+  fused = views._solve(mixture, spec, d_left, d_left, consistent, priors, config,
+                             priors)
+  expected = _reference_solve(mixture, spec, d_left, d_left, consistent, priors, config)
+  for got, want in zip(fused, expected):
+    np.testing.assert_allclose(got, want, atol=1e-3)  # float32 against float64: 1/4 level.
+
+
+def test_only_anaglyphs_are_restored():
+  left, right, d, _ = _pair()
+  with pytest.raises(ValueError, match='anaglyph encoding'):
+    views.restore_views(_mix('diplopia', left, right), 'diplopia', d, d)

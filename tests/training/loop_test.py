@@ -1,0 +1,120 @@
+"""Tests of the training loop: resume, NaN stop, distribution, fine-tuning, outputs."""
+
+import glob
+import json
+
+import numpy as np
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf import models
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.training import config as config_lib
+from mixstereo_tf.training import loop
+from mixstereo_tf.training import objective
+from tests import training_helpers
+
+
+def _train(model_dir, num_steps, batch_size=1, **kwargs):
+  nan_from_step = kwargs.pop('nan_from_step', None)
+  config = config_lib.TrainConfig(model_dir=str(model_dir), num_steps=num_steps,
+                                  learning_rate=1e-3, checkpoint_every=1, summary_every=1,
+                                  image_summary_every=2, log_every=1, **kwargs)
+  return loop.train(config, training_helpers.MINI, objective.LossConfig(),
+                    training_helpers.dataset_fn(batch_size, nan_from_step=nan_from_step,
+                                                height=16, width=32, shift=2),
+                    flags_text='--num_steps=%d\n' % num_steps)
+
+
+def _checkpoint_values(path):
+  reader = tf.train.load_checkpoint(path)
+  return {k: reader.get_tensor(k) for k in reader.get_variable_to_shape_map()
+          if k.startswith('model/')}
+
+
+def test_resume_continues_from_the_saved_step(tmp_path):
+  first = _train(tmp_path, 2)
+  assert (first.start_step, first.final_step, first.num_replicas) == (0, 2, 1)
+  assert first.last_checkpoint.endswith('ckpt-2')
+  saved = _checkpoint_values(first.last_checkpoint)
+  second = _train(tmp_path, 3)
+  assert (second.start_step, second.final_step) == (2, 3)
+  assert np.isfinite(second.final_loss)
+  assert json.loads((tmp_path / 'config.json').read_text())['model'][
+      'max_disparity'] == training_helpers.MINI.max_disparity
+  assert (tmp_path / 'flags.txt').read_text() == '--num_steps=3\n'
+  assert glob.glob(str(tmp_path / 'train' / 'events.out.tfevents.*'))
+  # Resuming with nothing left to do restores the checkpoint as it was.
+  model = models.build_model(training_helpers.MINI)
+  tf.train.Checkpoint(model=model).read(second.last_checkpoint).expect_partial()
+  assert saved.keys() == _checkpoint_values(second.last_checkpoint).keys()
+
+
+def test_nan_loss_stops_naming_the_step_and_keeps_the_last_good_checkpoint(tmp_path):
+  with pytest.raises(loop.NonFiniteLossError, match='at step 3'):
+    _train(tmp_path, 5, nan_from_step=3)
+  latest = tf.train.latest_checkpoint(str(tmp_path))
+  assert latest.endswith('ckpt-2')
+  assert all(np.all(np.isfinite(v)) for v in _checkpoint_values(latest).values())
+
+
+def test_mirrored_strategy_splits_the_batch_over_two_devices(tmp_path):
+  assert len(tf.config.list_logical_devices('CPU')) == 2  # tests/conftest.py
+  result = _train(tmp_path, 2, batch_size=2, strategy='mirrored')
+  assert result.num_replicas == 2
+  assert result.final_step == 2 and np.isfinite(result.final_loss)
+
+
+def test_mirrored_strategy_rejects_a_batch_it_cannot_split(tmp_path):
+  with pytest.raises(ValueError, match='not divisible by the 2 replicas'):
+    _train(tmp_path, 1, batch_size=1, strategy='mirrored')
+
+
+def test_init_checkpoint_starts_a_new_run_from_given_weights(tmp_path):
+  pretrained = _train(tmp_path / 'pretrain', 1)
+  weights = _checkpoint_values(pretrained.last_checkpoint)
+  finetune = _train(tmp_path / 'finetune', 1, init_checkpoint=pretrained.last_checkpoint,
+                    mode='separation_only')
+  assert finetune.start_step == 0
+  after = _checkpoint_values(finetune.last_checkpoint)
+  stereo = [k for k in weights if k.startswith('model/stereo/')]
+  assert stereo and all(np.array_equal(weights[k], after[k]) for k in stereo)
+
+
+def test_init_checkpoint_may_name_a_run_directory(tmp_path):
+  pretrained = _train(tmp_path / 'pretrain', 2)
+  weights = _checkpoint_values(pretrained.last_checkpoint)
+  assert runs.resolve_checkpoint(str(tmp_path / 'pretrain'))[1] == pretrained.last_checkpoint
+  finetune = _train(tmp_path / 'finetune', 1, init_checkpoint=str(tmp_path / 'pretrain'),
+                    mode='separation_only')
+  after = _checkpoint_values(finetune.last_checkpoint)
+  stereo = [k for k in weights if k.startswith('model/stereo/')]
+  assert stereo and all(np.array_equal(weights[k], after[k]) for k in stereo)
+
+
+def test_init_checkpoint_errors_name_the_path(tmp_path):
+  (tmp_path / 'empty').mkdir()
+  with pytest.raises(ValueError, match='No checkpoint in .*empty'):
+    _train(tmp_path / 'run', 1, init_checkpoint=str(tmp_path / 'empty'))
+  with pytest.raises(ValueError, match='missing/ckpt-3 is neither'):
+    _train(tmp_path / 'run2', 1, init_checkpoint=str(tmp_path / 'missing' / 'ckpt-3'))
+
+
+def test_a_crash_before_the_first_step_writes_no_checkpoint(tmp_path):
+  def broken_dataset():
+    def fail(element):
+      tf.debugging.assert_equal(0, 1, message='corrupt input')
+      return element
+    return training_helpers.dataset_fn(height=16, width=32, shift=2)().map(fail)
+
+  config = config_lib.TrainConfig(model_dir=str(tmp_path), num_steps=3)
+  with pytest.raises(tf.errors.InvalidArgumentError, match='corrupt input'):
+    loop.train(config, training_helpers.MINI, objective.LossConfig(), broken_dataset)
+  assert tf.train.latest_checkpoint(str(tmp_path)) is None
+
+
+def test_config_validation_names_the_field():
+  with pytest.raises(ValueError, match='TrainConfig.num_steps'):
+    config_lib.TrainConfig(model_dir='x', num_steps=0)
+  with pytest.raises(ValueError, match='TrainConfig.mode'):
+    config_lib.TrainConfig(model_dir='x', mode='stereo')

@@ -1,0 +1,113 @@
+"""Tests for mixstereo_tf.training.refiner_data: examples with the classical result, shards."""
+
+import dataclasses
+import os
+
+import numpy as np
+import pytest
+
+from mixstereo_tf.classical import anaglyph
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.data import synthetic
+from mixstereo_tf.models import refiner
+from mixstereo_tf.training import refiner_data
+
+SMALL = refiner_data.ExampleConfig(mixtures='gray,anaglyph', height=48, width=64,
+                                   max_disparity=16, window_probability=1.0, degrade=False)
+
+
+@pytest.fixture(scope='module')
+def textures():
+  return refiner_data._textures(SMALL)  # pylint: disable=protected-access
+
+
+def _assert_undegraded_pair(example):
+  """The left view is the right one sampled at x - d (the scene's own convention), and
+  the mixture is the encoding of the views."""
+  height, width = example['left'].shape[:2]
+  rows, cols = np.mgrid[0:height, 0:width]
+  source = np.round(cols - example['disparity_left']).astype(int)
+  inside = (source >= 0) & (source < width)
+  diff = np.abs(example['left'][inside].astype(float) -
+                example['right'][rows[inside], source[inside]].astype(float))
+  assert np.median(diff) < 8
+  expected = mixtures.mix(example['name'], example['left'] / 127.5 - 1,
+                          example['right'] / 127.5 - 1).numpy()
+  assert np.abs((expected + 1) * 127.5 - example['mixture']).max() <= 1
+
+
+def test_window_aligned_example_matches_its_ground_truth(textures):
+  example = refiner_data.make_example(5, SMALL, textures)
+  assert example['name'] in ('gray', 'anaglyph')
+  assert example['mixture'].shape == (48, 64, 3) and example['mixture'].dtype == np.uint8
+  d = example['disparity_left']
+  assert d.min() < 0 < d.max()  # Window-aligned: the disparities straddle zero.
+  _assert_undegraded_pair(example)
+  # The classical result is what baselines gives on the mixture.
+  again = anaglyph.unmix_anaglyph(example['mixture'], example['name'], None,
+                                  refiner_data.ONE_STRIP)
+  np.testing.assert_array_equal(again['disparity_left'], example['classical_disparity_left'])
+
+
+def test_shards_are_built_once_and_loaded_in_order(tmp_path, textures):
+  del textures
+  folder = str(tmp_path)
+  path = refiner_data.build_shard(folder, 1, 2, SMALL)
+  stamp = os.path.getmtime(path)
+  assert refiner_data.build_shard(folder, 1, 2, SMALL) == path
+  assert os.path.getmtime(path) == stamp
+  with pytest.raises(ValueError, match='Missing refiner example shards'):
+    refiner_data.load_shards(folder, 2)
+  refiner_data.build_shard(folder, 0, 2, SMALL)
+  data = refiner_data.load_shards(folder, 2)
+  assert data['mixture'].shape == (4, 48, 64, 3)
+  first = refiner_data.make_example(2, SMALL, synthetic.load_textures('train'))
+  np.testing.assert_array_equal(data['left'][2], first['left'])
+  inputs = refiner.network_input(data['mixture'], data['classical_left'],
+                                      data['classical_right'],
+                                      data['classical_disparity_left'],
+                                      data['classical_disparity_right'])
+  assert inputs.shape == (4, 48, 64, 11) and inputs.dtype == np.float32
+  np.testing.assert_array_equal(inputs[..., 9], data['classical_disparity_left'])
+
+
+def test_clean_share_keeps_the_encoding_and_draws_nothing_else(textures):
+  degraded = dataclasses.replace(SMALL, degrade=True)
+  clean = dataclasses.replace(degraded, clean_probability=1.0)
+  plain, kept = (refiner_data.make_example(5, c, textures) for c in (degraded, clean))
+  np.testing.assert_array_equal(plain['left'], kept['left'])  # Same scene and shift.
+  assert plain['name'] == kept['name']
+  assert kept['clean'] and not plain['clean']
+  expected = mixtures.mix(kept['name'], kept['left'] / 127.5 - 1,
+                          kept['right'] / 127.5 - 1).numpy()
+  assert np.abs((expected + 1) * 127.5 - kept['mixture']).max() <= 1
+  assert np.abs((expected + 1) * 127.5 - plain['mixture']).mean() > 2  # Degraded.
+
+
+def test_large_example_is_a_window_of_a_scene_twice_as_large(textures):
+  large = dataclasses.replace(SMALL, large_probability=1.0)
+  example = refiner_data.make_example(5, large, textures)
+  assert example['mixture'].shape == (48, 64, 3)
+  assert example['classical_disparity_left'].shape == (48, 64)
+  # The same draws as the small examples, on scenes twice as deep: the encodings are
+  # kept and the windows' disparity spreads are about twice the small scenes'.
+  drawn = {config: [refiner_data.make_example(i, config, textures) for i in range(4)]
+           for config in (SMALL, large)}
+  assert [e['name'] for e in drawn[SMALL]] == [e['name'] for e in drawn[large]]
+  spread = {config: np.mean([np.ptp(e['disparity_left']) for e in examples])
+            for config, examples in drawn.items()}
+  assert spread[large] > 1.5 * spread[SMALL]
+  _assert_undegraded_pair(example)  # The window keeps the pair's geometry.
+
+
+def test_config_checks():
+  with pytest.raises(ValueError, match='window_probability'):
+    refiner_data.ExampleConfig(window_probability=2.0)
+  with pytest.raises(ValueError, match='clean_probability'):
+    refiner_data.ExampleConfig(clean_probability=-0.1)
+  with pytest.raises(ValueError, match='large_probability'):
+    refiner_data.ExampleConfig(large_probability=1.5)
+  with pytest.raises(ValueError, match='large_factor'):
+    refiner_data.ExampleConfig(large_factor=0)
+  with pytest.raises(ValueError):
+    refiner_data.ExampleConfig(mixtures='nothing')

@@ -1,0 +1,160 @@
+"""Tests of detection: anaglyphs made by FFmpeg's stereo3d filter (imageio-ffmpeg's binary,
+where installed) and by our operators from a synthetic stereo pair with known disparities."""
+
+import subprocess
+
+import cv2
+import numpy as np
+import pytest
+
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.data import sample
+from mixstereo_tf.unmixing import detection
+
+# FFmpeg stereo3d output modes (from a left-first side-by-side input) -> our encodings.
+FFMPEG_MODES = {'arcg': 'gray', 'arcc': 'anaglyph', 'arch': 'half_color',
+                'arcd': 'dubois_ffmpeg', 'agmg': 'green_magenta_gray',
+                'agmc': 'green_magenta', 'agmh': 'green_magenta_half',
+                'agmd': 'green_magenta_dubois', 'aybg': 'amber_blue_gray', 'aybc': 'amber_blue',
+                'aybh': 'amber_blue_half', 'aybd': 'amber_blue_dubois'}
+
+
+def _pair(height=150, width=240):
+  """A textured colour pair: luminance detail times smooth colours (channels correlated, as
+  in photographs); disparities 4 px (background), 14 px (a box), 9 px (a disc)."""
+  rng = np.random.default_rng(3)
+  def smooth(cells, channels):
+    noise = rng.uniform(0, 1, (height // cells + 1, (width + 40) // cells + 1, channels))
+    return cv2.resize(noise.astype(np.float32), (width + 40, height),
+                      interpolation=cv2.INTER_CUBIC).reshape(height, width + 40, channels)
+  texture = np.clip((0.3 + 0.7 * smooth(3, 1)) * (0.2 + 0.8 * smooth(40, 3)), 0, 1)
+  disparity = np.full((height, width), 4, int)
+  disparity[30:100, 40:120] = 14
+  yy, xx = np.mgrid[:height, :width]
+  disparity[(yy - 100) ** 2 + (xx - 180) ** 2 < 30 ** 2] = 9
+  left = texture[:, 20:20 + width]
+  right = texture[yy, 20 + xx + disparity]  # Right pixel x shows the left pixel x + d.
+  return image_range.unit_to_u8(left), image_range.unit_to_u8(right), disparity
+
+
+def _ours(name, left, right):
+  mixed = mixtures.mix(name, image_range.u8_to_signed(left), image_range.u8_to_signed(right))
+  return image_range.signed_to_u8(mixed.numpy())
+
+
+def _ffmpeg(tmp_path, left, right, mode):
+  imageio_ffmpeg = pytest.importorskip('imageio_ffmpeg')
+  sbs = tmp_path / 'sbs.png'
+  out = tmp_path / f'{mode}.png'
+  cv2.imwrite(str(sbs), cv2.cvtColor(np.concatenate([left, right], 1), cv2.COLOR_RGB2BGR))
+  subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), '-y', '-loglevel', 'error', '-i', str(sbs),
+                  '-vf', f'stereo3d=sbsl:{mode}', str(out)], check=True)
+  return cv2.cvtColor(cv2.imread(str(out)), cv2.COLOR_BGR2RGB)
+
+
+@pytest.mark.parametrize('name', mixtures.ANAGLYPH_NAMES)
+def test_every_encoding_of_our_operators(name):
+  left, right, _ = _pair()
+  found = detection.detect(_ours(name, left, right))
+  # The two red-cyan Dubois matrices differ by < 0.03: both are reported as dubois_ffmpeg.
+  assert found.name == ('dubois_ffmpeg' if name == 'dubois' else name), found
+  assert found.confidence > 0.6, found
+
+
+@pytest.mark.parametrize('name, also_fits', [
+    ('half_color', 'anaglyph'), ('optimized', 'anaglyph'),
+    ('green_magenta_half', 'green_magenta'), ('amber_blue_half', 'amber_blue'),
+    ('anaglyph', None), ('gray', None), ('dubois_ffmpeg', None)])
+def test_a_smaller_set_names_the_colour_encoding_that_fits_as_well(name, also_fits):
+  left, right, _ = _pair()
+  found = detection.detect(_ours(name, left, right))
+  assert found.name == name and found.also_fits == also_fits, found
+
+
+@pytest.mark.parametrize('mode', sorted(FFMPEG_MODES))
+def test_ffmpeg_stereo3d_anaglyphs(tmp_path, mode):
+  left, right, _ = _pair()
+  found = detection.detect(_ffmpeg(tmp_path, left, right, mode))
+  assert found.name == FFMPEG_MODES[mode], found
+  dubois = FFMPEG_MODES[mode].endswith('dubois') or FFMPEG_MODES[mode] == 'dubois_ffmpeg'
+  ghost = next(v for k, v in found.scores.items() if k.startswith('ghost:'))
+  # Dubois leaks the odd eye into the other channels as its matrices say; the others not.
+  assert (ghost > 0.6) if dubois else (abs(ghost) < 0.15), found.scores
+
+
+def test_needed_share_follows_the_sets_volume():
+  config = detection.DetectConfig()
+  # A thinner set is likelier per sample, so it may leave more samples outside.
+  red_cyan, green_magenta = (detection.needed_share(n, config)
+                             for n in ('half_color', 'green_magenta_half'))
+  assert 0.9 < red_cyan < green_magenta < 1.0
+  gain = -np.log(0.299)
+  assert red_cyan == pytest.approx(1 - gain / (gain + config.outside_penalty), rel=1e-2)
+  assert detection.needed_share('gray', config) == config.singular_share
+
+
+@pytest.mark.parametrize('kind', ['left view', 'diplopia', 'gray photo'])
+def test_images_that_are_not_anaglyphs_are_refused(kind):
+  left, right, _ = _pair()
+  image = {'left view': left,
+           'diplopia': ((left.astype(np.float32) + right) / 2).round().astype(np.uint8),
+           'gray photo': np.repeat(left.mean(-1, keepdims=True), 3, -1).astype(np.uint8)}[kind]
+  found = detection.detect(image)
+  assert found.name is None and found.confidence > 0.5, found
+  assert 'displaced' in found.reason
+
+
+def test_colour_red_cyan_of_a_saturated_scene_is_not_half_colour():
+  """Half-colour needs R - 0.587 G - 0.114 B in [0, 0.299] (R = luma of the left view): a
+  saturated colour anaglyph breaks that, so the colour encoding wins there."""
+  left, right, _ = _pair()
+  found = detection.detect(_ours('anaglyph', left, right))
+  assert found.name == 'anaglyph', found
+
+
+@pytest.mark.parametrize('half, colour', [('half_color', 'anaglyph'),
+                                           ('green_magenta_half', 'green_magenta'),
+                                           ('amber_blue_half', 'amber_blue')])
+def test_a_half_colour_anaglyph_is_the_colour_anaglyph_of_a_scene_whose_odd_channel_is_luma(
+    half, colour):
+  """Why no detector can always tell them apart: the half-colour anaglyph of a scene is,
+  pixel for pixel, the colour anaglyph of the scene whose odd channel (R for red-cyan) is
+  replaced by luma in both views. Only the colours of that second scene, less saturated,
+  can make one reading likelier, so a colour anaglyph of a scene without saturated colours
+  is read as half-colour (`Detection.also_fits` names the colour encoding)."""
+  left, right, _ = _pair()
+  odd = detection.FAMILY_ODD_CHANNEL[mixtures.get_mixture(half).family]
+  def odd_is_luma(view):
+    view = view.astype(np.float64)
+    view[..., odd] = view @ np.asarray(mixtures.LUMA)
+    return np.clip(np.round(view), 0, 255).astype(np.uint8)
+  made_half = _ours(half, left, right)
+  made_colour = _ours(colour, odd_is_luma(left), odd_is_luma(right))
+  assert np.abs(made_half.astype(int) - made_colour).max() <= 1
+  found = detection.detect(made_colour)
+  assert found.name == half and found.also_fits == colour, found
+
+
+def test_a_blue_scene_leaks_nothing_into_its_colour_anaglyph():
+  """A realistic training scene, mostly dark blue with smooth textures: its red channel,
+  seen a few pixels apart, repeats itself, so without the collinearity filter the leak
+  regression read 1.5x the Dubois leak in its colour anaglyph and chose Dubois."""
+  record = sample.sample_records('train', max_disparity=64, num_scenes=10, height=240,
+                                 width=480, realistic=True)[9]
+  scene = sample.load_virtual(record)
+  # Window-aligned by 16 px, as the scene was measured.
+  left, right = scene['left'][:, 16:], np.roll(scene['right'], 16, axis=1)[:, 16:]
+  found = {name: detection.detect(_ours(name, left, right)) for name in
+           ('anaglyph', 'half_color', 'dubois_ffmpeg')}
+  for name, result in found.items():
+    assert result.name == name, result
+  assert abs(found['anaglyph'].scores['ghost:dubois_ffmpeg']) < 0.15, found['anaglyph']
+  assert found['dubois_ffmpeg'].scores['ghost:dubois_ffmpeg'] > 0.6, found['dubois_ffmpeg']
+
+
+def test_small_or_malformed_images_are_errors():
+  with pytest.raises(ValueError, match='RGB'):
+    detection.detect(np.zeros((40, 40), np.uint8))
+  with pytest.raises(ValueError, match='16x16'):
+    detection.detect(np.zeros((8, 8, 3), np.uint8))

@@ -1,0 +1,153 @@
+"""Tests for mixstereo_tf.unmixing.predictors: padding, the Unmixer and its registry of methods."""
+
+import os
+
+import numpy as np
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf import models
+from mixstereo_tf.artifacts import graphs
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.data import pipeline
+from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import predictors
+
+# Tiny architecture: forward passes take milliseconds; size multiple 32.
+TINY = models.ModelConfig(separation_widths=(4, 4, 4, 4, 4, 4), stereo_features=2,
+                          stereo_residual_blocks=0, stereo_3d_widths=(2,), max_disparity=4)
+
+
+def make_run_dir(path, mixture='anaglyph', seed=1):
+  """A run directory as training writes it: config.json and a model+optimizer checkpoint."""
+  tf.keras.utils.set_random_seed(seed)
+  model = models.build_model(TINY)
+  os.makedirs(path, exist_ok=True)
+  with open(os.path.join(path, 'config.json'), 'w') as f:
+    f.write(runs.to_json(
+        model=TINY, pipeline=pipeline.PipelineConfig(mixture=mixture, crop_height=64,
+                                                     crop_width=128)))
+  checkpoint = tf.train.Checkpoint(model=model, optimizer=tf.keras.optimizers.RMSprop(1e-4))
+  prefix = tf.train.CheckpointManager(checkpoint, path, max_to_keep=2).save(checkpoint_number=7)
+  return model, prefix
+
+
+@pytest.fixture(scope='module')
+def run(tmp_path_factory):
+  path = str(tmp_path_factory.mktemp('run'))
+  model, prefix = make_run_dir(path)
+  return path, model, prefix
+
+
+def test_pad_to_multiple_replicates_edges_and_crop_inverts():
+  image = np.arange(2 * 3 * 1).reshape(2, 3, 1)
+  padded = graphs.pad_to_multiple(image, 4).numpy()
+  expected = np.array([[0, 1, 2, 2], [3, 4, 5, 5], [3, 4, 5, 5], [3, 4, 5, 5]])
+  np.testing.assert_array_equal(padded[..., 0], expected)
+  np.testing.assert_array_equal(graphs.crop_to(padded, 2, 3), image)
+  batched = graphs.pad_to_multiple(np.zeros((2, 32, 33, 3), np.uint8), 32)
+  assert batched.shape == (2, 32, 64, 3) and batched.dtype == tf.uint8
+  with pytest.raises(ValueError):
+    graphs.pad_to_multiple(image, 0)
+
+
+def test_unmixer_odd_size_equals_padded_model_output(run):
+  path, model, _ = run
+  # The network's own range (named, or given as [0, D - 1]): no shift, no scaling.
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      checkpoint=path, restore_colour=False, disparity_range=disparity_range.NETWORK))
+  explicit = predictors.build_unmixer(predictors.PredictorConfig(
+      checkpoint=path, restore_colour=False, disparity_range=(0, TINY.max_disparity - 1)))
+  assert (unmixer.method, unmixer.mixture, unmixer.max_disparity) == ('model', 'anaglyph', 4)
+  image = np.random.RandomState(0).randint(0, 256, (97, 131, 3)).astype(np.uint8)
+  out = unmixer(image)
+  np.testing.assert_array_equal(out['disparity_left'], explicit(image)['disparity_left'])
+  assert out['info']['shift'] == 0 and out['info']['scale'] == 1.0
+  assert out['left'].shape == out['right'].shape == (97, 131, 3)
+  assert out['left'].dtype == np.uint8
+  assert out['disparity_left'].shape == out['disparity_right'].shape == (97, 131)
+  # Known answer: the model on the edge-padded 128 x 160 image, cropped back.
+  padded = np.pad(image, ((0, 31), (0, 29), (0, 0)), mode='edge')
+  direct = model(tf.constant(padded[None], tf.float32) / 127.5 - 1.0)
+  np.testing.assert_allclose(out['disparity_left'], direct['disparity_left'][0, :97, :131, 0],
+                             atol=1e-4)
+  np.testing.assert_allclose(out['disparity_right'],
+                             direct['disparity_right'][0, :97, :131, 0], atol=1e-4)
+  left = np.clip(np.round((direct['left'][0, :97, :131].numpy() + 1) * 127.5), 0, 255)
+  assert np.abs(out['left'].astype(float) - left).max() <= 1
+  # Soft-argmin over levels 0 .. D - 1.
+  assert 0 <= out['disparity_left'].min() <= out['disparity_left'].max() <= TINY.max_disparity - 1
+  # A gray image is replicated to RGB.
+  gray = unmixer(image[:, :, 0])
+  np.testing.assert_array_equal(gray['left'], unmixer(np.repeat(image[:, :, :1], 3, 2))['left'])
+
+
+def test_unmixer_restores_the_anaglyph_channels(run, tmp_path):
+  path, _, _ = run
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(checkpoint=path))
+  assert unmixer.restore_colour  # Default on for channel anaglyphs.
+  image = np.random.RandomState(1).randint(0, 256, (40, 50, 3)).astype(np.uint8)
+  out = unmixer(image)
+  raw = predictors.build_unmixer(predictors.PredictorConfig(checkpoint=path,
+                                                          restore_colour=False))(image)
+  # Red-cyan: the left view's red and the right view's green and blue are the mixture's.
+  np.testing.assert_array_equal(out['left'][..., 0], image[..., 0])
+  np.testing.assert_array_equal(out['right'][..., 1:], image[..., 1:])
+  assert not np.array_equal(raw['left'][..., 0], image[..., 0])
+  np.testing.assert_array_equal(out['disparity_left'], raw['disparity_left'])
+  # Diplopia keeps no channel: restoration is off by default.
+  diplopia_run = str(tmp_path / 'diplopia')
+  make_run_dir(diplopia_run, mixture='diplopia')
+  assert not predictors.build_unmixer(
+      predictors.PredictorConfig(checkpoint=diplopia_run)).restore_colour
+  with pytest.raises(ValueError, match='uint8'):
+    unmixer(image.astype(np.float32))
+
+
+def test_build_unmixer_checks_its_arguments(tmp_path):
+  build = lambda **kwargs: predictors.build_unmixer(predictors.PredictorConfig(**kwargs))
+  with pytest.raises(ValueError, match='exactly one'):
+    build(saved_model='a', checkpoint='b')
+  with pytest.raises(ValueError, match='takes neither'):
+    build(method='classical', saved_model='a', mixture='anaglyph')
+  with pytest.raises(ValueError, match='needs PredictorConfig.mixture'):
+    build(method='classical')
+  with pytest.raises(ValueError, match='monocular'):
+    build(method='classical', mixture='monocular')
+  with pytest.raises(ValueError, match='anaglyph'):
+    build(checkpoint='x', mixture='no_such_mixture')
+  with pytest.raises(ValueError, match="method 'model' only"):
+    build(method='classical', mixture='anaglyph', restore_colour=True)
+  with pytest.raises(ValueError, match='Unknown PredictorConfig.method'):
+    build(method='magic')
+  with pytest.raises(ValueError, match='needs PredictorConfig.checkpoint'):
+    build(method='oracle', saved_model='x')
+  run_dir = str(tmp_path / 'run')
+  make_run_dir(run_dir, mixture='diplopia')
+  with pytest.raises(ValueError, match="trained on 'diplopia'"):
+    build(checkpoint=run_dir, mixture='anaglyph')
+  unmixer = build(checkpoint=run_dir)
+  assert unmixer.mixture == 'diplopia' and unmixer.max_disparity == TINY.max_disparity
+  classical = build(method='classical', mixture='diplopia')
+  assert (classical.method, classical.mixture, classical.takes_pair) == (
+      'classical', 'diplopia', False)
+  oracle = build(method='oracle', checkpoint=run_dir, mixture='anaglyph')
+  assert oracle.takes_pair and oracle.mixture == 'anaglyph'
+
+
+def test_pair_function_pads_runs_the_stereo_module_and_crops():
+  tf.keras.utils.set_random_seed(0)
+  config = models.ModelConfig(separation_widths=(4, 4), stereo_features=4,
+                              stereo_residual_blocks=1, stereo_3d_widths=(4,),
+                              max_disparity=8)
+  model = models.build_model(config)
+  predict = graphs.pair_function(model)
+  rng = np.random.RandomState(1)
+  left, right = (rng.randint(0, 256, (32, 64, 3)).astype(np.uint8) for _ in range(2))
+  out = predict(left, right)
+  direct = model.compute_disparity(tf.constant(left[None], tf.float32) / 127.5 - 1.0,
+                                   tf.constant(right[None], tf.float32) / 127.5 - 1.0)
+  np.testing.assert_allclose(out['disparity_left'], direct['disparity_left'][0, ..., 0],
+                             atol=1e-5)
+  cropped = predict(left[:30, :62], right[:30, :62])
+  assert cropped['disparity_left'].shape == cropped['disparity_right'].shape == (30, 62)

@@ -1,0 +1,70 @@
+"""Tests of unmix_image: encoding resolution (detection), ranges, and bad input."""
+
+from absl import logging
+import numpy as np
+import pytest
+
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.unmixing import steps
+from tests.unmixing import detection_test
+
+
+def _anaglyph(name='anaglyph'):
+  left, right, disparity = detection_test._pair()  # pylint: disable=protected-access
+  return detection_test._ours(name, left, right), disparity  # pylint: disable=protected-access
+
+
+def test_auto_takes_the_detected_encoding():
+  image, _ = _anaglyph('gray')
+  name, info = steps.resolve_mixture(image, 'auto', mixtures.ANAGLYPH_NAMES)
+  assert name == 'gray' and info['detected'] == 'gray' and info['confidence'] > 0.9
+
+
+def test_auto_on_a_half_colour_anaglyph_records_and_warns_that_colour_fits_too(monkeypatch):
+  warnings = []
+  monkeypatch.setattr(logging, 'warning', lambda msg, *args: warnings.append(msg % args))
+  name, info = steps.resolve_mixture(_anaglyph('half_color')[0], 'auto',
+                                           mixtures.ANAGLYPH_NAMES)
+  assert name == 'half_color' and info['also_fits'] == 'anaglyph'
+  assert len(warnings) == 1 and 'anaglyph fits it as well' in warnings[0]
+  warnings.clear()
+  _, info = steps.resolve_mixture(_anaglyph('anaglyph')[0], 'auto',
+                                        mixtures.ANAGLYPH_NAMES)
+  assert 'also_fits' not in info and not warnings
+
+
+def test_auto_refuses_a_plain_photo_with_a_clear_message():
+  left, _, _ = detection_test._pair()  # pylint: disable=protected-access
+  with pytest.raises(ValueError, match='does not look like an anaglyph.*name its mixture'):
+    steps.resolve_mixture(left, 'auto', mixtures.ANAGLYPH_NAMES)
+
+
+def test_a_wrong_explicit_mixture_warns_with_the_detected_one(monkeypatch):
+  warnings = []
+  monkeypatch.setattr(logging, 'warning', lambda msg, *args: warnings.append(msg % args))
+  image, _ = _anaglyph('gray')
+  name, _ = steps.resolve_mixture(image, 'anaglyph', mixtures.ANAGLYPH_NAMES)
+  assert name == 'anaglyph'  # The user's choice is kept...
+  assert len(warnings) == 1 and "'anaglyph' but looks like gray" in warnings[0]  # ...warned.
+  warnings.clear()
+  steps.resolve_mixture(image, 'gray', mixtures.ANAGLYPH_NAMES)
+  assert not warnings
+
+
+def test_classical_auto_recovers_signed_disparities():
+  """The pair's disparities are 4..14 px; window-shifted by 9 px they straddle zero."""
+  image, _ = _anaglyph()
+  shifted = np.concatenate([image[:, 9:, :1], image[:, :-9, 1:]], axis=-1)  # d - 9.
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='auto'))
+  out = unmixer(shifted)
+  low, high = out['info']['disparity_range']
+  assert low <= -5 and high >= 5 and out['info']['mixture'] == 'anaglyph'
+  d = out['disparity_left'][20:-20, 30:-30]
+  assert (d < -2).mean() > 0.2 and (d > 2).mean() > 0.2
+
+
+def test_a_range_with_min_not_below_max_is_refused():
+  with pytest.raises(ValueError, match='MIN < MAX'):
+    predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='anaglyph',
+                                                      disparity_range=(5, 5)))

@@ -1,0 +1,150 @@
+"""Tests for mixstereo_tf.video.streams: decoding, encoding, remuxing with the audio copied."""
+
+import fractions
+
+import av
+import numpy as np
+import pytest
+
+from mixstereo_tf.video import streams
+
+Fraction = fractions.Fraction
+# Lossless audio where the container takes it, AAC in MP4 (its decoded samples compare
+# exactly too when the packets are copied).
+AUDIO = {'.mp4': 'aac', '.mov': 'pcm_s16le', '.mkv': 'flac', '.avi': 'pcm_s16le'}
+
+
+def pattern(index, height=64, width=96):
+  """A moving colour pattern: frame `index` of a test clip, uint8 RGB."""
+  y, x = np.mgrid[:height, :width]
+  return np.stack([(x * 8 + index * 5) % 256, (y * 6 + index * 3) % 256,
+                   ((x + y) * 4) % 256], -1).astype(np.uint8)
+
+
+def make_video(path, frames, rate=Fraction(12), audio_rate=48000, rotation=0):
+  """Writes frames (uint8 RGB) with a 440 Hz sine as mono audio (codec from AUDIO) using
+  PyAV directly, independently of the writer under test. Returns the path."""
+  extension = str(path)[str(path).rfind('.'):]
+  with av.open(str(path), 'w') as out:
+    codec = 'mjpeg' if extension == '.avi' else 'libx264'
+    options = {'qmin': '1', 'qmax': '2'} if codec == 'mjpeg' else {'crf': '12'}
+    video = out.add_stream(codec, rate=rate, options=options)
+    video.height, video.width = frames[0].shape[:2]
+    video.pix_fmt = 'yuvj420p' if codec == 'mjpeg' else 'yuv420p'
+    if rotation:
+      video.set_display_rotation(rotation)
+    audio = out.add_stream(AUDIO[extension], rate=audio_rate, layout='mono')
+    for index, image in enumerate(frames):
+      frame = av.VideoFrame.from_ndarray(image, format='rgb24')
+      frame.pts = index
+      out.mux(video.encode(frame))
+    samples = int(audio_rate * len(frames) / rate)
+    sine = 0.3 * np.sin(2 * np.pi * 440 * np.arange(samples) / audio_rate)
+    planar = audio.codec_context.format.name == 'fltp'
+    block = audio.codec_context.frame_size or 1024
+    for start in range(0, samples, block):
+      chunk = sine[start:start + block]
+      chunk = chunk.astype(np.float32) if planar else (chunk * 32767).astype(np.int16)
+      frame = av.AudioFrame.from_ndarray(chunk[None], format='fltp' if planar else 's16',
+                                         layout='mono')
+      frame.sample_rate, frame.pts = audio_rate, start
+      out.mux(audio.encode(frame))
+    out.mux(video.encode(None))
+    out.mux(audio.encode(None))
+  return str(path)
+
+
+def audio_samples(path):
+  """All decoded samples of a file's first audio stream, [channels, samples]."""
+  with av.open(str(path)) as container:
+    return np.concatenate([f.to_ndarray() for f in container.decode(audio=0)], axis=1)
+
+
+def read_all(path):
+  """(VideoInfo, [Frame]) of a whole video."""
+  info, frames = streams.open_video(str(path))
+  return info, list(frames)
+
+
+@pytest.mark.parametrize('extension', ['.mp4', '.mkv', '.avi'])
+def test_parts_assembled_keep_rate_timestamps_and_audio(tmp_path, extension):
+  source = make_video(tmp_path / f'in{extension}', [pattern(i) for i in range(20)])
+  info, frames = read_all(source)
+  assert (info.width, info.height, info.frame_rate, info.audio_streams) == (96, 64, 12, 1)
+  assert info.frame_count in (20, None) and info.rotation == 0 and len(frames) == 20
+  # Decoded close to what was encoded (crf 12, or MJPEG), RGB order kept.
+  assert float(np.abs(frames[7].image.astype(int) - pattern(7)).mean()) < 6
+  # Two parts, each timed from 0 and shifted by its first frame's time.
+  parts = []
+  for first in (0, 8):
+    part = str(tmp_path / f'part{first}.mov')
+    with streams.VideoWriter(part, info.frame_rate, info.time_base,
+                              streams.encoder_for(source)) as writer:
+      for frame in frames[first:first + (8 if first == 0 else 12)]:
+        writer.write(frame.image, frame.time - frames[first].time)
+    parts.append(streams.Part(part, frames[first].time))
+  output = str(tmp_path / f'out{extension}')
+  streams.assemble(parts, output, info.frame_rate, info.time_base, audio_source=source)
+  out_info, out_frames = read_all(output)
+  assert out_info.frame_rate == info.frame_rate and len(out_frames) == 20
+  assert [f.time for f in out_frames] == [f.time for f in frames]
+  assert [f.time for f in frames[:3]] == [0, Fraction(1, 12), Fraction(1, 6)] or (
+      extension == '.mkv')  # Matroska counts milliseconds: 0, 83/1000, 167/1000.
+  # Re-encoded once more (4:2:0 blurs the pattern's colour stripes a little).
+  errors = [np.abs(a.image.astype(int) - b.image).mean() for a, b in zip(frames, out_frames)]
+  assert max(errors) < 5, errors
+  np.testing.assert_array_equal(audio_samples(output), audio_samples(source))
+  assert audio_samples(source).shape[1] >= 20 * 4000  # 48 kHz for 20 frames at 12 fps.
+
+
+def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
+  rate = Fraction(30000, 1001)
+  source = make_video(tmp_path / 'in.mp4', [pattern(i, 34, 48) for i in range(6)], rate,
+                      rotation=90)
+  info, frames = read_all(source)
+  assert info.frame_rate == rate and info.rotation == 90
+  part = str(tmp_path / 'part.mp4')
+  with streams.VideoWriter(part, rate, info.time_base) as writer:
+    for frame in frames:
+      odd = frame.image[:33, :47].copy()  # Odd size: padded by edge replication.
+      odd[32] = odd[:, 46] = 255
+      writer.write(odd, frame.time)
+  streams.assemble([streams.Part(part)], str(tmp_path / 'out.mp4'), rate, info.time_base,
+                    rotation=info.rotation)
+  out_info, out_frames = read_all(tmp_path / 'out.mp4')
+  assert out_info.frame_rate == rate and out_info.rotation == 90
+  assert (out_info.height, out_info.width, out_info.audio_streams) == (34, 48, 0)
+  assert [f.time for f in out_frames] == [Fraction(i * 1001, 30000) for i in range(6)]
+  assert out_frames[2].image[33].min() > 220 and out_frames[2].image[:, 47].min() > 220
+
+
+def test_writer_keeps_timestamps_increasing_and_one_size(tmp_path):
+  path = str(tmp_path / 'v.mkv')
+  with streams.VideoWriter(path, Fraction(10)) as writer:
+    writer.write(pattern(0), Fraction(0))
+    writer.write(pattern(1), Fraction(0))  # Same time: moved one tick on.
+    with pytest.raises(ValueError, match='differs'):
+      writer.write(pattern(2, 32, 32), Fraction(1, 5))
+  _, frames = read_all(path)
+  assert [f.time for f in frames] == [0, Fraction(1, 10)]
+
+
+def test_bad_files_are_named(tmp_path):
+  with pytest.raises(ValueError, match='missing.mp4'):
+    streams.open_video(str(tmp_path / 'missing.mp4'))
+  (tmp_path / 'garbage.mp4').write_bytes(b'not a video at all' * 50)
+  with pytest.raises(ValueError, match='garbage.mp4'):
+    streams.open_video(str(tmp_path / 'garbage.mp4'))
+  with av.open(str(tmp_path / 'sound.mkv'), 'w') as out:  # Audio only.
+    stream = out.add_stream('flac', rate=8000, layout='mono')
+    frame = av.AudioFrame.from_ndarray(np.zeros((1, 800), np.int16), format='s16',
+                                       layout='mono')
+    frame.sample_rate, frame.pts = 8000, 0
+    out.mux(stream.encode(frame))
+    out.mux(stream.encode(None))
+  with pytest.raises(ValueError, match='sound.mkv: no video stream'):
+    streams.open_video(str(tmp_path / 'sound.mkv'))
+  with pytest.raises(ValueError, match=r'clip\.flv'):
+    streams.VideoWriter(str(tmp_path / 'clip.flv'), Fraction(25))
+  with pytest.raises(ValueError, match='No video'):
+    streams.assemble([], str(tmp_path / 'out.mp4'), Fraction(25))

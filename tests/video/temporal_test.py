@@ -1,0 +1,154 @@
+"""Tests for temporal consistency: scene cuts, per-shot decisions, the prior (temporal)."""
+
+import numpy as np
+import pytest
+
+from mixstereo_tf import classical
+from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.data import synthetic
+from mixstereo_tf.unmixing import detection
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import temporal
+
+HEIGHT, WIDTH, PAN = 48, 80, 2
+
+
+def _anaglyph(left, right, name='anaglyph'):
+  mixed = mixtures.mix(name, image_range.u8_to_signed(left), image_range.u8_to_signed(right))
+  return image_range.signed_to_u8(mixed.numpy())
+
+
+def _shot(seed, frames, pan=PAN, noise=0.0):
+  """`frames` anaglyphs of a camera panning `pan` px per frame over procedural scene
+  `seed` (held-out textures), with Gaussian noise of `noise` levels per frame."""
+  config = synthetic.SceneConfig(max_disparity=12, height=HEIGHT,
+                                 width=WIDTH + pan * (frames - 1))
+  scene = synthetic.render_scene(seed, config, synthetic.load_textures('heldout'))
+  mixture = _anaglyph(scene['left'], scene['right'])
+  rng = np.random.RandomState(seed)
+  shot = []
+  for index in range(frames):
+    crop = mixture[:, pan * index:pan * index + WIDTH].astype(np.float32)
+    crop += rng.normal(0.0, noise, crop.shape) if noise else 0.0
+    shot.append(np.clip(np.round(crop), 0, 255).astype(np.uint8))
+  return shot
+
+
+@pytest.fixture(scope='module')
+def two_shots():
+  """12 frames: 7 of one scene, then a cut to 5 of another."""
+  return _shot(3, 7) + _shot(11, 5)
+
+
+def test_cut_found_exactly_at_the_planted_cut(two_shots):
+  assert temporal.find_cuts(two_shots) == [7]
+  state = temporal.VideoState()
+  for frame in two_shots:
+    state.begin(frame)
+  assert state.cuts == [7] and state.shot_starts == [0, 7]
+  # A forced cut (a segment start) starts a shot without being a scene cut.
+  state = temporal.VideoState()
+  for index, frame in enumerate(two_shots):
+    state.begin(frame, cut=index == 4)
+  assert state.cuts == [7] and state.shot_starts == [0, 4, 7]
+
+
+def test_histogram_distance_known_answers():
+  black = np.zeros((10, 20, 3), np.uint8)
+  white = np.full((10, 20, 3), 255, np.uint8)
+  half = np.concatenate([black[:, :10], white[:, 10:]], axis=1)
+  histograms = {k: temporal.colour_histograms(v) for k, v in
+                (('black', black), ('white', white), ('half', half))}
+  assert temporal.histogram_distance(histograms['black'], histograms['white']) == 1.0
+  assert temporal.histogram_distance(histograms['black'], histograms['half']) == 0.5
+  assert temporal.histogram_distance(histograms['half'], histograms['half']) == 0.0
+  # Moving the content (a pan, a flip) changes nothing.
+  assert temporal.histogram_distance(histograms['half'],
+                                     temporal.colour_histograms(half[:, ::-1])) == 0.0
+
+
+def _counting(monkeypatch, module, name):
+  """Replaces module.name by a wrapper counting its calls; returns the call list."""
+  calls, original = [], getattr(module, name)
+
+  def wrapper(*args, **kwargs):
+    calls.append((args, kwargs))
+    return original(*args, **kwargs)
+  monkeypatch.setattr(module, name, wrapper)
+  return calls
+
+
+def _run(frames, config=temporal.TemporalConfig(), mixture='anaglyph', search=None):
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture=mixture, disparity_range=search))
+  state, outputs = temporal.VideoState(config), []
+  for frame in frames:
+    hint = state.begin(frame)
+    outputs.append(unmixer(frame, hint=hint))
+    state.end(outputs[-1])
+  return outputs
+
+
+def test_encoding_and_range_decided_once_per_shot(two_shots, monkeypatch):
+  monkeypatch.setattr(detection, 'detect', lambda image: detection.Detection(
+      'anaglyph', 0.97, 'stub', {}))
+  detected = _counting(monkeypatch, detection, 'detect')
+  estimated = _counting(monkeypatch, matcher, 'estimate_range')
+  outputs = _run(two_shots, mixture='auto')
+  assert len(detected) == 2 and len(estimated) == 2
+  assert [o['info']['mixture'] for o in outputs] == ['anaglyph'] * 12
+  assert all(o['info']['detected'] == 'anaglyph' for o in outputs)
+  ranges = [tuple(o['info']['disparity_range']) for o in outputs]
+  assert len(set(ranges[:7])) == 1 and len(set(ranges[7:])) == 1
+  # Without temporal consistency every frame is detected and estimated alone.
+  del detected[:], estimated[:]
+  _run(two_shots, temporal.TemporalConfig(enabled=False), mixture='auto')
+  assert len(detected) == 12 and len(estimated) == 12
+
+
+def test_prior_is_the_previous_disparity_and_none_after_a_cut(two_shots, monkeypatch):
+  calls = _counting(monkeypatch, baselines, 'unmix_classical')
+  outputs = _run(two_shots, search=(0, 12))
+  priors = [kwargs['prior'] for _, kwargs in calls]
+  assert priors[0] is None and priors[7] is None
+  for index in list(range(1, 7)) + list(range(8, 12)):
+    previous = outputs[index - 1]
+    # NaN (search everything) where the previous match failed the left-right check.
+    np.testing.assert_array_equal(priors[index], np.where(
+        previous['consistent_left'], previous['disparity_left'], np.nan))
+  assert any(np.isnan(prior).any() for prior in priors[1:7])
+  assert [o['info']['prior'] for o in outputs] == [i not in (0, 7) for i in range(12)]
+  # A shot's first frame (only) gets the coarse-to-fine threshold of its full search.
+  cells = [kwargs['full_search_cells'] for _, kwargs in calls]
+  first = temporal.TemporalConfig().first_frame_cells
+  assert cells == [first if i in (0, 7) else None for i in range(12)]
+  # use_prior off: the shot's decisions stay, no prior is passed.
+  del calls[:]
+  _run(two_shots, temporal.TemporalConfig(use_prior=False), search=(0, 12))
+  assert all(kwargs['prior'] is None for _, kwargs in calls)
+
+
+def test_a_frame_without_a_consistency_mask_hands_on_its_whole_disparity():
+  state = temporal.VideoState()
+  frame = np.zeros((8, 8, 3), np.uint8)
+  state.begin(frame)
+  disparity = np.arange(64, dtype=np.float32).reshape(8, 8)
+  state.end({'disparity_left': disparity})
+  np.testing.assert_array_equal(state.begin(frame).prior, disparity)
+  consistent = disparity % 3 > 0
+  state.end({'disparity_left': disparity, 'consistent_left': consistent})
+  prior = state.begin(frame).prior
+  np.testing.assert_array_equal(np.isnan(prior), ~consistent)
+  np.testing.assert_array_equal(prior[consistent], disparity[consistent])
+
+
+def test_prior_lowers_flicker_on_a_static_noisy_clip():
+  frames = _shot(5, 8, pan=0, noise=3.0)
+  flicker = {}
+  for use_prior in (False, True):
+    disparities = [o['disparity_left'] for o in _run(
+        frames, temporal.TemporalConfig(use_prior=use_prior), search=(0, 12))]
+    flicker[use_prior] = float(np.mean(np.abs(np.diff(disparities, axis=0))))
+  assert flicker[True] < 0.7 * flicker[False], flicker
