@@ -14,7 +14,7 @@ search is one window for all pixels; windows per pixel (coarse-to-fine, a tempor
 cost work and memory in proportion to the sum of the widths. The recursion maps a
 neighbour's window onto the current one; disparities outside the neighbour's window cost
 +inf there. `parallel_sgm` runs `sgm_strip` on horizontal strips in threads (the kernels
-release the GIL).
+release the GIL); the codes and the cost rows come from `census_costs`.
 
 Compiled kernels are cached on disk (`cache=True`: `__pycache__` beside this file, or
 numba's user-wide cache directory where that is not writable; NUMBA_CACHE_DIR overrides
@@ -23,97 +23,13 @@ both), so only the first process after an install or an edit compiles them.
 
 import numba
 import numpy as np
-from numba.core import types
-from numba.extending import intrinsic
+
+from mixstereo_tf.classical import census_costs
 
 _BIG = np.int32(30000)  # Above any path cost; _BIG + P2 still fits the int32 arithmetic.
 _NONE = np.int64(2 ** 63 - 1)  # No candidate yet (right winners).
-# Helpers run once per pixel and path and only index arrays (never allocate or slice), so
-# they are compiled without numba's reference counting (`_nrt=False`): with it, each call
-# paid ~50 ns of atomic counts on its array arguments, more than the recursion on narrow
-# windows (1280x720, 16 disparities: 463 -> 254 ms). The entry points allocate, release
-# the GIL and are cached on disk. error_model: no ZeroDivisionError checks in the loops.
-_INNER = {'error_model': 'numpy', '_nrt': False}
-_JIT = dict(error_model='numpy', nogil=True, cache=True)
-
-
-@intrinsic
-def _popcount(typingctx, value):  # pylint: disable=unused-argument
-  """Bits set in a uint64 (LLVM's ctpop: one instruction where the CPU has it)."""
-  def codegen(context, builder, signature, args):  # pylint: disable=unused-argument
-    return builder.ctpop(args[0])
-  return types.uint64(types.uint64), codegen
-
-
-@numba.njit(**_JIT)
-def census_rows(padded, height, width, out):
-  """Census codes of a reflect-padded float32 block, as `sgm.census_transform`.
-
-  out[y, x] (uint64 [rows, W]) gets bit k set where the k-th neighbour of padded[y + ry,
-  x + rx] in its height x width window (row-major, centre skipped) is darker.
-  """
-  rows, w = out.shape
-  ry, rx = height // 2, width // 2
-  code = np.empty(w, np.uint64)
-  for y in range(rows):
-    code[:] = 0
-    centre = padded[y + ry, rx:rx + w]
-    for dy in range(height):
-      for dx in range(width):
-        if dy == ry and dx == rx:
-          continue
-        row = padded[y + dy, dx:dx + w]
-        for x in range(w):
-          code[x] = (code[x] << np.uint64(1)) | np.uint64(row[x] < centre[x])
-    out[y] = code
-
-
-@numba.njit(**_INNER)
-def _cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
-  """out[x, i] (uint8 [W, >= widths]) = mean Hamming cost of left (y, x) against right
-  (y, x - lo - i). The right codes are reversed (rev[b, k] = cr[b, y, W-1-k]) so the loop
-  over i reads consecutive words and vectorises; 1x1, 1x2 and 2x1 channel pairs (plain and
-  colour anaglyphs) have their own loops."""
-  kl, _, w = cl.shape
-  kr = cr.shape[0]
-  pairs = kl * kr
-  half = np.uint32(pairs // 2)
-  one = np.uint32(1)
-  for b in range(kr):
-    for k in range(w):
-      rev[b, k] = cr[b, y, w - 1 - k]
-  for x in range(w):
-    d0, nd = lo[y, x], nds[y, x]
-    ia = min(nd, max(0, x - d0 - w + 1))  # i < ia: the match is right of the image.
-    ib = max(ia, min(nd, x - d0 + 1))  # i >= ib: the match is left of the image.
-    k0 = w - 1 - x + d0  # Window position i reads rev[., k0 + i].
-    for i in range(ia):
-      out[x, i] = oob
-    for i in range(ib, nd):
-      out[x, i] = oob
-    ca = cl[0, y, x]
-    if pairs == 1:
-      for i in range(ia, ib):
-        out[x, i] = np.uint8(_popcount(ca ^ rev[0, k0 + i]))
-    elif kl == 1 and kr == 2:
-      for i in range(ia, ib):
-        out[x, i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k0 + i])) +
-                              np.uint32(_popcount(ca ^ rev[1, k0 + i])) + one) >> one)
-    elif kl == 2 and kr == 1:
-      cb = cl[1, y, x]
-      for i in range(ia, ib):
-        out[x, i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k0 + i])) +
-                              np.uint32(_popcount(cb ^ rev[0, k0 + i])) + one) >> one)
-    else:
-      for i in range(ia, ib):
-        acc[i] = 0
-      for a in range(kl):
-        ca = cl[a, y, x]
-        for b in range(kr):
-          for i in range(ia, ib):
-            acc[i] += np.uint32(_popcount(ca ^ rev[b, k0 + i]))
-      for i in range(ia, ib):
-        out[x, i] = np.uint8((acc[i] + half) // np.uint32(pairs))
+_INNER = census_costs.INNER
+_JIT = census_costs.JIT
 
 
 @numba.njit(**_INNER)
@@ -224,6 +140,64 @@ def _winners(s, offsets, lo, nds, y, dl, dr, best):
 
 
 @numba.njit(**_JIT)
+def _window_offsets(nds, y0, n, w):
+  """(offsets, widest window) of rows [y0, y0 + n): pixel (y0 + k, x) at offsets[k * w + x]."""
+  offsets = np.zeros(n * w + 1, np.int64)
+  nd = 1
+  for k in range(n):
+    for x in range(w):
+      offsets[k * w + x + 1] = offsets[k * w + x] + nds[y0 + k, x]
+      nd = max(nd, nds[y0 + k, x])
+  return offsets, nd
+
+
+@numba.njit(**_JIT)
+def _down_row(crow, lo, nds, y, first, pen1, pen2, hor, vprev, vcur, vpm, t12, tmp, total,
+              base_offsets):
+  """Pass 1 on row y: left-to-right (hor), top-down (vcur), right-to-left (t12) paths;
+  their sum goes to total at base_offsets (this row's offsets)."""
+  w = lo.shape[1]
+  pm = _start(crow, 0, hor, 0, nds[y, 0])
+  for x in range(1, w):
+    pm = _step(hor, x - 1, pm, lo[y, x] - lo[y, x - 1], nds[y, x - 1], crow, x, hor, x,
+               nds[y, x], pen1, pen2, tmp)
+  for x in range(w):
+    if first:
+      vpm[x] = _start(crow, x, vcur, x, nds[y, x])
+    else:
+      vpm[x] = _step(vprev, x, vpm[x], lo[y, x] - lo[y - 1, x], nds[y - 1, x], crow, x,
+                     vcur, x, nds[y, x], pen1, pen2, tmp)
+  for x in range(w - 1, -1, -1):
+    now = x & 1  # This pixel's row of t12; pixel x + 1 used the other one.
+    if x == w - 1:
+      pm = _start(crow, x, t12, now, nds[y, x])
+    else:
+      pm = _step(t12, 1 - now, pm, lo[y, x] - lo[y, x + 1], nds[y, x + 1], crow, x, t12,
+                 now, nds[y, x], pen1, pen2, tmp)
+    base = base_offsets[x]
+    for i in range(nds[y, x]):
+      total[base + i] = np.uint16(t12[now, i + 1] + hor[x, i + 1] + vcur[x, i + 1])
+
+
+@numba.njit(**_JIT)
+def _up_row(crow, lo, nds, y, first, pen1, pen2, vprev, vcur, vpm, total, base_offsets, srow,
+            row_offsets, tmp):
+  """Pass 2 on row y: the bottom-up path; srow = total + L_up, laid out by row_offsets."""
+  w = lo.shape[1]
+  row_offsets[0] = 0
+  for x in range(w):
+    if first:
+      vpm[x] = _start(crow, x, vcur, x, nds[y, x])
+    else:
+      vpm[x] = _step(vprev, x, vpm[x], lo[y, x] - lo[y + 1, x], nds[y + 1, x], crow, x,
+                     vcur, x, nds[y, x], pen1, pen2, tmp)
+    base, row_base = base_offsets[x], row_offsets[x]
+    row_offsets[x + 1] = row_base + nds[y, x]
+    for i in range(nds[y, x]):
+      srow[row_base + i] = np.int32(total[base + i]) + vcur[x, i + 1]
+
+
+@numba.njit(**_JIT)
 def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
   """SGM over rows [y0, y1); writes the winners of rows [w0, w1) into dl, dr.
 
@@ -238,12 +212,7 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
   _, _, w = cl.shape
   n = y1 - y0
   pen1, pen2 = np.int32(p1), np.int32(p2)
-  offsets = np.zeros(n * w + 1, np.int64)  # Pixel (y0 + k, x) at offsets[k * w + x].
-  nd = 1
-  for k in range(n):
-    for x in range(w):
-      offsets[k * w + x + 1] = offsets[k * w + x] + nds[y0 + k, x]
-      nd = max(nd, nds[y0 + k, x])
+  offsets, nd = _window_offsets(nds, y0, n, w)
   total = np.empty(offsets[n * w], np.uint16)
   crow = np.empty((w, nd), np.uint8)
   rev = np.empty((cr.shape[0], w), np.uint64)
@@ -254,47 +223,19 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
   vpm = np.zeros(w, np.int32)
   t12 = np.full((2, nd + 2), _BIG, np.int32)
   tmp = np.full(nd + 2, _BIG, np.int32)
-  for k in range(n):  # Pass 1: left-to-right (hor), top-down (vcur), right-to-left (t12).
-    y = y0 + k
-    _cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
-    pm = _start(crow, 0, hor, 0, nds[y, 0])
-    for x in range(1, w):
-      pm = _step(hor, x - 1, pm, lo[y, x] - lo[y, x - 1], nds[y, x - 1], crow, x, hor, x,
-                 nds[y, x], pen1, pen2, tmp)
-    for x in range(w):
-      if k == 0:
-        vpm[x] = _start(crow, x, vcur, x, nds[y, x])
-      else:
-        vpm[x] = _step(vprev, x, vpm[x], lo[y, x] - lo[y - 1, x], nds[y - 1, x], crow, x,
-                       vcur, x, nds[y, x], pen1, pen2, tmp)
-    for x in range(w - 1, -1, -1):
-      now = x & 1  # This pixel's row of t12; pixel x + 1 used the other one.
-      if x == w - 1:
-        pm = _start(crow, x, t12, now, nds[y, x])
-      else:
-        pm = _step(t12, 1 - now, pm, lo[y, x] - lo[y, x + 1], nds[y, x + 1], crow, x, t12,
-                   now, nds[y, x], pen1, pen2, tmp)
-      base = offsets[k * w + x]
-      for i in range(nds[y, x]):
-        total[base + i] = np.uint16(t12[now, i + 1] + hor[x, i + 1] + vcur[x, i + 1])
+  for k in range(n):
+    census_costs.cost_row(cl, cr, lo, nds, y0 + k, oob, rev, acc, crow)
+    _down_row(crow, lo, nds, y0 + k, k == 0, pen1, pen2, hor, vprev, vcur, vpm, t12, tmp,
+              total, offsets[k * w:(k + 1) * w])
     vprev, vcur = vcur, vprev
-  srow = np.empty(w * nd, np.int32)  # Pass 2: bottom-up path, S = total + L_up, winners.
+  srow = np.empty(w * nd, np.int32)
   row_offsets = np.empty(w + 1, np.int64)
   best = np.empty(w, np.int64)
   for k in range(n - 1, -1, -1):
     y = y0 + k
-    _cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
-    row_offsets[0] = 0
-    for x in range(w):
-      if k == n - 1:
-        vpm[x] = _start(crow, x, vcur, x, nds[y, x])
-      else:
-        vpm[x] = _step(vprev, x, vpm[x], lo[y, x] - lo[y + 1, x], nds[y + 1, x], crow, x,
-                       vcur, x, nds[y, x], pen1, pen2, tmp)
-      base, row_base = offsets[k * w + x], row_offsets[x]
-      row_offsets[x + 1] = row_base + nds[y, x]
-      for i in range(nds[y, x]):
-        srow[row_base + i] = np.int32(total[base + i]) + vcur[x, i + 1]
+    census_costs.cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
+    _up_row(crow, lo, nds, y, k == n - 1, pen1, pen2, vprev, vcur, vpm, total,
+            offsets[k * w:(k + 1) * w], srow, row_offsets, tmp)
     vprev, vcur = vcur, vprev
     if w0 <= y < w1:
       _winners(srow, row_offsets, lo, nds, y, dl, dr, best)

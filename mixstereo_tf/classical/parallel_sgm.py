@@ -17,6 +17,7 @@ from typing import Tuple
 
 import numpy as np
 
+from mixstereo_tf.classical import census_costs
 from mixstereo_tf.classical import census_sgm
 
 
@@ -48,7 +49,7 @@ def census_codes(channels: np.ndarray, height: int, width: int,
   bounds = np.linspace(0, h, min(h, threads) + 1).round().astype(int)
   padded = [np.pad(channels[..., c], ((ry, ry), (rx, rx)), mode='reflect') for c in range(k)]
   tasks = [(c, a, b) for c in range(k) for a, b in zip(bounds[:-1], bounds[1:])]
-  _run(lambda t: census_sgm.census_rows(padded[t[0]][t[1]:t[2] + 2 * ry], height, width,
+  _run(lambda t: census_costs.census_rows(padded[t[0]][t[1]:t[2] + 2 * ry], height, width,
                                         out[t[0], t[1]:t[2]]), tasks, threads)
   return out
 
