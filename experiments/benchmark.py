@@ -10,7 +10,7 @@ XLA on / off), analytic FLOPs per step, a per-module split of forward+backward t
 input pipeline, SavedModel inference, the warp op against a gather-based reference, and the
 stride-2 3D conv implementations, the paper-scale forward pass, the classical baseline
 per 375x1242 frame, where the 3D encoder-decoder's time goes (per layer and per
-stride-2 kernel), and the numba census-SGM matcher (`baselines.matcher.match`) at 1242x375,
+stride-2 kernel), and the numba census-SGM matcher (`classical.matcher.match`) at 1242x375,
 1280x720 (also with a video prior) and 4000x3000, against the NumPy `sgm.match`, and
 videos (`benchmark_video`: flicker, accuracy and frames/s with and without the temporal
 prior, both methods, 720p and 1080p). Times are medians of repeats after warm-up, with min/max.

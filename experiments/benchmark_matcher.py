@@ -1,4 +1,4 @@
-"""The 'matcher' measurement of experiments/benchmark.py: `baselines.matcher.match` speed.
+"""The 'matcher' measurement of experiments/benchmark.py: `classical.matcher.match` speed.
 
 Inputs are held-out `sample` scenes made into red-cyan anaglyphs (R of the left view
 against G and B of the right, as the classical de-anaglyph matches them):

@@ -187,7 +187,7 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
 
 
 def _matcher_section(run) -> list:
-  """Section 13 (this run only): `baselines.matcher.match` against the NumPy sgm.match."""
+  """Section 13 (this run only): `classical.matcher.match` against the NumPy sgm.match."""
   lines = ['', '## 13. Census-SGM matcher (red-cyan anaglyph of a held-out `sample` scene)',
            '', 'numba = `baselines.matcher.match` (signed range, window-aligned pair); '
            'NumPy = `baselines.sgm.match` on the unshifted pair over [0, max - min]. CPU = '

@@ -15,7 +15,6 @@ import numpy as np
 import tensorflow as tf
 
 from experiments import bench_data
-from mixstereo_tf import classical
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import runs
@@ -30,6 +29,7 @@ from mixstereo_tf.ops import conv3d
 from mixstereo_tf.ops import cost_volume
 from mixstereo_tf.training import objective
 from mixstereo_tf.training import step as step_lib
+from mixstereo_tf.unmixing import families
 
 _DEMO_FLAGS = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'demo.flags')
 
@@ -289,7 +289,7 @@ def classical(height: int = 375, width: int = 1242) -> dict:
   result = {'size': f'{height}x{width}'}
   for name in ('anaglyph', 'diplopia'):
     mixture = image_range.signed_to_u8(mixtures.mix(name, left, right)[0].numpy())
-    result[name] = timed(lambda m=mixture, n=name: classical.unmix_classical(m, n), 1,
+    result[name] = timed(lambda m=mixture, n=name: families.of(n).classical(m, n), 1,
                          warmup=False)
   return result
 

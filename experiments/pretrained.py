@@ -2,8 +2,8 @@
 
     python experiments/pretrained.py --shared_dir=../shared/stereo_samples
 
-For each model of `mixstereo_tf/pretrained/` (or --pretrained=NAME|FOLDER) and its
-default mixture (colour anaglyph / diplopia, made by `mixtures.py` as in the paper):
+For each model of `mixstereo_tf/artifacts/pretrained/` (or --pretrained=NAME|FOLDER) and its
+default mixture (colour anaglyph / diplopia, made by `core/mixtures.py` as in the paper):
   1. the `sample` held-out scenes (8 procedural + Motorcycle), never trained on;
   2. the SceneFlow frame of --shared_dir;
   3. for anaglyph models, the real-world conditions of `evaluation/realworld.py`: every

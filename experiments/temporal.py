@@ -8,7 +8,7 @@ camera panning right (2 px per frame over scene A, 1 px over scene B, integer sh
 ground truth moves exactly), with a cut between them; each frame is a red-cyan anaglyph with
 Gaussian noise (sigma 2 levels, new every frame, as a camera's). Every variant unmixes the
 frames in order with `--mixture=auto`, by the classical method and by the shipped model
-(`mixstereo_tf/pretrained`, the refiner on the classical result, so the prior reaches it
+(`mixstereo_tf/artifacts/pretrained`, the refiner on the classical result, so the prior reaches it
 through its classical stage; per frame and per shot + prior only):
   * per frame: today's behaviour (encoding, range and disparity of each frame alone);
   * per shot: encoding and range once per shot (`temporal.VideoState`), no prior;

@@ -4,7 +4,7 @@ The networks need inputs whose height and width are multiples of `size_multiple`
 the paper's model). An image of any size is padded at the bottom and the right by edge
 replication, run, and the outputs are cropped back. Padding does not move the image
 content, so disparities keep their units (pixels of the input image). `serving_function`
-is the graph shared by the `inference.Unmixer` and the SavedModel (`serving`).
+is the graph shared by the `unmixing.predictors.Unmixer` and the SavedModel (`serving`).
 """
 
 from typing import Callable, Dict

@@ -1,7 +1,7 @@
 """Reading inputs and writing results of the unmix tool: images, videos, disparity files.
 
 Images are uint8 RGB `[H, W, 3]` (docs/DESIGN.md reader convention); disparities float32
-`[H, W]` in pixels, positive. Video files are read and written by `video_io` (PyAV).
+`[H, W]` in pixels, positive. Video files are read and written by `video.streams` (PyAV).
 """
 
 import collections
@@ -100,7 +100,7 @@ def display_range(disparity: np.ndarray,
 def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: str,
                         layout: str, max_display_disparity: Optional[float] = None
                         ) -> Dict[str, object]:
-  """Writes one image's results (mixstereo_tf/unmix_files.py).
+  """Writes one image's results (mixstereo_tf/cli/unmix_files.py).
 
   Args:
     outputs: {'left', 'right': uint8 [H, W, 3], 'disparity_left': [H, W] signed pixels}.

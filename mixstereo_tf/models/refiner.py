@@ -3,7 +3,7 @@
 Not in the paper. The issue "A pretrained model that ... beats the classical baseline"
 allows a hybrid in which the network refines the classical matcher's disparity while the
 separation and colour restoration stay learned. `RefinerNet` takes, per pixel, the
-mixture and the classical result (`baselines.unmix_classical`) and returns:
+mixture and the classical result (`classical`) and returns:
   * the views: a small U-Net of [mixture, classical left, classical right] adds a residual
     to the classical views (learned separation; its last layer starts at zero, so an
     untrained refiner returns the classical views);

@@ -2,7 +2,7 @@
 
 Every image argument is on the [0, 1] scale (docs/DESIGN.md, "Loss scales"): the constants
 that come from monodepth (SSIM's C1 and C2, the 0.85 / 0.15 balance of the appearance loss,
-the scale of the edge-aware weights) were set for it, and `objective.py` maps the network's
+the scale of the edge-aware weights) were set for it, and `training/objective.py` maps the network's
 [-1, 1] views to it once for every term, the separation terms included.
 
 Every scalar is a per-pixel mean: `1/N sum` in the paper, with each map (SSIM, L1, x and y

@@ -1,7 +1,7 @@
 """Local linear colour transfer: a view's colours predicted from the channels it kept.
 
 Where an anaglyph's views do not match (occlusions, the image border), neither the mixture
-nor the other view fixes the channels a view lost; `restoration` then leans on a prior
+nor the other view fixes the channels a view lost; `views` then leans on a prior
 predicted from the channels the view kept in the mixture (its "eye channels") by a
 guided-filter-style local linear model (He et al. 2013), fitted where the views do match.
 Box filters (OpenCV) make the work per pixel independent of the window radius.

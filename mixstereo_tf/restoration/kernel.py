@@ -1,6 +1,6 @@
-"""The numba kernel of `restoration`: over-relaxed alternations of both views, row by row.
+"""The numba kernel of `views`: over-relaxed alternations of both views, row by row.
 
-Per pixel and view, the normal equations of `restoration`'s least-squares problem
+Per pixel and view, the normal equations of `views`' least-squares problem
 (w_obs |A_own v + A_other v_other - m|^2 + w_match c |v - v_other(x + offset)|^2
 + w_prior |v - prior|^2) are solved and the view relaxed towards the solution; channels
 the mixture copies are set to it. Values are float32 in [0, 1]; offsets in pixels, signed.

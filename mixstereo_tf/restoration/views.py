@@ -11,7 +11,7 @@ equals the other one warped. Each view V is the per-pixel least-squares solution
 between the views with over-relaxation (iterations and relaxation chosen on the `sample`
 training scenes with true disparities, over all encodings; the prior's weight on validation
 examples with the classical disparities, `RestoreConfig`), channels the mixture
-copies set to the mixture's exactly after each step (`restoration_kernel`). So the other
+copies set to the mixture's exactly after each step (`kernel`). So the other
 view's channels are warped in wherever they match, and what neither fixes comes from the
 prior: for the classical method a local linear colour transfer from the view's own
 mixture channels, fitted where the views match (`colour_transfer`; standing in for Joulin
