@@ -1,3 +1,144 @@
-"""mixstereo_tf: stereo computation for a single mixture image (Zhong, Dai, Li, ECCV 2018)."""
+"""mixstereo_tf: stereo computation for a single mixture image (Zhong, Dai, Li, ECCV 2018).
+
+The public face is one function:
+
+  import mixstereo_tf
+  result = mixstereo_tf.unmix('photo.jpg')  # Or a uint8 [H, W, 3] / gray [H, W] array.
+  result.left, result.right    # uint8 [H, W, 3] views.
+  result.disparity             # float32 [H, W], signed pixels of the left view.
+  result.info['mixture']       # The encoding unmixed ('auto': the one detected).
+
+Importing the package is cheap: TensorFlow and the models load on the first `unmix` call.
+"""
+
+import dataclasses
+import functools
+import os
+import re
+from typing import Any, Dict, Optional, Tuple, Union
+
+import numpy as np
 
 __version__ = '0.1.0'
+
+# PredictorConfig fields whose `unmix` keyword has another name.
+_KEYWORDS = {'pretrained': 'model'}
+
+
+@dataclasses.dataclass(frozen=True)
+class Unmixed:
+  """What `unmix` returns.
+
+  Disparities are signed pixels of the input (negative = in front of the screen): the left
+  pixel x matches the right pixel x - disparity[y, x]; the right pixel x matches the left
+  pixel x + disparity_right[y, x].
+
+  Attributes:
+    left: uint8 [H, W, 3] left view.
+    right: uint8 [H, W, 3] right view.
+    disparity: float32 [H, W] disparity of the left view.
+    disparity_right: float32 [H, W] disparity of the right view.
+    info: what the CLI's side-car `<name>_info.json` holds about the unmixing (JSON-able):
+      'mixture' (the encoding unmixed), 'detected' and 'confidence' (the detector's
+      encoding), 'disparity_range' ([min, max] pixels searched), 'method', 'pretrained'
+      (the shipped model's name, when one ran), 'seconds', and the method's own details.
+  """
+  left: np.ndarray
+  right: np.ndarray
+  disparity: np.ndarray
+  disparity_right: np.ndarray
+  info: Dict[str, Any]
+
+
+def _keywords(message: str) -> str:
+  """`message` naming `unmix` keywords (`mixture=`) instead of PredictorConfig fields."""
+
+  def keyword(match: re.Match) -> str:
+    return f'{_KEYWORDS.get(match.group(1), match.group(1))}='
+
+  return re.sub(r'\bPredictorConfig\.(\w+)=?', keyword, message)
+
+
+@functools.lru_cache(maxsize=4)
+def _unmixer(config):
+  """The Unmixer of a PredictorConfig, built once (building loads the model)."""
+  from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
+  if config.method == 'oracle':
+    raise ValueError("PredictorConfig.method='oracle' needs the clean stereo pair; it is "
+                     'for evaluation only.')
+  return predictors.build_unmixer(config)
+
+
+def _search(value: Union[None, str, Tuple[int, int]]) -> Union[None, str, Tuple[int, int]]:
+  """A `disparity_range` keyword as PredictorConfig.disparity_range (the CLI's text too)."""
+  from mixstereo_tf.unmixing import disparity_range  # pylint: disable=g-import-not-at-top
+  if value is None:
+    return None
+  if isinstance(value, str):
+    try:
+      return disparity_range.parse(value)
+    except ValueError as e:
+      raise ValueError(f'disparity_range={value!r}: {e}') from None
+  return tuple(int(v) for v in value)
+
+
+def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] = 'auto',
+          method: str = 'model', model: Optional[str] = None,
+          checkpoint: Optional[str] = None, saved_model: Optional[str] = None,
+          disparity_range: Union[None, str, Tuple[int, int]] = None,
+          restore_colour: Optional[bool] = None,
+          max_network_pixels: Optional[int] = ...) -> Unmixed:
+  """Separates one mixture image into its two views and their disparities.
+
+  The keywords are the `mixstereo-unmix` flags of the same names (`model`: --pretrained)
+  and default to PredictorConfig's values (`max_network_pixels=...` stands for its value),
+  except `mixture`, which detects the encoding unless told.
+  The unmixer of each set of keywords is built once and kept (the four newest), so calling
+  `unmix` on many images costs the model loading once.
+
+  Args:
+    image: a uint8 RGB [H, W, 3] or gray [H, W] array, or the path of an image file (read
+      like the CLI reads it: gray and 16-bit files become uint8 RGB).
+    mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g.
+      'gray', 'dubois', 'diplopia'); 'auto' detects an anaglyph's encoding; None: the
+      model's own.
+    method: 'model' (a trained network) or 'classical' (training-free).
+    model: a shipped model's name ('anaglyph', 'diplopia') or a folder in its format;
+      None with neither checkpoint nor saved_model: the first shipped model that unmixes
+      the mixture ('auto': the anaglyph model).
+    checkpoint: a training run directory or checkpoint prefix, instead of a shipped model.
+    saved_model: a SavedModel written by mixstereo_tf.export, instead of a shipped model.
+    disparity_range: (min, max) signed pixels to search, or the CLI's text ('-40,120',
+      'auto', 'network'); None: estimated per image.
+    restore_colour: rebuild the views' exact channels from the mixture and disparities
+      (None: on for anaglyphs); method 'model' only.
+    max_network_pixels: a network's input is reduced to at most this many pixels (None:
+      no limit).
+
+  Returns:
+    An `Unmixed`: views and disparities the size of the input, and `info`.
+
+  Raises:
+    ValueError: an unreadable file, a bad image or keyword, or an image the unmixer cannot
+      take (e.g. mixture='auto' on a photo that is no anaglyph); the message names the
+      keyword to change.
+  """
+  from mixstereo_tf.cli import media  # pylint: disable=g-import-not-at-top
+  from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
+  given = dict(method=method, checkpoint=checkpoint, saved_model=saved_model,
+               mixture=mixture, restore_colour=restore_colour,
+               max_network_pixels=max_network_pixels, pretrained=model)
+  try:
+    config = predictors.PredictorConfig(
+        disparity_range=_search(disparity_range),
+        **{name: value for name, value in given.items() if value is not ...})
+    if isinstance(image, (str, os.PathLike)):
+      image = media.read_image(os.fspath(image))
+    outputs = _unmixer(config)(image)
+  except ValueError as e:
+    message = _keywords(str(e))
+    if message == str(e):
+      raise
+    raise ValueError(message) from None
+  return Unmixed(outputs['left'], outputs['right'], outputs['disparity_left'],
+                 outputs['disparity_right'], outputs['info'])

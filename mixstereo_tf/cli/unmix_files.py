@@ -11,8 +11,9 @@ range searched, scale, method, seconds; `write_info`). Per video, in the input's
 (`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps, rotation and audio streams
 (copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`), `<name>_disparity<ext>`
 and `<name>_info.json` (the first unmixed frame's info, frames, frame rate, rotation, audio
-streams, the scene cuts found in this run, files). Videos are written resumably (`video_job`). Progress (`progress.ProgressBar`) is shown for several
-inputs and for every video's frames.
+streams, the scene cuts found in this run, files). Videos are written resumably
+(`video.jobs`). Progress (`progress.ProgressBar`) is shown for several inputs and for
+every video's frames.
 
 Video frames are unmixed with temporal consistency (`temporal`, unless
 `TemporalConfig.enabled` is off): the encoding and the range are decided once per shot and
@@ -31,6 +32,7 @@ from absl import logging
 import cv2
 import tensorflow as tf
 
+from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.core import colormap
@@ -66,10 +68,12 @@ def failure_message(report: UnmixReport) -> Optional[str]:
 
 
 def _reason(error: Exception) -> str:
-  """A one-line reason for a failed input (TensorFlow messages can span many lines)."""
+  """A one-line reason for a failed input (TensorFlow messages can span many lines),
+  naming the predictor flags (`--mixture`) instead of PredictorConfig fields."""
   message = error.message if isinstance(error, tf.errors.OpError) else str(error)
   lines = message.strip().splitlines()
-  return f'{type(error).__name__}: {lines[0] if lines else ""}'
+  line = cli_flags.flag_names(lines[0], known=cli_flags.PREDICTOR_FLAGS) if lines else ''
+  return f'{type(error).__name__}: {line}'
 
 
 # What one input may raise without stopping the others: unreadable or malformed files
@@ -89,7 +93,7 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
                  video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
                  report: UnmixReport, temporal_config: temporal.TemporalConfig) -> int:
   """Unmixes every frame of a video into layout and disparity videos (resumable, see
-  `video_job`), writes `<name>_info.json`; returns the frames unmixed in this run.
+  `video.jobs`), writes `<name>_info.json`; returns the frames unmixed in this run.
 
   Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
   encoding, range and prior; each segment's first frame starts a shot)."""
@@ -152,6 +156,20 @@ def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object]) 
   return path
 
 
+def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
+                 layout: str, max_display_disparity: Optional[float],
+                 report: UnmixReport) -> int:
+  """Unmixes one image and writes its outputs and `<name>_info.json`; returns 1 (frame)."""
+  image = media.read_image(item.path)
+  unmix_start = time.perf_counter()
+  outputs = unmixer(image)
+  report.unmix_seconds += time.perf_counter() - unmix_start
+  written = media.write_image_outputs(outputs, output_dir, item.name, layout,
+                                      max_display_disparity)
+  write_info(output_dir, item, dict(outputs.get('info', {}), **written))
+  return 1
+
+
 def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
                  layout: str = 'separate', max_display_disparity: Optional[float] = None,
                  progress_stream: Optional[TextIO] = None,
@@ -164,7 +182,7 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
   An input that cannot be read, unmixed or written is logged with its path and the reason,
   recorded in `UnmixReport.failures` and skipped; the others still run.
 
-  Videos are written in resumable segments (`video_job`, `video_config`): re-running the
+  Videos are written in resumable segments (`video.jobs`, `video_config`): re-running the
   same call after an interruption continues from the last finished segment, as long as
   the input and `settings` (a JSON-serialisable description of the unmixer; default its
   method, mixture and range) are unchanged. `temporal_config`: a video's per-shot
@@ -198,14 +216,8 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
                               settings or _video_settings(unmixer), video_config,
                               progress_stream, report, temporal_config)
       else:
-        image = media.read_image(item.path)
-        unmix_start = time.perf_counter()
-        outputs = unmixer(image)
-        report.unmix_seconds += time.perf_counter() - unmix_start
-        written = media.write_image_outputs(outputs, output_dir, item.name, layout,
-                                            max_display_disparity)
-        write_info(output_dir, item, dict(outputs.get('info', {}), **written))
-        frames = 1
+        frames = _unmix_image(unmixer, item, output_dir, layout, max_display_disparity,
+                              report)
     except _INPUT_ERRORS as e:
       if bar:
         bar.clear()

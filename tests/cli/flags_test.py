@@ -38,6 +38,14 @@ def test_usage_error_names_flags_instead_of_config_fields():
                   '--data_dir missing; OtherConfig.nothing stays.')
 
 
+def test_flag_names_translates_only_known_flags():
+  message = "PredictorConfig.mixture=x; PredictorConfig.method='model'; VideoConfig.enabled."
+  assert cli_flags.flag_names(message, known=cli_flags.PREDICTOR_FLAGS) == (
+      "--mixture=x; --method='model'; VideoConfig.enabled.")
+  cli_flags.define_predictor()
+  assert all(name in flags.FLAGS for name in cli_flags.PREDICTOR_FLAGS)
+
+
 def test_defaults_come_from_the_config_dataclass():
   assert cli_flags.defaults(predictors.PredictorConfig) == {
       'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,

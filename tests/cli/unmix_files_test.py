@@ -208,6 +208,16 @@ def test_classical_method(tmp_path):
   assert np.load(tmp_path / 'out' / 'x_disparity.npy').shape == (30, 44)
 
 
+def test_an_input_that_is_no_anaglyph_names_the_flag(tmp_path):
+  setup = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='auto'))
+  _image(tmp_path / 'noise.png', (24, 32, 3))  # No colour channel displaced: no anaglyph.
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'noise.png'), str(tmp_path / 'out'))
+  assert report.processed == 0 and len(report.failures) == 1
+  reason = report.failures[0][1]
+  assert reason.startswith('ValueError: This image does not look like an anaglyph')
+  assert '(e.g. --mixture=diplopia)' in reason and 'PredictorConfig' not in reason
+
+
 def test_inputs_sharing_a_stem_keep_their_own_outputs(setup, tmp_path):
   folder = tmp_path / 'in'
   folder.mkdir()

@@ -1,0 +1,106 @@
+"""Tests for the public face, `mixstereo_tf.unmix` (mixstereo_tf/__init__.py)."""
+
+import dataclasses
+import inspect
+import subprocess
+import sys
+
+import cv2
+import numpy as np
+import pytest
+import skimage.data
+
+import mixstereo_tf
+from mixstereo_tf.cli import media
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.unmixing import predictors
+
+
+@pytest.fixture(scope='module')
+def anaglyph():
+  """A published-style gray anaglyph of Middlebury's Motorcycle at half size (370 x 250)
+  and the median of its true disparity at that size."""
+  left, right, truth = skimage.data.stereo_motorcycle()
+  left, right = (cv2.resize(v, (370, 250), interpolation=cv2.INTER_AREA) for v in (left, right))
+  mixed = mixtures.mix('gray', image_range.u8_to_signed(left), image_range.u8_to_signed(right))
+  return image_range.signed_to_u8(mixed.numpy()), np.median(truth[np.isfinite(truth)]) / 2
+
+
+def _check_known_answer(result, truth_median, method):
+  assert result.left.shape == result.right.shape == (250, 370, 3)
+  assert result.left.dtype == result.right.dtype == np.uint8
+  assert result.disparity.shape == result.disparity_right.shape == (250, 370)
+  assert result.disparity.dtype == np.float32
+  assert result.info['mixture'] == result.info['detected'] == 'gray'
+  assert result.info['method'] == method and len(result.info['disparity_range']) == 2
+  assert np.median(result.disparity) == pytest.approx(truth_median, abs=1.5)
+  with pytest.raises(dataclasses.FrozenInstanceError):
+    result.left = None
+
+
+def test_classical_method_detects_the_encoding(anaglyph):
+  image, truth_median = anaglyph
+  result = mixstereo_tf.unmix(image, method='classical')
+  _check_known_answer(result, truth_median, 'classical')
+
+
+def test_default_shipped_model(anaglyph):
+  image, truth_median = anaglyph
+  result = mixstereo_tf.unmix(image)
+  _check_known_answer(result, truth_median, 'model')
+  assert result.info['pretrained'] == 'anaglyph'
+
+
+def test_path_and_gray_inputs(anaglyph, tmp_path):
+  image = anaglyph[0][:64, 150:230]
+  media.write_image(str(tmp_path / 'photo.png'), image)
+  direct = mixstereo_tf.unmix(image, method='classical')
+  for path in (str(tmp_path / 'photo.png'), tmp_path / 'photo.png'):
+    read = mixstereo_tf.unmix(path, method='classical')
+    np.testing.assert_array_equal(read.disparity, direct.disparity)
+    np.testing.assert_array_equal(read.left, direct.left)
+  gray = image[:, :, 1]  # [H, W]: the same as its RGB replica.
+  options = dict(mixture='gray', method='classical', disparity_range='0,8')
+  from_gray = mixstereo_tf.unmix(gray, **options)
+  from_rgb = mixstereo_tf.unmix(np.repeat(gray[:, :, None], 3, axis=2), **options)
+  assert from_gray.left.shape == (64, 80, 3) and from_gray.disparity.shape == (64, 80)
+  np.testing.assert_array_equal(from_gray.disparity, from_rgb.disparity)
+  assert from_gray.info['disparity_range'] == [0, 8]
+
+
+def test_a_photo_that_is_no_anaglyph_names_the_keyword():
+  photo = cv2.resize(skimage.data.coffee(), (75, 50), interpolation=cv2.INTER_AREA)
+  with pytest.raises(ValueError, match=r'mixture=diplopia') as raised:
+    mixstereo_tf.unmix(photo)
+  assert 'mixture=' in str(raised.value) and 'PredictorConfig' not in str(raised.value)
+
+
+@pytest.mark.parametrize('keywords, message', [
+    (dict(method='classical', mixture=None), "method='classical' needs mixture= "),
+    (dict(model='anaglyph', checkpoint='run'), 'model= excludes checkpoint= and saved_model='),
+    (dict(method='oracle'), "method='oracle' needs the clean stereo pair"),
+    (dict(disparity_range='5,5'), "disparity_range='5,5': disparity range needs MIN < MAX"),
+    (dict(method='classical', disparity_range=(5, 5)), 'disparity_range= needs MIN < MAX'),
+])
+def test_bad_keywords_are_named(keywords, message):
+  with pytest.raises(ValueError) as raised:
+    mixstereo_tf.unmix(np.zeros((8, 8, 3), np.uint8), **keywords)
+  assert message in str(raised.value) and 'Config' not in str(raised.value)
+
+
+def test_defaults_are_the_predictor_configs():
+  parameters = inspect.signature(mixstereo_tf.unmix).parameters
+  defaults = predictors.PredictorConfig()
+  for field in dataclasses.fields(predictors.PredictorConfig):
+    default = parameters['model' if field.name == 'pretrained' else field.name].default
+    if field.name != 'mixture' and default is not ...:
+      assert default == getattr(defaults, field.name), field.name
+  assert parameters['mixture'].default == 'auto'
+
+
+def test_importing_the_package_loads_no_tensorflow():
+  code = 'import sys, mixstereo_tf; print(sorted(m for m in sys.modules if "tensorflow" in m))'
+  result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          timeout=60, check=True)
+  assert result.stdout.strip() == '[]'
