@@ -20,16 +20,16 @@ setuptools.setup(
     package_data={'mixstereo_tf.data_lists': ['README.md', 'kitti/*.txt'],
                   'mixstereo_tf.artifacts.pretrained': ['*/info.json', '*/weights.npz']},
     include_package_data=True,
-    # baselines/sgm.py uses np.bitwise_count (numpy >= 2.0). The TF, OpenCV, scikit-image and
+    # classical/sgm.py uses np.bitwise_count (numpy >= 2.0). The TF, OpenCV, scikit-image and
     # SciPy bounds are their first releases built for numpy 2; older wheels need numpy < 2.
     install_requires=[
         'tensorflow>=2.18,<3',
         'numpy>=2.0',
         'opencv-python-headless>=4.10',
         'scikit-image>=0.24',
-        # baselines/diplopia.py solves its layer system with scipy.sparse.
+        # classical/diplopia.py solves its layer system with scipy.sparse.
         'scipy>=1.13',
-        # baselines/matcher.py's census-SGM kernels. Against the NumPy baselines/sgm.py on
+        # classical/matcher.py's census-SGM kernels. Against the NumPy classical/sgm.py on
         # one red-cyan anaglyph, 2 cores (experiments/benchmark.py --sections=matcher; CPU-s,
         # peak memory above the process' resident memory before the call): 1242x375 [0, 127] 0.48 vs 3.64 CPU-s, 0.14 vs
         # 0.50 GiB; 1280x720 [-58, 58] 1.08 vs 7.05 CPU-s (0.41 with a video prior), 0.30
@@ -37,7 +37,7 @@ setuptools.setup(
         # alone would take 17 GB. Compiled once (~10 CPU-s), then loaded from numba's disk
         # cache (~0.5 CPU-s per process).
         'numba>=0.60',
-        # mixstereo_tf/video_io.py: FFmpeg's libraries in-process (PyAV >= 14 for
+        # mixstereo_tf/video/streams.py: FFmpeg's libraries in-process (PyAV >= 14 for
         # add_stream_from_template; the wheels bundle FFmpeg with libx264).
         'av>=14',
         'absl-py>=1.0',
@@ -46,7 +46,7 @@ setuptools.setup(
     ],
     extras_require={
         # imageio-ffmpeg ships a static FFmpeg binary (with the stereo3d filter): the
-        # independent anaglyph encoder of tests/detection_test.py and the real-world
+        # independent anaglyph encoder of tests/unmixing/detection_test.py and the real-world
         # evaluation (evaluation/ffmpeg_encoder.py). PyAV's wheels lack stereo3d.
         'test': ['pytest>=7', 'imageio-ffmpeg>=0.5'],
         'eval': ['imageio-ffmpeg>=0.5'],

@@ -4,10 +4,10 @@ folder in the package's pretrained format.
   python -m mixstereo_tf.export --checkpoint=runs/demo --export_dir=exports/demo
   python -m mixstereo_tf.export --export_dir=exports/diplopia --pretrained=diplopia
   python -m mixstereo_tf.export --checkpoint=runs/pretrained_anaglyph --as_pretrained \
-      --export_dir=mixstereo_tf/pretrained/anaglyph --recipe='...' --results='...'
+      --export_dir=mixstereo_tf/artifacts/pretrained/anaglyph --recipe='...' --results='...'
 
 Signatures: `serving_default` (image -> left, right, disparity, disparity_right) and
-`metadata` (mixture, training crop, architecture); see mixstereo_tf/serving.py. Without
+`metadata` (mixture, training crop, architecture); see mixstereo_tf/artifacts/serving.py. Without
 --checkpoint the shipped model (`--pretrained`, default: the one for --mixture) is
 exported. A hybrid refiner has no SavedModel: its first stage is the classical method,
 which is not a TensorFlow graph.
@@ -33,7 +33,7 @@ cli_flags.define_pretrained()
 flags.DEFINE_string('export_dir', None, 'Where to write the SavedModel (must be new).')
 cli_flags.require_unless_listing('export_dir')
 flags.DEFINE_boolean('as_pretrained', False, 'Write --checkpoint in the pretrained format '
-                     '(mixstereo_tf/pretrained/NAME: float16 weights and info.json) instead '
+                     '(mixstereo_tf/artifacts/pretrained/NAME: float16 weights and info.json) instead '
                      'of a SavedModel.')
 flags.DEFINE_string('recipe', '', 'With --as_pretrained: the command that retrains it.')
 flags.DEFINE_string('results', '', 'With --as_pretrained: its held-out numbers.')

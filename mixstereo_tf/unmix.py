@@ -10,7 +10,7 @@ the measured frames per second is drawn on stderr when it is a terminal (logged 
 Videos keep their container, frame rate, timestamps, rotation and audio (copied), are
 unmixed shot by shot with the previous frame's disparity as a prior (--notemporal: frame by
 frame), and are written resumably: after Ctrl-C or a crash, the same command continues
-from the last finished segment. Outputs are described in mixstereo_tf/unmix_files.py.
+from the last finished segment. Outputs are described in mixstereo_tf/cli/unmix_files.py.
 """
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)

@@ -1,5 +1,5 @@
 """Training of the hybrid refiner (`models/refiner.py`) on cached examples
-(`data/refiner_data.py`), supervised by the synthetic scenes' ground truth.
+(`training/refiner_data.py`), supervised by the synthetic scenes' ground truth.
 
 Loss (not in the paper; the paper's losses need no ground truth, these scenes have it):
   mean min(|d_L - d_L*|, c) + mean min(|d_R - d_R*|, c)  (pixels, every pixel: the scenes'

@@ -1,4 +1,4 @@
-"""Tests of unmix_image: encoding resolution (detection), ranges, and bad input."""
+"""Tests of unmixing.steps: encoding resolution (detection), ranges, and bad input."""
 
 from absl import logging
 import numpy as np
