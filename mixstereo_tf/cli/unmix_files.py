@@ -189,10 +189,8 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
   decisions and disparity prior (`temporal`; on by default).
 
   `max_display_disparity` fixes the colour maps to 0..that many pixels; by default each
-  image's map spans the disparities found (videos: the unmixer's range). Each image also
-  gets `<name>_info.json` (`write_info`).
-  Progress (`ProgressBar`) is drawn on `progress_stream` when it is a terminal (the CLI
-  passes stderr), else logged.
+  image's map spans the disparities found (videos: the unmixer's range). Progress
+  (`ProgressBar`) is drawn on `progress_stream` when it is a terminal, else logged.
 
   Raises:
     ValueError: bad layout / display range, or `input_spec` names nothing usable.
