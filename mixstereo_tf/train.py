@@ -28,6 +28,7 @@ from mixstereo_tf.training import objective
 from mixstereo_tf.training import optimizers
 from mixstereo_tf.training import refiner_data
 from mixstereo_tf.training import refiner_loop
+from mixstereo_tf.unmixing import families
 
 FLAGS = flags.FLAGS
 _DATA = cli_flags.defaults(sources.DataConfig)
@@ -162,7 +163,7 @@ def build_configs():
       stereo_3d_widths=_ints(FLAGS.volume_features, 'volume_features'),
       max_disparity=FLAGS.max_disparity, census_cost=FLAGS.census_cost,
       # Monocular depth (I = I_L): the input is the left view (paper section 3.1).
-      input_is_left=pipeline_config.mixture == 'monocular')
+      input_is_left=families.input_is_left(pipeline_config.mixture))
   loss_config = objective.LossConfig(
       alpha_c=FLAGS.alpha_c, alpha_p=FLAGS.alpha_p, omega_w=FLAGS.omega_w,
       omega_s=FLAGS.omega_s, lambda_ssim=FLAGS.lambda_ssim, lambda_l1=FLAGS.lambda_l1,

@@ -14,7 +14,8 @@ search is one window for all pixels; windows per pixel (coarse-to-fine, a tempor
 cost work and memory in proportion to the sum of the widths. The recursion maps a
 neighbour's window onto the current one; disparities outside the neighbour's window cost
 +inf there. `parallel_sgm` runs `sgm_strip` on horizontal strips in threads (the kernels
-release the GIL); the codes and the cost rows come from `census_costs`.
+release the GIL); the codes and the cost rows come from `census_costs`. A stored cost
+volume (diplopia's self-matching) runs the same recursion in `volume_sgm`.
 
 Compiled kernels are cached on disk (`cache=True`: `__pycache__` beside this file, or
 numba's user-wide cache directory where that is not writable; NUMBA_CACHE_DIR overrides
@@ -209,6 +210,42 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
     dl, dr: float32 [H, W] outputs: the left pixel x matches the right pixel x - dl, the
       right pixel x matches the left pixel x + dr (NaN where no window reaches it).
   """
+  _strip(cl, cr, np.empty((0, 0, 0), np.uint8), lo, nds, y0, y1, w0, w1, p1, p2, oob, dl,
+         dr)
+
+
+@numba.njit(**_JIT)
+def volume_sgm(volume, min_disparity, p1, p2, dl, dr):
+  """SGM of a stored cost volume over the whole image (one strip): the winners of
+  `sgm.aggregate` and `sgm.select_disparities`, bit for bit.
+
+  Args:
+    volume: uint8 [H, W, D] C-contiguous; volume[y, x, i] scores the left pixel x against
+      the right pixel x - d_i, d_i = min_disparity + i (diplopia's self-matching costs).
+    min_disparity: pixels; p1, p2: SGM penalties.
+    dl, dr: float32 [H, W] outputs, as `sgm_strip`'s.
+  """
+  h, w, depth = volume.shape
+  codes = np.empty((0, h, w), np.uint64)
+  _strip(codes, codes, volume, np.full((h, w), min_disparity, np.int32),
+         np.full((h, w), depth, np.int32), 0, h, 0, h, p1, p2, np.uint8(0), dl, dr)
+
+
+@numba.njit(**_JIT)
+def _cost_rows(volume, cl, cr, lo, nds, y, oob, rev, acc, crow):
+  """Row y's costs into crow: the census codes' (`census_costs.cost_row`), or the stored
+  volume's row when `volume` has rows."""
+  if volume.shape[0] == 0:
+    census_costs.cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
+    return
+  for x in range(volume.shape[1]):
+    for i in range(volume.shape[2]):
+      crow[x, i] = volume[y, x, i]
+
+
+@numba.njit(**_JIT)
+def _strip(cl, cr, volume, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
+  """`sgm_strip` on the costs of the codes cl, cr or, when it has rows, of `volume`."""
   _, _, w = cl.shape
   n = y1 - y0
   pen1, pen2 = np.int32(p1), np.int32(p2)
@@ -224,7 +261,7 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
   t12 = np.full((2, nd + 2), _BIG, np.int32)
   tmp = np.full(nd + 2, _BIG, np.int32)
   for k in range(n):
-    census_costs.cost_row(cl, cr, lo, nds, y0 + k, oob, rev, acc, crow)
+    _cost_rows(volume, cl, cr, lo, nds, y0 + k, oob, rev, acc, crow)
     _down_row(crow, lo, nds, y0 + k, k == 0, pen1, pen2, hor, vprev, vcur, vpm, t12, tmp,
               total, offsets[k * w:(k + 1) * w])
     vprev, vcur = vcur, vprev
@@ -233,7 +270,7 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
   best = np.empty(w, np.int64)
   for k in range(n - 1, -1, -1):
     y = y0 + k
-    census_costs.cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
+    _cost_rows(volume, cl, cr, lo, nds, y, oob, rev, acc, crow)
     _up_row(crow, lo, nds, y, k == n - 1, pen1, pen2, vprev, vcur, vpm, total,
             offsets[k * w:(k + 1) * w], srow, row_offsets, tmp)
     vprev, vcur = vcur, vprev

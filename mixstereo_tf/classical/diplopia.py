@@ -13,7 +13,8 @@ one linear equation per pixel in the unknown left view. Steps:
   2. Per-pixel shifts: I(x) and I(x - d_L(x)) share the component L(x), so SGM on a ZNCC
      volume of the mixture against itself (`self_matching_volume`, lags from
      `min_disparity` >= 1 up, the trivial lag 0 excluded) gives d_L, and the volume's
-     diagonal search gives d_R; then the left-right check and filling of `sgm`.
+     diagonal search gives d_R; then the left-right check and filling of `sgm` (run by
+     the anaglyph matcher's numba kernels, `parallel_sgm.match_volume`: the same bits).
   3. Layers: L on the columns [0, W + E) (E covers the largest d_R, content the left view
      never shows inside the image) minimises
        sum_x (L(x)/2 + L(x + d_R(x))/2 - I(x))^2 + smoothness * |grad L|^2
@@ -35,6 +36,7 @@ import cv2
 import numpy as np
 import scipy.sparse
 
+from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import image_range
 
@@ -245,7 +247,7 @@ def estimate_range(mixture, config: Optional[DiplopiaConfig] = None, width: int 
   reach = max(2, round(fraction * gray.shape[1]))
   config = dataclasses.replace(config, matching=dataclasses.replace(
       config.matching, min_disparity=1, max_disparity=reach))
-  matched = sgm.match_volume(self_matching_volume(gray, config), config.matching)
+  matched = parallel_sgm.match_volume(self_matching_volume(gray, config), config.matching)
   found = matched['disparity_left'][matched['consistent_left']]
   counts = np.histogram(found, bins=np.arange(1, reach + 2))[0]  # counts[i]: lag i + 1.
   share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)
@@ -284,7 +286,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
         config.matching, min_disparity=int(low), max_disparity=int(high)))
   image = image_range.as_unit_float(mixture, 'mixture')
   gray = image.mean(axis=-1) * 255.0
-  matched = sgm.match_volume(self_matching_volume(gray, config), config.matching)
+  matched = parallel_sgm.match_volume(self_matching_volume(gray, config), config.matching)
   layers = separate_layers(image, matched['disparity_right'], config)
   return {'left': image_range.unit_to_u8(layers['left']),
           'right': image_range.unit_to_u8(layers['right']),

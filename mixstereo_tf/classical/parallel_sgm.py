@@ -10,6 +10,8 @@ row; at most `threads` strips run at a time. `strip_bounds` cuts the strips so t
 hold equal numbers of cells (equal work too), at least one per thread and more where one
 would pass `max_strip_bytes`. Each strip aggregates `overlap` extra rows above and below,
 where its vertical paths start; one strip (no overlap) reproduces `sgm.match` exactly.
+A stored cost volume (`match_volume`) runs in one strip, so it reproduces
+`sgm.match_volume` exactly.
 """
 
 import concurrent.futures
@@ -19,6 +21,8 @@ import numpy as np
 
 from mixstereo_tf.classical import census_costs
 from mixstereo_tf.classical import census_sgm
+from mixstereo_tf.classical import fast_postprocess
+from mixstereo_tf.classical import sgm
 
 
 def _run(fn, tasks, threads: int) -> None:
@@ -101,3 +105,25 @@ def disparities(codes_left: np.ndarray, codes_right: np.ndarray, lo: np.ndarray,
 
   _run(strip, list(range(len(bounds) - 1)), threads)
   return dl, dr
+
+
+def match_volume(volume: np.ndarray, config: sgm.SgmConfig) -> dict:
+  """`sgm.match_volume` by the numba kernels: SGM, winners and post-processing of a
+  left-referenced cost volume, the same outputs bit for bit, in one strip.
+
+  Args:
+    volume: uint8 [H, W, D]; volume[y, x, i] scores the left pixel x against the right
+      pixel x - d_i, d_i = config.min_disparity + i.
+    config: penalties and left-right threshold (the census fields are unused).
+
+  Returns:
+    As `sgm.match`.
+  """
+  h, w, _ = volume.shape
+  d_left = np.empty((h, w), np.float32)
+  d_right = np.empty((h, w), np.float32)
+  census_sgm.volume_sgm(np.ascontiguousarray(volume, np.uint8), int(config.min_disparity),
+                        int(config.p1), int(config.p2), d_left, d_right)
+  # A right pixel no left pixel reaches: `sgm.select_disparities` gives it d_0.
+  d_right[np.isnan(d_right)] = np.float32(config.min_disparity)
+  return fast_postprocess.postprocess(d_left, d_right, config.lr_threshold)

@@ -1,7 +1,9 @@
-"""What a video shot has decided before one of its frames is unmixed (`FrameHint`).
+"""What is decided before a frame is unmixed (`FrameHint`): its video shot's decisions,
+and how the matcher runs.
 
-Made by `video.temporal.VideoState`, read by the unmixing steps and the classical matcher;
-one object under one name from the video loop down to the matcher.
+Made by `video.temporal.VideoState` (and, pinned to one SGM strip, by the refiner's
+training examples), read by the unmixing steps and the families' classical stages; one
+object under one name from the video loop down to the matcher's configuration.
 """
 
 import dataclasses
@@ -12,7 +14,7 @@ import numpy as np
 
 @dataclasses.dataclass(frozen=True)
 class FrameHint:
-  """What a shot has decided before one of its frames is unmixed (None: decide now).
+  """What is decided before a frame is unmixed (None: decide now, or the default).
 
   Attributes:
     mixture: the shot's encoding.
@@ -23,6 +25,9 @@ class FrameHint:
     prior_window: (radius, spread) of the search around the prior (`TemporalConfig`).
     full_search_cells: for a shot's first frame, the matcher's coarse-to-fine threshold
       (`TemporalConfig.first_frame_cells`); None: the matcher's own.
+    matcher_strips: the anaglyph matcher's SGM strips (`MatcherConfig.strips`), for its
+      range estimation and its matching; None: its own (they follow the core count, and
+      the aggregation differs near strip borders); 1: the same result on every machine.
   """
   mixture: Optional[str] = None
   detection: Optional[Dict[str, object]] = None
@@ -30,3 +35,4 @@ class FrameHint:
   prior: Optional[np.ndarray] = None
   prior_window: Optional[Tuple[int, int]] = None
   full_search_cells: Optional[int] = None
+  matcher_strips: Optional[int] = None

@@ -12,9 +12,9 @@ One example (`make_example`):
   4. the mixture, `degrade.degrade` (noise, blur, JPEG, vignetting, channel imbalance)
      except with probability `clean_probability` (anaglyphs made digitally from clean
      pairs, as FFmpeg or StereoPhoto Maker make them), and 8-bit quantisation;
-  5. `classical.unmix_classical` on it with the range estimated from the image, as at
-     inference (`matcher.estimate_range` inside the anaglyph method,
-     `diplopia.estimate_range` for a double image);
+  5. the classical stage on it by inference's own route (`classical_stage`: the range
+     planned by `steps.estimate_range`, then `steps.classical_unmix`), with the matcher
+     pinned to one SGM strip (`ONE_STRIP`);
   6. with probability `large_probability`, steps 1-5 happen on a scene `large_factor`
      times as high, wide and deep, and a random height x width window of everything is
      kept: the network sees disparities, occlusions and classical errors of photo-sized
@@ -31,18 +31,17 @@ from typing import Dict, Optional
 import numpy as np
 import tensorflow as tf
 
-from mixstereo_tf import classical
-from mixstereo_tf.classical import anaglyph
-from mixstereo_tf.classical import diplopia
-from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import degrade
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.unmixing import families
+from mixstereo_tf.unmixing import steps
 
 # One SGM strip: the matcher's strips otherwise follow the core count, and so would the
 # examples (the aggregation differs near strip borders).
-ONE_STRIP = anaglyph.AnaglyphConfig(matching=matcher.MatcherConfig(strips=1))
+ONE_STRIP = hints.FrameHint(matcher_strips=1)
 KEYS = ('mixture', 'classical_left', 'classical_right', 'classical_disparity_left',
         'classical_disparity_right', 'left', 'right', 'disparity_left', 'disparity_right')
 
@@ -127,7 +126,7 @@ def _whole_example(index, name, window, fraction, clean, factor, config, texture
                                        width + max_disparity, realistic=True)
   scene = synthetic.render_scene(index, scene_config, textures)
   shift = 0
-  if window and mixtures.get_mixture(name).is_anaglyph:
+  if window and families.of(name).signed:
     low, high = np.percentile(scene['disparity_left'], [1.0, 99.0])
     shift = int(round(low + fraction * (high - low)))
   pair = _window_aligned(scene, shift, width)
@@ -137,10 +136,7 @@ def _whole_example(index, name, window, fraction, clean, factor, config, texture
   if config.degrade and not clean:
     mixed = degrade.degrade(mixed, tf.constant([index, 7], tf.int32))
   mixture = image_range.unit_to_u8(np.asarray(mixed))
-  if name == 'diplopia':
-    base = classical.unmix_classical(mixture, name, diplopia.estimate_range(mixture))
-  else:
-    base = anaglyph.unmix_anaglyph(mixture, name, None, ONE_STRIP)
+  base = classical_stage(mixture, name)
   return {'mixture': mixture,
           'classical_left': base['left'], 'classical_right': base['right'],
           'classical_disparity_left': base['disparity_left'].astype(np.float32),
@@ -148,6 +144,15 @@ def _whole_example(index, name, window, fraction, clean, factor, config, texture
           'left': pair['left'], 'right': pair['right'],
           'disparity_left': pair['disparity_left'].astype(np.float32),
           'disparity_right': pair['disparity_right'].astype(np.float32)}
+
+
+def classical_stage(mixture: np.ndarray, name: str) -> Dict[str, np.ndarray]:
+  """The classical method's result on a uint8 mixture as inference computes it (the
+  range estimated from the image, `steps.estimate_range`; `steps.classical_unmix`), with
+  the matcher pinned to one strip (`ONE_STRIP`)."""
+  default = families.of(name).classical_range()
+  search = steps.estimate_range(mixture, name, None, default, ONE_STRIP)
+  return steps.classical_unmix(mixture, name, search, ONE_STRIP)
 
 
 def _shard_path(folder: str, shard: int) -> str:

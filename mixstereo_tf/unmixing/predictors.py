@@ -10,7 +10,7 @@ The `Unmixer` is the one predictor object every tool uses (unmix, evaluate, benc
   * 'model': a trained network, from a run directory / checkpoint prefix (`runs`), a
     SavedModel (`serving`) or, with neither, a model shipped with the package
     (`pretrained`), run around each image's disparity range (`unmix_image`);
-  * 'classical': the training-free baseline (`baselines`);
+  * 'classical': the training-free method of each mixture family (`families`);
   * 'oracle': the stereo module of a trained run on the clean pair (the paper's diplopia
     reference); it takes (left, right) instead of a mixture.
 """
@@ -21,7 +21,6 @@ from typing import Callable, Dict, Optional, Sequence, Tuple, Union
 import numpy as np
 import tensorflow as tf
 
-from mixstereo_tf import classical
 from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.artifacts import runs
@@ -29,6 +28,7 @@ from mixstereo_tf.artifacts import serving
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.models import refiner
 from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import steps
 
 Outputs = Dict[str, np.ndarray]
@@ -162,7 +162,7 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
   levels = run_info.model_config.max_disparity
   restore = config.restore_colour
   if restore is None:
-    restore = any(mixtures.get_mixture(m).is_anaglyph for m in trained)
+    restore = any(families.of(m).restores_views for m in trained)
 
   def solve(image, name, search, hint):
     del hint  # The network takes no prior.
@@ -195,6 +195,9 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
                         input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)])
     return model_unmixer(graph, run_info, config)
   trained = entry.mixtures
+  lacking = [m for m in trained if entry.kind not in families.of(m).learned_stages]
+  if lacking:
+    raise ValueError(f'{entry.name}: mixtures {", ".join(lacking)} have no {entry.kind} stage.')
   if config.mixture is None and len(trained) > 1:  # Several encodings: detect each image's.
     config = dataclasses.replace(config, mixture=steps.AUTO)
   requested = _check_mixture(config, trained)
@@ -208,21 +211,18 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
     return outputs
 
   return _image_unmixer('model', requested, trained, config, _classical_range, solve,
-                        _classical_display(trained[0]),
-                        any(mixtures.get_mixture(m).is_anaglyph for m in trained))
+                        _family(trained[0]).display_range(),
+                        any(families.of(m).restores_views for m in trained))
 
 
-def _classical_display(mixture: str) -> int:
-  """The classical method's display range for a mixture name or 'auto'."""
-  return classical.max_disparity(mixture if mixture in classical.SUPPORTED_MIXTURES
-                                 else 'anaglyph')
+def _family(mixture: str) -> families.Family:
+  """The family of a mixture name; for 'auto', the one detection finds."""
+  return families.detected() if mixture == steps.AUTO else families.of(mixture)
 
 
 def _classical_range(mixture: str) -> Tuple[int, int]:
-  """The classical method's own range for a mixture (diplopia: no zero shift)."""
-  if mixture == 'diplopia':
-    return 1, classical.max_disparity('diplopia')
-  return 0, classical.max_disparity(mixture) - 1
+  """The classical method's own range for a mixture (`Family.classical_range`)."""
+  return families.of(mixture).classical_range()
 
 
 @_register('classical')
@@ -233,15 +233,15 @@ def _classical(config: PredictorConfig) -> Unmixer:
   if config.mixture is None:
     raise ValueError("PredictorConfig.method='classical' needs PredictorConfig.mixture (a "
                      "name or 'auto').")
-  supported = classical.SUPPORTED_MIXTURES
+  supported = families.classical_names()
   if config.mixture not in supported + (steps.AUTO,):
     raise ValueError(f"PredictorConfig.method='classical' does not support "
                      f'PredictorConfig.mixture={config.mixture}; supported: '
                      f'{", ".join(supported)}.')
   return _image_unmixer(
       'classical', config.mixture, supported, config, _classical_range,
-      steps.classical_unmix, _classical_display(config.mixture),
-      config.mixture == steps.AUTO or mixtures.get_mixture(config.mixture).is_anaglyph)
+      steps.classical_unmix, _family(config.mixture).display_range(),
+      _family(config.mixture).restores_views)
 
 
 @_register('oracle')

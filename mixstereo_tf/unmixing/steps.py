@@ -4,19 +4,22 @@ plan around that range, the restoration of both views, and what was done (`info`
 Steps, shared by the model and the classical method:
   1. the encoding: the one asked for, or detected from the image (`detection`); an asked
      encoding that the detector confidently contradicts is logged as a warning;
-  2. the disparity range: the one asked for, or estimated from the image's eye channels
-     (`matcher.estimate_range`; anaglyphs only);
+  2. the disparity range: the one asked for, or planned by the encoding's family
+     (`families`: an anaglyph's eye channels, a double image's self-matching);
   3. the model: the mixture's right-eye channels shifted and the image reduced so the
      range fits the network's levels (`disparity_range.plan`), the outputs brought back to
      the input's pixels, then both views restored from the encoding's matrices with the
-     network's views as the prior (`restoration`); the classical method: `baselines`.
+     network's views as the prior (`restoration`); the classical method: the family's
+     `classical` stage (`classical_unmix`, the one route of inference and of the
+     refiner's training examples).
 Outputs: 'left', 'right' uint8 [H, W, 3], 'disparity_left', 'disparity_right' float32
 [H, W] signed pixels, and 'info' (a JSON-able dict: mixture, detection, disparity range,
 shift, scale, seconds).
 
 A video frame may come with a `hints.FrameHint`: its shot's encoding and range replace
 steps 1 and 2, and its prior (the previous frame's left disparity) goes to the solver (the
-classical matcher searches around it; the model does not use it).
+classical matcher searches around it; the model does not use it); its matcher options
+(`matcher_strips`) reach the range estimation and the classical matcher.
 """
 
 import time
@@ -26,17 +29,12 @@ from absl import logging
 import numpy as np
 import tensorflow as tf
 
-from mixstereo_tf import classical
-from mixstereo_tf.classical import anaglyph
-from mixstereo_tf.classical import diplopia
-from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
-from mixstereo_tf.core import mixtures
 from mixstereo_tf.models import refiner
-from mixstereo_tf.restoration import views
 from mixstereo_tf.unmixing import detection
 from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import tiling
 
 AUTO = 'auto'
@@ -67,7 +65,7 @@ def resolve_mixture(image: np.ndarray, requested: str,
   if requested == AUTO:
     if found.name is None:
       raise ValueError(f'This image does not look like an anaglyph ({found.reason}); name '
-                       'its mixture with PredictorConfig.mixture (e.g. diplopia).')
+                       'its mixture (e.g. PredictorConfig.mixture=diplopia).')
     name = found.name
     if found.also_fits:
       info['also_fits'] = found.also_fits
@@ -78,7 +76,7 @@ def resolve_mixture(image: np.ndarray, requested: str,
   else:
     name = requested
     if found.confidence >= WARN_CONFIDENCE and found.name != name and (
-        found.name is not None or mixtures.get_mixture(name).is_anaglyph):
+        found.name is not None or families.of(name).detectable):
       logging.warning('The image was given as %r but looks like %s (confidence %.2f).',
                       name, found.name or 'no anaglyph', found.confidence)
   if name not in allowed:
@@ -88,39 +86,34 @@ def resolve_mixture(image: np.ndarray, requested: str,
 
 
 def estimate_range(image: np.ndarray, name: str, requested: Range,
-                   default: Tuple[int, int]) -> Tuple[int, int]:
-  """The range asked for; the method's `default` for disparity_range.NETWORK and for
-  monocular mixtures; else estimated from the image (an anaglyph's eye channels, a double
-  image's self-matching)."""
+                   default: Tuple[int, int],
+                   hint: Optional[hints.FrameHint] = None) -> Tuple[int, int]:
+  """The range asked for; the method's `default` for disparity_range.NETWORK; else the
+  family's plan (`Family.estimate_range`: an anaglyph's eye channels matched with the
+  `hint`'s matcher options, a double image's self-matching, a monocular's `default`)."""
   if requested == disparity_range.NETWORK:
     return default
   if requested is not None:
     return requested
-  if name == 'diplopia':
-    return diplopia.estimate_range(image)
-  if not mixtures.get_mixture(name).is_anaglyph:
-    return default
-  left_eye, right_eye = anaglyph.eye_images(image_range.u8_to_unit(image), name)
-  return matcher.estimate_range(left_eye, right_eye)
+  return families.of(name).estimate_range(image, name, default, hint)
 
 
 def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.ndarray,
                 name: str, search: Tuple[int, int], levels: int,
                 max_pixels: Optional[int], restore: bool) -> Dict[str, object]:
   """The network around a disparity range, then the restoration (module docstring)."""
-  spec = mixtures.get_mixture(name)
+  family = families.of(name)
   height, width = image.shape[:2]
   chosen = disparity_range.plan(search, levels, height, width, max_pixels,
-                                can_shift=spec.is_anaglyph)
-  network_input = disparity_range.to_network(
-      image, spec.eye_channels[1] if spec.is_anaglyph else (), chosen)
+                                can_shift=family.signed)
+  network_input = disparity_range.to_network(image, family.right_eye(name), chosen)
   raw = graph(tf.constant(network_input))
   outputs = disparity_range.from_network(
       {'left': raw['left'].numpy(), 'right': raw['right'].numpy(),
        'disparity_left': raw['disparity'].numpy(),
        'disparity_right': raw['disparity_right'].numpy()}, chosen, height, width)
-  if restore and spec.is_anaglyph:
-    restored = views.restore_views(
+  if restore and family.restores_views:
+    restored = family.restore(
         image_range.u8_to_unit(image), name, outputs['disparity_left'],
         outputs['disparity_right'], image_range.u8_to_unit(outputs['left']),
         image_range.u8_to_unit(outputs['right']))
@@ -143,16 +136,16 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
   outputs = {key: image_range.signed_to_u8(refined[key]) for key in ('left', 'right')}
   for key in ('disparity_left', 'disparity_right'):
     outputs[key] = refined[key][..., 0]
-  if mixtures.get_mixture(name).is_anaglyph:
+  family = families.of(name)
+  if family.restores_views:
     mixture01 = image_range.u8_to_unit(image)
     disparities = outputs['disparity_left'], outputs['disparity_right']
-    transfer = views.restore_views(mixture01, name, *disparities)
+    transfer = family.restore(mixture01, name, *disparities)
     weight = REFINED_VIEW_WEIGHT
     prior = [weight * image_range.u8_to_unit(outputs[k]) + (1 - weight) * transfer[k]
              for k in ('left', 'right')]
     checked = transfer['consistent_left'], transfer['consistent_right']
-    restored = views.restore_views(mixture01, name, *disparities, *prior,
-                                   consistent=checked)
+    restored = family.restore(mixture01, name, *disparities, *prior, consistent=checked)
     outputs.update({k: image_range.unit_to_u8(restored[k]) for k in ('left', 'right')})
     outputs['consistent_left'] = restored['consistent_left']  # For the next frame's prior.
   return outputs
@@ -160,16 +153,13 @@ def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, nam
 
 def classical_unmix(image: np.ndarray, name: str, search: Range,
                     hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
-  """The training-free method; a `hint`'s prior: a left disparity to search around in its
-  prior_window (anaglyphs; NaN: no prior there); its full_search_cells: the
-  matcher's coarse-to-fine threshold (a shot's first frame). Anaglyphs also give
-  'consistent_left', the matcher's left-right check (`temporal.VideoState` drops the
-  prior where it failed)."""
-  prior = hint.prior if hint is not None else None
-  window = hint.prior_window if prior is not None else None
-  cells = hint.full_search_cells if hint is not None else None
-  out = classical.unmix_classical(image, name, search, prior=prior, prior_window=window,
-                                  full_search_cells=cells)
+  """The training-free method, the family's `classical` stage: the route of inference and
+  of the refiner's training examples. A `hint`'s prior: a left disparity to search around
+  in its prior_window (anaglyphs; NaN: no prior there); its full_search_cells: the
+  matcher's coarse-to-fine threshold (a shot's first frame); its matcher_strips: the
+  matcher's SGM strips. Anaglyphs also give 'consistent_left', the matcher's left-right
+  check (`temporal.VideoState` drops the prior where it failed)."""
+  out = families.of(name).classical(image, name, search, hint)
   keys = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
   return {key: out[key] for key in keys if key in out}
 
@@ -189,7 +179,7 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
     name, info = resolve_mixture(image, requested_mixture, allowed)
   search = hint.disparity_range
   if search is None:
-    search = estimate_range(image, name, requested_range, default_range(name))
+    search = estimate_range(image, name, requested_range, default_range(name), hint)
   outputs = solve(image, name, search, hint)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),
               prior=hint.prior is not None, **outputs.get('info', {}))

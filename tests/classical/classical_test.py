@@ -5,9 +5,8 @@ import numpy as np
 import pytest
 import tensorflow as tf
 
-from mixstereo_tf import classical
+from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import diplopia
-from mixstereo_tf.classical import matcher
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
@@ -79,7 +78,7 @@ def _y_psnr(image, truth):
 def test_anaglyph_disparity_and_colours(name):
   left, right, d_left, nonocc = _scene(d_bg=3, d_fg=8)
   mixture = _mix(name, left, right)
-  out = classical.unmix_classical(mixture, name)
+  out = anaglyph.unmix_anaglyph(mixture, name)
   bad1 = metrics.bad_pixel_rate(out['disparity_left'], d_left, nonocc, 1.0)
   trivial = metrics.bad_pixel_rate(np.full_like(d_left, np.median(d_left)), d_left, nonocc, 1.0)
   assert bad1 < 0.15 and bad1 < trivial / 2, (bad1, trivial)
@@ -117,7 +116,7 @@ def test_diplopia_layers_with_true_shift_beat_the_mixture():
 def test_lossy_encodings_beat_the_mixture_in_luminance(name):
   left, right, d_left, nonocc = _scene(d_bg=3, d_fg=8, seed=2)
   mixture = _mix(name, left, right)
-  out = classical.unmix_classical(mixture, name)
+  out = anaglyph.unmix_anaglyph(mixture, name)
   bad1 = metrics.bad_pixel_rate(out['disparity_left'], d_left, nonocc, 1.0)
   assert bad1 < 0.2, bad1
   for view, truth in (('left', left), ('right', right)):
@@ -137,39 +136,26 @@ def test_window_aligned_pair_has_negative_disparities():
   truth = d_left[:, 6:] - 6
   inside = np.arange(_W - 6)[None, :] - truth <= _W - 7  # The match lies inside the image.
   valid = nonocc[:, 6:] & inside
-  out = classical.unmix_classical(mixture, 'anaglyph')
+  out = anaglyph.unmix_anaglyph(mixture, 'anaglyph')
   low, high = out['disparity_range']
   assert low <= -3 and high >= 2
   background, foreground = valid & (truth < 0), valid & (truth > 0)
   assert abs(np.median(out['disparity_left'][background]) + 3) < 0.5
   assert abs(np.median(out['disparity_left'][foreground]) - 2) < 0.5
   assert metrics.bad_pixel_rate(out['disparity_left'], truth, valid, 1.0) < 0.25
-  given = classical.unmix_classical(mixture, 'anaglyph', disparity_range=(-5, 4))
+  given = anaglyph.unmix_anaglyph(mixture, 'anaglyph', disparity_range=(-5, 4))
   assert given['disparity_range'] == (-5, 4)
   assert given['disparity_left'].min() >= -5 - 0.5
 
 
-@pytest.mark.parametrize('name', ['monocular', 'nonsense'])
-def test_unsupported_mixture_raises(name):
+@pytest.mark.parametrize('name', ['monocular', 'diplopia', 'nonsense'])
+def test_a_non_anaglyph_mixture_is_refused_by_the_de_anaglyph(name):
   with pytest.raises(ValueError, match=name):
-    classical.unmix_classical(np.zeros((8, 16, 3), np.uint8), name)
+    anaglyph.unmix_anaglyph(np.zeros((8, 16, 3), np.uint8), name)
 
 
 def test_bad_image_raises():
   with pytest.raises(ValueError, match='mixture'):
-    classical.unmix_classical(np.zeros((8, 16), np.uint8), 'anaglyph')
+    anaglyph.unmix_anaglyph(np.zeros((8, 16), np.uint8), 'anaglyph')
   with pytest.raises(ValueError, match=r'\[0, 1\]'):
-    classical.unmix_classical(np.full((8, 16, 3), 2.0), 'diplopia')
-
-
-def test_full_search_cells_and_prior_window_reach_the_matcher(monkeypatch):
-  left, right, _, _ = _scene(2, 6)
-  seen = []
-  original = matcher.match
-  monkeypatch.setattr(matcher, 'match', lambda *args: seen.append(args[4]) or original(*args))
-  classical.unmix_classical(_mix('anaglyph', left, right), 'anaglyph', (0, 10),
-                            prior=np.full((_H, _W), 4.0, np.float32), prior_window=(1, 2),
-                            full_search_cells=1000)
-  assert (seen[0].full_search_cells, seen[0].prior_radius, seen[0].prior_spread) == (1000, 1, 2)
-  classical.unmix_classical(_mix('anaglyph', left, right), 'anaglyph', (0, 10))
-  assert seen[1] == matcher.MatcherConfig()
+    diplopia.unmix_diplopia(np.full((8, 16, 3), 2.0))

@@ -4,6 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
+from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.classical import sgm
@@ -58,6 +59,26 @@ def test_one_strip_equals_sgm_match_bit_for_bit():
   theirs = sgm.match(left, right, sgm.SgmConfig(min_disparity=0, max_disparity=14))
   for key in theirs:
     np.testing.assert_array_equal(ours[key], theirs[key], err_msg=key)
+
+
+@pytest.mark.parametrize('seed', [0, 1])
+def test_a_stored_volume_through_the_numba_sgm_equals_sgm_match_volume(seed):
+  """The diplopia self-matching volume of a double image, and costs up to 255 with ties
+  (random), give the NumPy SGM's outputs bit for bit."""
+  rng = np.random.default_rng(seed)
+  left, right, _, _ = _layered(3, 8, height=40, width=64, seed=seed)
+  gray = (left[..., 0] + right.mean(-1)) / 2
+  config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=1, max_disparity=20,
+                                                          p1=8, p2=64))
+  volumes = [diplopia.self_matching_volume(gray, config),
+             rng.integers(0, 256, (24, 40, 9)).astype(np.uint8) // 16 * 16]
+  for volume, low in zip(volumes, (1, 3)):
+    settings = sgm.SgmConfig(min_disparity=low, max_disparity=low + volume.shape[2] - 1,
+                             p1=8, p2=64)
+    ours = parallel_sgm.match_volume(volume, settings)
+    theirs = sgm.match_volume(volume, settings)
+    for key in theirs:
+      np.testing.assert_array_equal(ours[key], theirs[key], err_msg=key)
 
 
 def test_strips_and_threads_change_almost_nothing():

@@ -7,10 +7,12 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.classical import anaglyph
+from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.models import refiner
 from mixstereo_tf.training import refiner_data
+from mixstereo_tf.unmixing import predictors
 
 SMALL = refiner_data.ExampleConfig(mixtures='gray,anaglyph', height=48, width=64,
                                    max_disparity=16, window_probability=1.0, degrade=False)
@@ -43,10 +45,22 @@ def test_window_aligned_example_matches_its_ground_truth(textures):
   d = example['disparity_left']
   assert d.min() < 0 < d.max()  # Window-aligned: the disparities straddle zero.
   _assert_undegraded_pair(example)
-  # The classical result is what baselines gives on the mixture.
-  again = anaglyph.unmix_anaglyph(example['mixture'], example['name'], None,
-                                  refiner_data.ONE_STRIP)
+  # The classical result is the de-anaglyph's on the mixture, its matcher on one strip.
+  one_strip = anaglyph.AnaglyphConfig(matching=matcher.MatcherConfig(strips=1))
+  again = anaglyph.unmix_anaglyph(example['mixture'], example['name'], None, one_strip)
   np.testing.assert_array_equal(again['disparity_left'], example['classical_disparity_left'])
+
+
+@pytest.mark.parametrize('name', ['anaglyph', 'diplopia'])
+def test_the_same_frame_through_both_routes_gives_bit_identical_arrays(name, textures):
+  """A training example's classical arrays are what the served classical method returns
+  on its mixture, with the same one-strip option."""
+  example = refiner_data.make_example(3, dataclasses.replace(SMALL, mixtures=name), textures)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture=name))
+  served = unmixer(example['mixture'],
+                   hint=dataclasses.replace(refiner_data.ONE_STRIP, mixture=name))
+  for key in ('left', 'right', 'disparity_left', 'disparity_right'):
+    np.testing.assert_array_equal(served[key], example[f'classical_{key}'], err_msg=key)
 
 
 def test_shards_are_built_once_and_loaded_in_order(tmp_path, textures):

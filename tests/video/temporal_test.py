@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mixstereo_tf import classical
+from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
@@ -109,7 +109,7 @@ def test_encoding_and_range_decided_once_per_shot(two_shots, monkeypatch):
 
 
 def test_prior_is_the_previous_disparity_and_none_after_a_cut(two_shots, monkeypatch):
-  calls = _counting(monkeypatch, baselines, 'unmix_classical')
+  calls = _counting(monkeypatch, anaglyph, 'unmix_anaglyph')
   outputs = _run(two_shots, search=(0, 12))
   priors = [kwargs['prior'] for _, kwargs in calls]
   assert priors[0] is None and priors[7] is None
@@ -121,9 +121,10 @@ def test_prior_is_the_previous_disparity_and_none_after_a_cut(two_shots, monkeyp
   assert any(np.isnan(prior).any() for prior in priors[1:7])
   assert [o['info']['prior'] for o in outputs] == [i not in (0, 7) for i in range(12)]
   # A shot's first frame (only) gets the coarse-to-fine threshold of its full search.
-  cells = [kwargs['full_search_cells'] for _, kwargs in calls]
+  cells = [kwargs['config'].matching.full_search_cells for _, kwargs in calls]
   first = temporal.TemporalConfig().first_frame_cells
-  assert cells == [first if i in (0, 7) else None for i in range(12)]
+  own = matcher.MatcherConfig().full_search_cells
+  assert cells == [first if i in (0, 7) else own for i in range(12)]
   # use_prior off: the shot's decisions stay, no prior is passed.
   del calls[:]
   _run(two_shots, temporal.TemporalConfig(use_prior=False), search=(0, 12))
