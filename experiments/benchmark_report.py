@@ -189,8 +189,8 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
 def _matcher_section(run) -> list:
   """Section 13 (this run only): `classical.matcher.match` against the NumPy sgm.match."""
   lines = ['', '## 13. Census-SGM matcher (red-cyan anaglyph of a held-out `sample` scene)',
-           '', 'numba = `baselines.matcher.match` (signed range, window-aligned pair); '
-           'NumPy = `baselines.sgm.match` on the unshifted pair over [0, max - min]. CPU = '
+           '', 'numba = `classical.matcher.match` (signed range, window-aligned pair); '
+           'NumPy = `classical.sgm.match` on the unshifted pair over [0, max - min]. CPU = '
            'user + sys of all threads; peak = VmHWM of the case\'s process, "before" = its '
            'resident memory before the first timed call (imports incl. TensorFlow, inputs); '
            'bad-1 on the left pixels visible in the right view; load = 1-minute load '

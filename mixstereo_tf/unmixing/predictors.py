@@ -9,7 +9,7 @@ The `Unmixer` is the one predictor object every tool uses (unmix, evaluate, benc
 `build_unmixer` makes one from a `PredictorConfig` through a registry of methods:
   * 'model': a trained network, from a run directory / checkpoint prefix (`runs`), a
     SavedModel (`serving`) or, with neither, a model shipped with the package
-    (`pretrained`), run around each image's disparity range (`unmix_image`);
+    (`pretrained`), run around each image's disparity range (`steps`);
   * 'classical': the training-free method of each mixture family (`families`);
   * 'oracle': the stereo module of a trained run on the clean pair (the paper's diplopia
     reference); it takes (left, right) instead of a mixture.
@@ -81,7 +81,7 @@ class Unmixer:
 
   Called on a uint8 mixture [H, W, 3] it returns {'left', 'right': uint8 [H, W, 3],
   'disparity_left', 'disparity_right': float32 [H, W] signed pixels, 'info': what was done
-  (`unmix_image`)}; an 'oracle' returns the disparities of the clean pair. A video frame
+  (`steps`)}; an 'oracle' returns the disparities of the clean pair. A video frame
   may be given a `hints.FrameHint` (`unmixer(frame, hint=hint)`: its shot's encoding,
   range and prior); `fn` is then called with `hint=` as well.
 
@@ -186,7 +186,7 @@ def _image_unmixer(method: str, requested: str, allowed: Sequence[str],
 def pretrained_unmixer(entry: pretrained.Pretrained,
                        config: PredictorConfig = PredictorConfig()) -> Unmixer:
   """The 'model' Unmixer of a shipped model (`pretrained`): a joint network runs like a
-  trained run; a refiner runs on the classical method's result (`unmix_image`), on the
+  trained run; a refiner runs on the classical method's result (`steps`), on the
   encoding detected in each image when no mixture is given and it knows several."""
   model = pretrained.load_model(entry)
   if entry.kind == 'joint':
