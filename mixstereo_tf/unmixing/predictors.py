@@ -11,6 +11,8 @@ The `Unmixer` is the one predictor object every tool uses (unmix, evaluate, benc
     SavedModel (`serving`) or, with neither, a model shipped with the package
     (`pretrained`), run around each image's disparity range (`steps`);
   * 'classical': the training-free method of each mixture family (`families`);
+  * 'sgbm': a peer baseline for anaglyphs, OpenCV's untuned StereoSGBM on the eye channels
+    (`classical/sgbm.py`), views restored like the classical method's;
   * 'oracle': the stereo module of a trained run on the clean pair (the paper's diplopia
     reference); it takes (left, right) instead of a mixture.
 """
@@ -242,6 +244,20 @@ def _classical(config: PredictorConfig) -> Unmixer:
       'classical', config.mixture, supported, config, _classical_range,
       steps.classical_unmix, _family(config.mixture).display_range(),
       _family(config.mixture).restores_views)
+
+
+@_register('sgbm')
+def _sgbm(config: PredictorConfig) -> Unmixer:
+  if config.saved_model or config.checkpoint:
+    raise ValueError("PredictorConfig.method='sgbm' takes neither "
+                     'PredictorConfig.saved_model nor PredictorConfig.checkpoint.')
+  supported = families.detected().names
+  if config.mixture not in supported + (steps.AUTO,):
+    raise ValueError(f"PredictorConfig.method='sgbm' needs PredictorConfig.mixture, an "
+                     f"anaglyph encoding or 'auto' (got {config.mixture}); supported: "
+                     f'{", ".join(supported)}.')
+  return _image_unmixer('sgbm', config.mixture, supported, config, _classical_range,
+                        steps.sgbm_unmix, families.detected().display_range(), True)
 
 
 @_register('oracle')

@@ -11,7 +11,8 @@ Steps, shared by the model and the classical method:
      the input's pixels, then both views restored from the encoding's matrices with the
      network's views as the prior (`restoration`); the classical method: the family's
      `classical` stage (`classical_unmix`, the one route of inference and of the
-     refiner's training examples).
+     refiner's training examples); the 'sgbm' baseline: OpenCV's SGBM on the eye
+     channels, views restored likewise (`sgbm_unmix`).
 Outputs: 'left', 'right' uint8 [H, W, 3], 'disparity_left', 'disparity_right' float32
 [H, W] signed pixels, and 'info' (a JSON-able dict: mixture, detection, disparity range,
 shift, scale, seconds).
@@ -29,6 +30,7 @@ from absl import logging
 import numpy as np
 import tensorflow as tf
 
+from mixstereo_tf.classical import sgbm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.models import refiner
@@ -162,6 +164,22 @@ def classical_unmix(image: np.ndarray, name: str, search: Range,
   out = families.of(name).classical(image, name, search, hint)
   keys = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
   return {key: out[key] for key in keys if key in out}
+
+
+def sgbm_unmix(image: np.ndarray, name: str, search: Tuple[int, int],
+               hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
+  """The 'sgbm' method's step 3 (`steps.run`'s `solve`): SGBM's left disparity and its
+  right one from the mirrored, swapped pair (`sgbm.match_anaglyph`) over `search`, then
+  both views restored from the encoding's matrices (`Family.restore`, as the classical
+  method's); a video hint's prior is not used."""
+  del hint
+  d_left, d_right = sgbm.match_anaglyph(image, name, *search)
+  restored = families.of(name).restore(image_range.u8_to_unit(image), name, d_left, d_right)
+  return {'left': image_range.unit_to_u8(restored['left']),
+          'right': image_range.unit_to_u8(restored['right']),
+          'disparity_left': d_left, 'disparity_right': d_right,
+          'consistent_left': restored['consistent_left'],
+          'info': {'matcher': 'opencv_stereo_sgbm'}}
 
 
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],

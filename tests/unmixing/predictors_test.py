@@ -12,6 +12,7 @@ from mixstereo_tf.artifacts import runs
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import predictors
+from tests.classical import sgbm_test
 
 # Tiny architecture: forward passes take milliseconds; size multiple 32.
 TINY = models.ModelConfig(separation_widths=(4, 4, 4, 4, 4, 4), stereo_features=2,
@@ -151,3 +152,30 @@ def test_pair_function_pads_runs_the_stereo_module_and_crops():
                              atol=1e-5)
   cropped = predict(left[:30, :62], right[:30, :62])
   assert cropped['disparity_left'].shape == cropped['disparity_right'].shape == (30, 62)
+
+
+def test_sgbm_method_is_registered_and_unmixes_an_anaglyph():
+  assert 'sgbm' in predictors.METHODS
+  build = lambda **kwargs: predictors.build_unmixer(
+      predictors.PredictorConfig(method='sgbm', **kwargs))
+  with pytest.raises(ValueError, match='anaglyph encoding'):
+    build(mixture='diplopia')
+  with pytest.raises(ValueError, match='anaglyph encoding'):
+    build()
+  with pytest.raises(ValueError, match='takes neither'):
+    build(mixture='anaglyph', checkpoint='x')
+  left, right = sgbm_test.shifted_pair(-4)
+  image = sgbm_test.anaglyph_of(left, right)
+  unmixer = build(mixture='anaglyph', disparity_range=(-10, 10))
+  assert (unmixer.method, unmixer.mixture, unmixer.restore_colour) == (
+      'sgbm', 'anaglyph', True)
+  out = unmixer(image)
+  assert out['left'].shape == out['right'].shape == image.shape
+  assert out['left'].dtype == np.uint8
+  assert out['info']['method'] == 'sgbm' and out['info']['disparity_range'] == [-10, 10]
+  assert np.mean(np.abs(sgbm_test.inner(out['disparity_left']) + 4) <= 1) > 0.9
+  # The views: the red channel is the left view's, green and blue the right view's.
+  np.testing.assert_array_equal(out['left'][..., 0], image[..., 0])
+  estimated = build(mixture='auto')(image)  # Detected encoding, range estimated.
+  assert estimated['info']['disparity_range'][0] <= -4 <= estimated['info'][
+      'disparity_range'][1]
