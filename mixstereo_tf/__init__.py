@@ -21,6 +21,13 @@ import numpy as np
 
 __version__ = '0.1.0'
 
+# TensorFlow >= 2.17 leaves its oneDNN kernels off on CPUs without AVX-512 (e.g. AVX2-only
+# AMD EPYC); its own kernels for stride-2 Conv3D gradients and Conv3DTranspose are then
+# 10-200x slower: the demo trained at 0.23 steps/s instead of ~6 on one core. Read when
+# TensorFlow is first imported, so it applies to every tool and to `unmix` unless the
+# caller imported TensorFlow first or set the variable (an explicit setting wins).
+os.environ.setdefault('TF_ENABLE_ONEDNN_OPTS', '1')
+
 # PredictorConfig fields whose `unmix` keyword has another name.
 _KEYWORDS = {'pretrained': 'model'}
 
