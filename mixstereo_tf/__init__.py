@@ -109,8 +109,7 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
     mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g.
       'gray', 'dubois', 'diplopia'); 'auto' detects an anaglyph's encoding; None: the
       model's own.
-    method: 'model' (a trained network), 'classical' (training-free) or 'sgbm' (OpenCV's
-      StereoSGBM on the eye channels, a peer baseline; anaglyphs).
+    method: 'model' (a network), 'classical' (training-free) or 'sgbm' (OpenCV's, a peer).
     model: a shipped model's name ('anaglyph', 'diplopia') or a folder in its format;
       None with neither checkpoint nor saved_model: the first shipped model that unmixes
       the mixture ('auto': the anaglyph model).
