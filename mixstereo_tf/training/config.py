@@ -26,7 +26,11 @@ class TrainConfig:
       or 'false'.
     strategy: 'default' (one device), 'mirrored' (all local devices) or 'multi_worker'
       (MultiWorkerMirroredStrategy from TF_CONFIG).
-    mixed_precision: float16 (GPU) / bfloat16 (CPU) compute with float32 variables.
+    mixed_precision: float16 compute with float32 variables and dynamic loss scaling on a
+      GPU, bfloat16 (no scaling) on a CPU (`step.precision_policy`; docs/GPU.md).
+    deterministic: op determinism (`tf.config.experimental.enable_op_determinism`): two
+      runs of one configuration on one machine give identical weights (the seeds are
+      always set from `seed`); slower on a GPU.
     init_checkpoint: weights to start from when model_dir has no checkpoint (fine-tuning).
     checkpoint_every: steps between checkpoints (one is also written on SIGINT/SIGTERM,
       on an exception, and at the end).
@@ -44,6 +48,7 @@ class TrainConfig:
   jit_compile: str = 'auto'
   strategy: str = 'default'
   mixed_precision: bool = False
+  deterministic: bool = False
   init_checkpoint: Optional[str] = None
   checkpoint_every: int = 1000
   summary_every: int = 100

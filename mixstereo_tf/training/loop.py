@@ -82,15 +82,6 @@ def _write_dir(strategy: tf.distribute.Strategy, model_dir: str) -> Tuple[bool, 
   return False, os.path.join(tempfile.gettempdir(), f'mixstereo_{task_type}_{task_id}')
 
 
-def _set_precision(enabled: bool, device_type: str) -> None:
-  # float16 needs loss scaling and is fast on GPUs; CPUs have bfloat16 kernels instead.
-  if not enabled:
-    tf.keras.mixed_precision.set_global_policy('float32')
-  else:
-    tf.keras.mixed_precision.set_global_policy(
-        'mixed_float16' if device_type == 'GPU' else 'mixed_bfloat16')
-
-
 class _StopSignals:
   """Turns SIGINT/SIGTERM into a flag the loop checks between steps."""
 
@@ -152,11 +143,15 @@ def _prepare(config: config_lib.TrainConfig, model_config: models.ModelConfig,
   if model_config.conv3d_implementation == 'auto':
     model_config = dataclasses.replace(
         model_config, conv3d_implementation=conv3d.auto_implementation(device_type, jit))
-  _set_precision(config.mixed_precision, device_type)
+  policy = step_lib.precision_policy(config.mixed_precision, device_type)
+  tf.keras.mixed_precision.set_global_policy(policy)
+  if config.deterministic:  # Process-wide, like the policy; XLA follows it on GPUs.
+    tf.config.experimental.enable_op_determinism()
   tf.keras.utils.set_random_seed(config.seed)
-  logging.info('Strategy %s with %d replica(s) on %s; jit_compile=%s; conv3d %s; mode=%s.',
-               config.strategy, strategy.num_replicas_in_sync, device_type, jit,
-               model_config.conv3d_implementation, config.mode)
+  logging.info('Strategy %s with %d replica(s) on %s; jit_compile=%s; conv3d %s; mode=%s; '
+               '%s; deterministic=%s.', config.strategy, strategy.num_replicas_in_sync,
+               device_type, jit, model_config.conv3d_implementation, config.mode, policy,
+               config.deterministic)
   return strategy, chief, write_dir, model_config, jit
 
 
@@ -167,7 +162,7 @@ def _build(config: config_lib.TrainConfig, model_config: models.ModelConfig,
   with strategy.scope():
     model = models.build_model(model_config)
     optimizer = optimizers.make_optimizer(config.optimizer, config.learning_rate)
-    if config.mixed_precision and _device_type(strategy) == 'GPU':
+    if tf.keras.mixed_precision.global_policy().compute_dtype == 'float16':
       optimizer = tf.keras.mixed_precision.LossScaleOptimizer(optimizer)
     trainer = step_lib.TrainStep(model, optimizer, loss_config, config.mode, strategy, jit)
     optimizer.build(trainer.variables)
@@ -198,13 +193,36 @@ def _due(step: int, every: int, last: int = -1) -> bool:
   return step % every == 0 or step == last
 
 
-def _check_finite(loss: float, gradient_norm: float, session: _Session, step: int) -> None:
-  if not (math.isfinite(loss) and (session.trainer.loss_scaled or
-                                   math.isfinite(gradient_norm))):
+def _check_finite(loss: float, gradient_norm: float, session: _Session, step: int,
+                  skipped: int = 0) -> None:
+  # 40 updates in a row skipped by loss scaling (scale < 2^-25): the gradients are broken.
+  if not (math.isfinite(loss) and skipped < 40 and (session.trainer.loss_scaled or
+                                                    math.isfinite(gradient_norm))):
     raise NonFiniteLossError(
-        f'Non-finite loss {loss} (gradient norm {gradient_norm}) at step {step}; '
+        f'Non-finite loss {loss} (gradient norm {gradient_norm}, {skipped} updates skipped '
+        f'in a row) at step {step}; '
         f'stopping. The last good checkpoint is {session.manager.latest_checkpoint} '
         '(not overwritten).')
+
+
+def _periodic(session: _Session, config: config_lib.TrainConfig, step: int,
+              result: Tuple[dict, dict, dict], rate: float,
+              last_save: Optional[str]) -> Optional[str]:
+  """Summaries, log line, checkpoint due at `step` of `result`; returns the newest save."""
+  scalars, outputs, batch = result
+  if _due(step, config.summary_every):
+    summaries.write_scalars({k: float(v) for k, v in scalars.items()}, step,
+                            {'learning_rate': config.learning_rate, 'steps_per_second': rate})
+  if _due(step, config.image_summary_every):
+    local = session.strategy.experimental_local_results(batch)[0]
+    summaries.write_images(local, outputs, step, session.model_config.max_disparity)
+  if _due(step, config.log_every, config.num_steps):
+    eta = (config.num_steps - step) / rate if rate > 0 else math.nan
+    logging.info('step %d/%d  loss %.4f  %.3f steps/s  ETA %.0f s', step, config.num_steps,
+                 float(scalars['loss']), rate, eta)
+  if _due(step, config.checkpoint_every):
+    last_save = session.manager.save(checkpoint_number=step)
+  return last_save
 
 
 def _run_steps(session: _Session, config: config_lib.TrainConfig,
@@ -213,7 +231,7 @@ def _run_steps(session: _Session, config: config_lib.TrainConfig,
   writer = (tf.summary.create_file_writer(os.path.join(config.model_dir, 'train'))
             if session.chief else tf.summary.create_noop_writer())
   iterator = iter(session.strategy.experimental_distribute_dataset(dataset))
-  step, loss, rate = start_step, math.nan, 0.0
+  step, loss, rate, skipped = start_step, math.nan, 0.0, 0
   last_save = session.manager.latest_checkpoint
   tick, tick_step = None, step
   with _StopSignals() as signals, writer.as_default():
@@ -221,26 +239,17 @@ def _run_steps(session: _Session, config: config_lib.TrainConfig,
       while step < config.num_steps and signals.received is None:
         batch = next(iterator)
         scalars, outputs = session.trainer(batch)
-        step = int(session.optimizer.iterations.numpy())
+        previous, step = step, int(session.optimizer.iterations.numpy())
+        skipped = skipped + 1 if step == previous else 0
         loss = float(scalars['loss'])
-        _check_finite(loss, float(scalars['metrics/gradient_norm']), session, step)
+        _check_finite(loss, float(scalars['metrics/gradient_norm']), session, step, skipped)
+        if skipped:  # Loss scaling skipped the update (inf gradients): no new step.
+          continue
         if tick is None:  # The first step includes tracing and compilation.
           tick, tick_step = time.perf_counter(), step
         elif step > tick_step:
           rate = (step - tick_step) / (time.perf_counter() - tick)
-        if _due(step, config.summary_every):
-          summaries.write_scalars({k: float(v) for k, v in scalars.items()}, step,
-                                  {'learning_rate': config.learning_rate,
-                                   'steps_per_second': rate})
-        if _due(step, config.image_summary_every):
-          local = session.strategy.experimental_local_results(batch)[0]
-          summaries.write_images(local, outputs, step, session.model_config.max_disparity)
-        if _due(step, config.log_every, config.num_steps):
-          eta = (config.num_steps - step) / rate if rate > 0 else math.nan
-          logging.info('step %d/%d  loss %.4f  %.3f steps/s  ETA %.0f s', step,
-                       config.num_steps, loss, rate, eta)
-        if _due(step, config.checkpoint_every):
-          last_save = session.manager.save(checkpoint_number=step)
+        last_save = _periodic(session, config, step, (scalars, outputs, batch), rate, last_save)
     except NonFiniteLossError:
       raise
     except BaseException:

@@ -28,6 +28,19 @@ def resolve_jit_compile(setting: str, device_type: str) -> bool:
   raise ValueError(f"jit_compile must be 'auto', 'true' or 'false', got {setting!r}.")
 
 
+def precision_policy(mixed_precision: bool, device_type: str) -> str:
+  """The Keras dtype policy of `--mixed_precision` on a device type ('CPU', 'GPU', ...).
+
+  Off: 'float32'. On: 'mixed_float16' on a GPU (Tensor Cores; the loop adds dynamic loss
+  scaling), 'mixed_bfloat16' elsewhere (float16 has no fast CPU kernels; bfloat16 has
+  float32's range, so no loss scaling). Variables, batch-norm statistics, the soft-argmin
+  and every loss stay float32 (docs/GPU.md).
+  """
+  if not mixed_precision:
+    return 'float32'
+  return 'mixed_float16' if device_type.upper() == 'GPU' else 'mixed_bfloat16'
+
+
 def trainable_variables(model: tf.keras.Model, mode: str) -> List[tf.Variable]:
   """The variables a mode trains: all (joint), the U-Net only, or the stereo network only."""
   if mode == 'joint':
@@ -103,8 +116,14 @@ class TrainStep:
     gradients = tape.gradient(loss, self.variables)
     scalars.update(separation_psnr(outputs, batch))
     # NaN gradients with a finite loss would silently poison the weights: the loop checks
-    # this norm as well as the loss.
-    scalars['metrics/gradient_norm'] = tf.linalg.global_norm(gradients)
+    # this norm as well as the loss. Under loss scaling the gradients carry the scale
+    # (the optimizer divides it out before applying them): so does the norm, until here.
+    norm = tf.linalg.global_norm(gradients)
+    if self.loss_scaled:
+      scale = tf.cast(self.optimizer.scale_loss(tf.constant(1.0)), norm.dtype)
+      norm = norm / scale
+      scalars['metrics/loss_scale'] = scale
+    scalars['metrics/gradient_norm'] = norm
     return scalars, outputs, gradients
 
   def _replica_step(self, batch):

@@ -1,11 +1,15 @@
-"""Tests of the training loop: resume, NaN stop, distribution, fine-tuning, outputs."""
+"""Tests of the training loop: resume, NaN stop, distribution, fine-tuning, outputs, mixed
+precision and determinism."""
 
 import glob
 import json
+import math
+import types
 
 import numpy as np
 import pytest
 import tensorflow as tf
+from tensorflow.python.framework import config as tf_config
 
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import runs
@@ -118,3 +122,45 @@ def test_config_validation_names_the_field():
     config_lib.TrainConfig(model_dir='x', num_steps=0)
   with pytest.raises(ValueError, match='TrainConfig.mode'):
     config_lib.TrainConfig(model_dir='x', mode='stereo')
+
+
+def test_deterministic_runs_give_identical_weights(tmp_path):
+  try:
+    first = _train(tmp_path / 'a', 3, deterministic=True)
+    second = _train(tmp_path / 'b', 3, deterministic=True)
+  finally:
+    tf_config.disable_op_determinism()
+  a, b = _checkpoint_values(first.last_checkpoint), _checkpoint_values(second.last_checkpoint)
+  assert a.keys() == b.keys() and len(a) > 10
+  for key in a:
+    np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_mixed_precision_on_a_gpu_scales_the_loss_and_logs_unscaled_scalars(
+    tmp_path, monkeypatch):
+  # The GPU path (mixed_float16, LossScaleOptimizer) run on the CPU's float16 kernels.
+  monkeypatch.setattr(loop, '_device_type', lambda strategy: 'GPU')
+  try:
+    result = _train(tmp_path, 2, mixed_precision=True, jit_compile='false')
+  finally:
+    tf.keras.mixed_precision.set_global_policy('float32')
+  assert result.final_step == 2 and np.isfinite(result.final_loss)
+  assert all(np.all(np.isfinite(v)) for v in _checkpoint_values(result.last_checkpoint).values())
+  reader = tf.train.load_checkpoint(result.last_checkpoint)
+  assert any('dynamic_scale' in k for k in reader.get_variable_to_shape_map())
+  events = glob.glob(str(tmp_path / 'train' / 'events.out.tfevents.*'))
+  logged = {}
+  for record in tf.data.TFRecordDataset(events):
+    for value in tf.compat.v1.Event.FromString(record.numpy()).summary.value:
+      if value.tag.startswith('metrics/'):
+        logged[value.tag] = float(tf.make_ndarray(value.tensor))
+  assert logged['metrics/loss_scale'] == 2.0 ** 15
+  assert 0 < logged['metrics/gradient_norm'] < 100  # Unscaled (scaled: ~1e4).
+
+
+def test_forty_updates_in_a_row_skipped_by_loss_scaling_stop_the_run():
+  session = types.SimpleNamespace(trainer=types.SimpleNamespace(loss_scaled=True),
+                                  manager=types.SimpleNamespace(latest_checkpoint='ckpt-7'))
+  loop._check_finite(0.5, math.inf, session, 7, skipped=39)  # Overflow: a normal skip.
+  with pytest.raises(loop.NonFiniteLossError, match='40 updates skipped in a row'):
+    loop._check_finite(0.5, math.inf, session, 7, skipped=40)

@@ -90,3 +90,46 @@ def test_resolve_jit_compile(setting, device, expected):
 def test_resolve_jit_compile_rejects_unknown_values():
   with pytest.raises(ValueError, match='jit_compile'):
     step_lib.resolve_jit_compile('yes', 'CPU')
+
+
+@pytest.mark.parametrize('mixed, device, expected', [
+    (False, 'GPU', 'float32'), (True, 'GPU', 'mixed_float16'), (True, 'gpu', 'mixed_float16'),
+    (True, 'CPU', 'mixed_bfloat16'), (False, 'CPU', 'float32')])
+def test_precision_policy(mixed, device, expected):
+  assert step_lib.precision_policy(mixed, device) == expected
+
+
+def _gradients_under(policy, weights=None):
+  """(weights, scalars, unscaled gradients) of one batch under a dtype policy."""
+  tf.keras.mixed_precision.set_global_policy(policy)
+  try:
+    model = models.build_model(training_helpers.MINI)
+    if weights is not None:
+      model.set_weights(weights)
+    optimizer = tf.keras.optimizers.RMSprop(1e-3)
+    if policy == 'mixed_float16':  # What the loop does on a GPU.
+      optimizer = tf.keras.mixed_precision.LossScaleOptimizer(optimizer)
+    trainer = step_lib.TrainStep(model, optimizer, objective.LossConfig(), 'joint',
+                                 tf.distribute.get_strategy(), jit_compile=False)
+    optimizer.build(trainer.variables)
+    scalars, _, gradients = trainer._gradients(training_helpers.stereo_batch())
+    scale = float(scalars.get('metrics/loss_scale', 1.0))
+    return (model.get_weights(), {k: float(v) for k, v in scalars.items()},
+            np.concatenate([g.numpy().ravel() / scale for g in gradients]))
+  finally:
+    tf.keras.mixed_precision.set_global_policy('float32')
+
+
+def test_mixed_float16_step_is_finite_and_its_unscaled_gradients_match_float32():
+  weights, full, reference = _gradients_under('float32')
+  _, mixed, gradients = _gradients_under('mixed_float16', weights)
+  assert mixed['metrics/loss_scale'] == 2.0 ** 15  # Keras' initial dynamic scale.
+  assert all(np.isfinite(v) for v in mixed.values()) and np.all(np.isfinite(gradients))
+  for key in ('loss', 'separation/total', 'stereo/total', 'stereo/smoothness_left'):
+    np.testing.assert_allclose(mixed[key], full[key], rtol=1e-3)
+  # The logged norm is unscaled: float32's within float16 rounding, not 32768 times it.
+  np.testing.assert_allclose(mixed['metrics/gradient_norm'], full['metrics/gradient_norm'],
+                             rtol=0.02)
+  cosine = gradients @ reference / np.linalg.norm(gradients) / np.linalg.norm(reference)
+  assert cosine > 0.995
+  assert np.linalg.norm(gradients - reference) < 0.1 * np.linalg.norm(reference)
