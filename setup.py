@@ -17,7 +17,7 @@ setuptools.setup(
         'mixstereo_tf.data_lists'],
     package_dir={'mixstereo_tf.data_lists': 'data_lists'},
     # The shipped models (mixstereo_tf/artifacts/pretrained/NAME/{info.json,weights.npz}).
-    package_data={'mixstereo_tf.data_lists': ['README.md', 'kitti/*.txt'],
+    package_data={'mixstereo_tf.data_lists': ['README.md', 'kitti/*.txt', 'middlebury/*.txt'],
                   'mixstereo_tf.artifacts.pretrained': ['*/info.json', '*/weights.npz']},
     include_package_data=True,
     # classical/sgm.py uses np.bitwise_count (numpy >= 2.0). The TF, OpenCV, scikit-image and
@@ -50,6 +50,9 @@ setuptools.setup(
         # evaluation (evaluation/ffmpeg_encoder.py). PyAV's wheels lack stereo3d.
         'test': ['pytest>=7', 'imageio-ffmpeg>=0.5'],
         'eval': ['imageio-ffmpeg>=0.5'],
+        # A GPU: TensorFlow with its CUDA and cuDNN wheels (`tensorflow` alone finds no GPU
+        # and trains on the CPU; every binary's first log line says which).
+        'gpu': ['tensorflow[and-cuda]>=2.18,<3'],
     },
     entry_points={
         'console_scripts': [

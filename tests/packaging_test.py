@@ -18,6 +18,7 @@ def test_the_wheel_ships_the_split_lists_as_package_data(tmp_path):
   names = set(zipfile.ZipFile(wheel).namelist())
   for name in ('eigen_test_files.txt', 'kitti_train_files.txt', 'eigen_train_files.txt'):
     assert f'mixstereo_tf/data_lists/kitti/{name}' in names
+  assert 'mixstereo_tf/data_lists/middlebury/finetune_scenes.txt' in names
   assert 'mixstereo_tf/evaluation/protocols/eigen.py' in names
   assert 'mixstereo_tf/cli/flags.py' in names
   shipped = {n for n in names if n.startswith('mixstereo_tf/artifacts/pretrained/')}

@@ -217,12 +217,44 @@ def _load(sample: records.StereoSample) -> Dict[str, np.ndarray]:
   }
 
 
+def fit_factor(largest: float, max_disparity: int) -> int:
+  """The smallest integer k >= 1 with largest / k <= max_disparity - 1."""
+  if max_disparity < 2:
+    raise ValueError(f'fit_disparity must be >= 2, got {max_disparity}.')
+  return max(1, int(np.ceil(largest / (max_disparity - 1.0))))
+
+
+def _block(array: np.ndarray, factor: int, reduce) -> np.ndarray:
+  """`reduce` over k x k blocks of [H, W, ...] (the last H % k rows, W % k columns go)."""
+  h, w = array.shape[0] // factor, array.shape[1] // factor
+  blocks = array[:h * factor, :w * factor].reshape(h, factor, w, factor, *array.shape[2:])
+  return reduce(blocks, axis=(1, 3))
+
+
+def shrink(loaded: Dict[str, np.ndarray], factor: int) -> Dict[str, np.ndarray]:
+  """A loaded pair `factor` times smaller: views by k x k means; ground truth / k where the
+  whole block is known (else 0, unknown); masks true where the whole block is."""
+  if factor == 1:
+    return loaded
+  out = {key: np.rint(_block(loaded[key], factor, np.mean)).astype(np.uint8)
+         for key in ('left', 'right')}
+  for view in ('left', 'right'):
+    valid = _block(loaded[f'valid_{view}'], factor, np.all)
+    mean = _block(loaded[f'disparity_{view}'].astype(np.float64), factor, np.mean)
+    out[f'valid_{view}'] = valid
+    out[f'disparity_{view}'] = np.where(valid, mean / factor, 0).astype(np.float32)
+  out['nonocc_left'] = _block(loaded['nonocc_left'], factor, np.all) & out['valid_left']
+  out['disc_left'] = _block(loaded['disc_left'], factor, np.any) & out['valid_left']
+  return out
+
+
 def load_file_sample(sample: records.StereoSample) -> Dict[str, np.ndarray]:
   """Loads a file-backed sample into arrays with exactly the keys of `records.LOADED_KEYS`.
 
   valid_left = GT known AND inside `all_left` (when given); nonocc_left = valid_left AND
   `nonocc_left` (when given), else valid_left; disc_left = valid_left AND `disc_left` (when
-  given), else all False. Disparity outside the validity masks is 0.
+  given), else all False. Disparity outside the validity masks is 0. With
+  `sample.fit_disparity`, the pair is then shrunk to fit that many levels (`shrink`).
   Missing ground truth gives zero disparity and all-False masks. Image paths go through
   `find_image`, so a .jpg entry also finds a .png file.
 
@@ -231,6 +263,11 @@ def load_file_sample(sample: records.StereoSample) -> Dict[str, np.ndarray]:
       file(s) and `sample.source`.
   """
   try:
-    return _load(sample)
+    loaded = _load(sample)
+    if sample.fit_disparity:
+      largest = max(float(loaded['disparity_left'].max()),
+                    float(loaded['disparity_right'].max()))
+      loaded = shrink(loaded, fit_factor(largest, sample.fit_disparity))
+    return loaded
   except ValueError as e:
     raise ValueError(f'{sample.source or sample.name}: {e}') from None

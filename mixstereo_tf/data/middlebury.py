@@ -144,8 +144,40 @@ def middlebury_samples(data_dir: str, scale_overrides: Optional[Mapping[str, flo
   return samples
 
 
+def scene_key(name: str) -> str:
+  """A sample name's scene: its last folder, lower case, before any '-' ('Adirondack' for
+  'Adirondack-perfect', '2014/Adirondack-imperfect' or 'adirondack')."""
+  return name.replace('\\', '/').rsplit('/', 1)[-1].lower().split('-')[0]
+
+
 def is_evaluation_scene(name: str) -> bool:
   """True for a folder of an EVALUATION_SCENES scene: 'Teddy', 'cones', 'Aloe',
   'Motorcycle-perfect', 'MotorcycleE-imperfect', '2003/teddy' (case-insensitive)."""
-  base = name.replace('\\', '/').rsplit('/', 1)[-1].lower().split('-')[0]
+  base = scene_key(name)
   return base in EVALUATION_SCENES or base.startswith('motorcycle')
+
+
+def read_scene_list(path: str) -> List[str]:
+  """The scene names of a list file: one per line; blank lines and '#' comments skipped."""
+  with open(path, encoding='utf-8') as f:
+    names = [line.split('#', 1)[0].strip() for line in f]
+  return [name for name in names if name]
+
+
+def select_scenes(samples: List[records.StereoSample], names: List[str],
+                  list_path: str) -> Tuple[List[records.StereoSample], List[str]]:
+  """(the samples of the listed scenes, the listed names found in no sample).
+
+  A name selects every folder of its scene (`scene_key`: 'Adirondack' selects
+  Adirondack-perfect and Adirondack-imperfect).
+
+  Raises:
+    ValueError: no sample is of a listed scene (naming the list and the scenes found).
+  """
+  wanted = {scene_key(n): n for n in names}
+  chosen = [s for s in samples if scene_key(s.name) in wanted]
+  if not chosen:
+    raise ValueError(f'None of the {len(wanted)} scenes of {list_path} is among the '
+                     f'{len(samples)} found: {", ".join(s.name for s in samples)}.')
+  found = {scene_key(s.name) for s in chosen}
+  return chosen, [n for key, n in wanted.items() if key not in found]

@@ -33,6 +33,9 @@ class StereoSample:
     calib: optional path of a calibration file (KITTI raw: the date folder).
     velodyne: optional path of the frame's Velodyne scan (KITTI raw).
     source: where the sample was listed, as 'file:line' or the scene folder, for errors.
+    fit_disparity: when set, loading shrinks the pair by the smallest integer k with (largest
+      ground-truth disparity) / k <= fit_disparity - 1 (`image_io.shrink`), so a scene
+      deeper than a network's levels (Middlebury 2014 at full size) fits them.
   """
   name: str
   left: str
@@ -46,6 +49,7 @@ class StereoSample:
   calib: Optional[str] = None
   velodyne: Optional[str] = None
   source: str = ''
+  fit_disparity: Optional[int] = None
 
   @property
   def is_virtual(self) -> bool:

@@ -22,6 +22,7 @@ from mixstereo_tf.data import kitti
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sample
+from mixstereo_tf.data import split_lists
 
 SPLITS = ('train', 'heldout')
 
@@ -33,7 +34,8 @@ class DataConfig:
   Attributes:
     dataset: one of DATASETS.
     data_dir: the dataset root (not used by `sample`).
-    split_list: a list of `left right` lines relative to data_dir (`kitti_raw`).
+    split_list: a list of `left right` lines relative to data_dir (`kitti_raw`), or of
+      scene names (`middlebury`: only those scenes are read; `middlebury.read_scene_list`).
     skip_bad_pairs: log and count pairs with missing files instead of failing.
     sample_scenes: number of procedural training scenes of the `sample` source.
     heldout_scenes: number of procedural held-out scenes of `sample` (None: the source's
@@ -51,6 +53,9 @@ class DataConfig:
     allow_evaluation_scenes: let the 'train' split read evaluation data: the Middlebury
       scenes of the paper's tables (`middlebury.EVALUATION_SCENES`) and the KITTI 2015
       training frames. Off: such a training set is refused.
+    fit_disparity: 'train' split of `middlebury`: a scene whose ground truth exceeds
+      max_disparity - 1 (2014 scenes at full size: hundreds of px) is shrunk by the smallest
+      integer factor that fits (`StereoSample.fit_disparity`), then cropped as any pair.
   """
   dataset: str = 'sample'
   data_dir: Optional[str] = None
@@ -65,6 +70,7 @@ class DataConfig:
   texture_dir: Optional[str] = None
   realistic_scenes: bool = False
   allow_evaluation_scenes: bool = False
+  fit_disparity: bool = True
 
   def __post_init__(self):
     if self.dataset not in _LISTERS:
@@ -135,9 +141,18 @@ def _kitti_stereo(version: str) -> Callable[[DataConfig, str], List[records.Ster
 def _middlebury(config: DataConfig, split: str) -> List[records.StereoSample]:
   samples = middlebury.middlebury_samples(config.data_dir,
                                           scale_overrides=dict(config.middlebury_scales))
+  if config.split_list:
+    path = split_lists.resolve(config.split_list)
+    samples, missing = middlebury.select_scenes(samples, middlebury.read_scene_list(path),
+                                                path)
+    if missing:
+      logging.warning('%d scene(s) of %s not in %s: %s.', len(missing), path,
+                      config.data_dir, ', '.join(missing))
   evaluation = [s.name for s in samples if middlebury.is_evaluation_scene(s.name)]
   if split == 'train' and evaluation:
     _refuse_evaluation_data(config, f'The Middlebury scenes {", ".join(evaluation)}')
+  if split == 'train' and config.fit_disparity and config.max_disparity:
+    samples = [dataclasses.replace(s, fit_disparity=config.max_disparity) for s in samples]
   return samples
 
 

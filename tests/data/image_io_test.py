@@ -229,3 +229,27 @@ def test_load_sample_size_mismatches_name_the_files(tmp_path):
   with pytest.raises(ValueError, match=r'scene7.*gone\.png'):
     image_io.load_file_sample(records.StereoSample('a', left, str(tmp_path / 'gone.png'),
                                                    source='scene7'))
+
+
+def test_fit_factor_is_the_smallest_that_fits():
+  assert [image_io.fit_factor(d, 8) for d in (0, 7, 7.01, 37.25)] == [1, 1, 2, 6]
+  with pytest.raises(ValueError, match='fit_disparity'):
+    image_io.fit_factor(3, 1)
+
+
+def test_shrink_averages_views_and_keeps_ground_truth_only_where_a_block_is_known():
+  views = np.arange(16, dtype=np.uint8).reshape(4, 4, 1).repeat(3, axis=2)
+  disparity = np.full((4, 4), 6, np.float32)
+  valid = np.ones((4, 4), bool)
+  valid[0, 0], disparity[0, 0] = False, 0
+  disc = np.zeros((4, 4), bool)
+  disc[3, 3] = True
+  loaded = {'left': views, 'right': views, 'disparity_left': disparity,
+            'disparity_right': disparity, 'valid_left': valid, 'valid_right': valid,
+            'nonocc_left': valid, 'disc_left': disc}
+  out = image_io.shrink(loaded, 2)
+  np.testing.assert_array_equal(out['left'][..., 0], [[2, 4], [10, 12]])  # rint(2.5) = 2.
+  np.testing.assert_array_equal(out['valid_left'], [[False, True], [True, True]])
+  np.testing.assert_array_equal(out['disparity_left'], [[0, 3], [3, 3]])
+  np.testing.assert_array_equal(out['disc_left'], [[False, False], [False, True]])
+  assert image_io.shrink(loaded, 1) is loaded

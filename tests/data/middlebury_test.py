@@ -1,5 +1,6 @@
 """Tests for mixstereo_tf.data.middlebury on tiny scene folders written into tmp_path."""
 
+import dataclasses
 import os
 
 import cv2
@@ -8,6 +9,7 @@ import pytest
 
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import sources
+from mixstereo_tf.data import split_lists
 from tests import data_helpers
 
 _SHAPE = (8, 12)
@@ -196,3 +198,47 @@ def test_training_refuses_the_papers_evaluation_scenes(tmp_path):
   assert [middlebury.is_evaluation_scene(n) for n in (
       'Aloe', 'cones', '2001/Tsukuba', 'MotorcycleE-imperfect', 'Art', 'Adirondack')] == [
           True, True, True, True, False, False]
+
+
+def test_a_training_scene_deeper_than_the_levels_is_shrunk_to_fit(tmp_path):
+  _scene_2014(str(tmp_path / 'Adirondack-perfect'))  # 8x12, 37.25 px, (0, 0) unknown.
+  config = sources.DataConfig(dataset='middlebury', data_dir=str(tmp_path), max_disparity=8)
+  train, = sources.list_samples(config, split='train')
+  heldout, = sources.list_samples(config, split='heldout')
+  assert train.fit_disparity == 8 and heldout.fit_disparity is None
+  loaded = sources.load_sample(train)  # k = ceil(37.25 / 7) = 6: 1x2 blocks.
+  assert loaded['left'].shape == (1, 2, 3) and loaded['left'][0, 0, 0] == 10
+  np.testing.assert_array_equal(loaded['valid_left'], [[False, True]])
+  np.testing.assert_allclose(loaded['disparity_left'], [[0, 37.25 / 6]], rtol=1e-6)
+  # Evaluation reads the scene as stored, and so does training with fit_disparity off.
+  assert sources.load_sample(heldout)['left'].shape == (8, 12, 3)
+  unfit = dataclasses.replace(config, fit_disparity=False)
+  assert sources.list_samples(unfit, split='train')[0].fit_disparity is None
+
+
+def test_a_scene_list_selects_scenes_and_the_guard_still_refuses_evaluation_ones(tmp_path):
+  for name in ('Adirondack-perfect', 'Adirondack-imperfect', 'Piano-perfect'):
+    _scene_2014(str(tmp_path / name))
+  _classic(str(tmp_path / 'Teddy'))
+  listed = tmp_path / 'scenes.txt'
+  listed.write_text('# training scenes\nadirondack\n\nbarn1  # 2001, not downloaded\n')
+  config = sources.DataConfig(dataset='middlebury', data_dir=str(tmp_path),
+                              split_list=str(listed))
+  names = sorted(s.name for s in sources.list_samples(config, split='train'))
+  assert names == ['Adirondack-imperfect', 'Adirondack-perfect']  # Teddy is not listed.
+  _, missing = middlebury.select_scenes(middlebury.middlebury_samples(str(tmp_path)),
+                                        middlebury.read_scene_list(str(listed)), 'list')
+  assert missing == ['barn1']
+  listed.write_text('Piano\nTeddy\n')
+  with pytest.raises(ValueError, match='Middlebury scenes Teddy.*allow_evaluation_scenes'):
+    sources.list_samples(config, split='train')
+  listed.write_text('Vintage\n')
+  with pytest.raises(ValueError, match='None of the 1 scenes of .*scenes.txt'):
+    sources.list_samples(config, split='train')
+
+
+def test_the_shipped_finetune_list_names_no_evaluation_scene():
+  path = split_lists.resolve('data_lists/middlebury/finetune_scenes.txt')
+  names = middlebury.read_scene_list(path)
+  assert len(names) == 26 and 'Adirondack' in names and 'barn1' in names
+  assert not [n for n in names if middlebury.is_evaluation_scene(n)]
