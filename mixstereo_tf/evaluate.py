@@ -19,6 +19,7 @@ from absl import app  # pylint: disable=g-bad-import-order
 from absl import flags
 from absl import logging
 
+from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.evaluation import protocols
@@ -64,6 +65,7 @@ def main(argv):
   if len(argv) > 1:
     raise app.UsageError(f'Unexpected arguments: {argv[1:]}')
   cli_flags.exit_if_listing()
+  device.log_line()
   try:
     predictor = cli_flags.predictor_config()
     if not FLAGS['disparity_range'].present:

@@ -23,6 +23,7 @@ from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.artifacts import serving
+from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flags as cli_flags
 
 FLAGS = flags.FLAGS
@@ -57,6 +58,7 @@ def _model_and_info():
 def main(argv):
   del argv
   cli_flags.exit_if_listing()
+  device.log_line()
   try:
     if FLAGS.as_pretrained:
       if not FLAGS.checkpoint:

@@ -18,6 +18,7 @@ from absl import flags
 from absl import logging
 
 from mixstereo_tf import models
+from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import sources
@@ -44,7 +45,10 @@ flags.DEFINE_string('model_dir', None, 'Checkpoints, summaries and saved flags g
                     required=True)
 flags.DEFINE_enum('dataset', _DATA['dataset'], sources.DATASETS, 'Training data source.')
 flags.DEFINE_string('train_list', _DATA['split_list'], 'Split list of `left right` lines '
-                    '(kitti_raw).')
+                    '(kitti_raw), or of scene names (middlebury: only those are read).')
+flags.DEFINE_boolean('fit_disparity', _DATA['fit_disparity'], 'middlebury: shrink a scene '
+                     'deeper than --max_disparity by the smallest integer factor that fits '
+                     '(block means; ground truth / factor) before cropping.')
 flags.DEFINE_boolean('skip_bad_pairs', _DATA['skip_bad_pairs'], 'Log and skip unreadable pairs.')
 flags.DEFINE_boolean('allow_evaluation_scenes', _DATA['allow_evaluation_scenes'],
                      "Train on the paper's evaluation scenes (Middlebury Tsukuba, Venus, "
@@ -71,7 +75,11 @@ flags.DEFINE_enum('jit_compile', _TRAIN['jit_compile'], config_lib.JIT_CHOICES,
 flags.DEFINE_enum('strategy', _TRAIN['strategy'], config_lib.STRATEGIES,
                   'tf.distribute strategy.')
 flags.DEFINE_boolean('mixed_precision', _TRAIN['mixed_precision'],
-                     'float16 (GPU) / bfloat16 (CPU) compute.')
+                     'float16 compute with loss scaling (GPU) / bfloat16 (CPU); float32 '
+                     'variables, soft-argmin and losses (not in the paper).')
+flags.DEFINE_boolean('deterministic', _TRAIN['deterministic'],
+                     'Op determinism: two runs of one flagfile on one machine give '
+                     'identical weights (slower on a GPU).')
 flags.DEFINE_integer('seed', _TRAIN['seed'], 'Seed of initialisation and the input pipeline.')
 flags.DEFINE_integer('checkpoint_every', _TRAIN['checkpoint_every'], 'Steps between checkpoints.')
 flags.DEFINE_integer('summary_every', _TRAIN['summary_every'], 'Steps between scalar summaries.')
@@ -151,7 +159,7 @@ def build_configs():
       sample_width=FLAGS.sample_width or FLAGS.crop_width,
       max_disparity=FLAGS.max_disparity, middlebury_scales=cli_flags.middlebury_scales(),
       allow_evaluation_scenes=FLAGS.allow_evaluation_scenes, texture_dir=FLAGS.texture_dir,
-      realistic_scenes=FLAGS.realistic_scenes)
+      realistic_scenes=FLAGS.realistic_scenes, fit_disparity=FLAGS.fit_disparity)
   pipeline_config = pipeline.PipelineConfig(
       mixture=FLAGS.mixture or _PIPE['mixture'], crop_height=FLAGS.crop_height,
       crop_width=FLAGS.crop_width, batch_size=FLAGS.batch_size, augment=FLAGS.augment,
@@ -176,7 +184,8 @@ def _train_config(num_steps: int) -> config_lib.TrainConfig:
       model_dir=FLAGS.model_dir, mode=FLAGS.mode, learning_rate=FLAGS.learning_rate,
       optimizer=FLAGS.optimizer,
       num_steps=num_steps, jit_compile=FLAGS.jit_compile, strategy=FLAGS.strategy,
-      mixed_precision=FLAGS.mixed_precision, init_checkpoint=FLAGS.init_checkpoint,
+      mixed_precision=FLAGS.mixed_precision, deterministic=FLAGS.deterministic,
+      init_checkpoint=FLAGS.init_checkpoint,
       checkpoint_every=FLAGS.checkpoint_every, summary_every=FLAGS.summary_every,
       image_summary_every=FLAGS.image_summary_every, log_every=FLAGS.log_every,
       seed=FLAGS.seed)
@@ -208,6 +217,7 @@ def _train_refiner() -> None:
 
 def main(argv):
   del argv
+  device.log_line()
   if FLAGS.architecture == 'refiner':
     _train_refiner()
     return

@@ -22,6 +22,7 @@ from absl import app
 from absl import flags
 from absl import logging
 
+from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
@@ -54,6 +55,7 @@ flags.DEFINE_boolean('temporal', temporal.TemporalConfig.enabled,
 def main(argv):
   del argv
   cli_flags.exit_if_listing()
+  device.log_line()
   try:
     config = cli_flags.predictor_config()
     if config.method == 'oracle':

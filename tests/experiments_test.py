@@ -1,10 +1,19 @@
-"""Every experiment flagfile parses into valid configs of the training binary."""
+"""Every experiment flagfile parses into valid configs of the training binary; the Middlebury
+fine-tuning one runs on a tiny layout."""
 
 import glob
 import json
 import os
 import subprocess
 import sys
+
+import cv2
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf import models
+from tests import data_helpers
+from tests import training_helpers
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -74,3 +83,38 @@ def test_train_lists_named_by_the_flagfiles_exist_with_the_papers_sizes():
   for name, lines in sizes.items():
     with open(os.path.join(REPO, 'data_lists', 'kitti', name)) as f:
       assert sum(1 for line in f if line.strip()) == lines, name
+
+
+def _scene_2014(folder, disparity, shape=(40, 80)):
+  """A Middlebury 2014-layout scene of constant disparity (textured views, PFM GT)."""
+  os.makedirs(folder)
+  texture = np.random.default_rng(len(folder)).integers(0, 256, (*shape, 3), np.uint8)
+  cv2.imwrite(os.path.join(folder, 'im0.png'), texture)
+  cv2.imwrite(os.path.join(folder, 'im1.png'), np.roll(texture, -int(disparity), axis=1))
+  data_helpers.write_pfm(os.path.join(folder, 'disp0.pfm'),
+                         np.full(shape, disparity, np.float32))
+
+
+def test_the_middlebury_finetune_flagfile_runs_on_a_tiny_layout(tmp_path):
+  """As shipped (its scene list, fit, guard), with a tiny network, crop and step count."""
+  data = tmp_path / 'middlebury'
+  _scene_2014(str(data / 'Adirondack-perfect'), 30)  # Deeper than 8 levels: shrunk by 5.
+  _scene_2014(str(data / 'Piano-imperfect'), 5)
+  _scene_2014(str(data / 'Motorcycle-perfect'), 5)  # Held out, and not in the list.
+  _scene_2014(str(data / 'MyOwnScene'), 5)  # Not in the list.
+  init = tf.train.Checkpoint(model=models.build_model(training_helpers.MINI)).write(
+      str(tmp_path / 'init' / 'ckpt'))
+  env = dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2', CUDA_VISIBLE_DEVICES='',
+             PYTHONPATH=REPO + os.pathsep + os.environ.get('PYTHONPATH', ''))
+  result = subprocess.run(
+      [sys.executable, '-m', 'mixstereo_tf.train',
+       '--flagfile=experiments/middlebury_anaglyph_finetune.flags', f'--data_dir={data}',
+       f'--init_checkpoint={init}', f'--model_dir={tmp_path / "run"}', '--num_steps=2',
+       '--crop_height=32', '--crop_width=64', '--max_disparity=8', '--unet_widths=4,4',
+       '--stereo_features=4', '--num_res_blocks=1', '--volume_features=4'],
+      cwd=REPO, env=env, capture_output=True, text=True, timeout=300, check=False)
+  assert result.returncode == 0, result.stderr[-3000:]
+  assert 'Training on 2 pairs from middlebury for 2 steps.' in result.stderr
+  assert '24 scene(s) of' in result.stderr  # The list's scenes this layout lacks.
+  assert 'Initialised the model from' in result.stderr
+  assert tf.train.latest_checkpoint(str(tmp_path / 'run')).endswith('ckpt-2')

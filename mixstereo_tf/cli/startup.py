@@ -28,8 +28,17 @@ def _has_cuda_driver() -> bool:
   return True
 
 
+# Pre-initialisation warnings and errors of a CUDA build that are no problem: duplicate
+# factory registrations (cuDNN, cuFFT, cuBLAS), no TensorRT, no driver (the device line,
+# `cli/device.py`, says what runs instead).
+_CUDA_NOISE = ('Unable to register cu', 'computation placer already registered',
+               'Could not find TensorRT', 'Could not find cuda drivers')
+
+
 def _is_noise(line: str) -> bool:
-  # Pre-initialisation INFO lines look like 'I0000 00:00:... file.cc:123] text'.
+  # Pre-initialisation lines look like 'I0000 00:00:... file.cc:123] text' (W0000, E0000).
+  if line.startswith(('W0000 ', 'E0000 ')):
+    return any(text in line for text in _CUDA_NOISE)
   return line.startswith('I0000 ') or line.startswith(_NOISE)
 
 

@@ -1,4 +1,5 @@
-"""The command-line tools start quietly: no TensorFlow start-up chatter, no CUDA errors."""
+"""The command-line tools start quietly: no TensorFlow start-up chatter, no CUDA errors,
+only their own device line."""
 
 import os
 import subprocess
@@ -24,3 +25,18 @@ def test_a_cli_run_prints_no_cuda_or_startup_lines_but_keeps_its_own_log(tmp_pat
   assert not [line for line in lines if 'cuda' in line.lower() or 'cuInit' in line], lines
   assert not [line for line in lines if line.startswith('I0000')], lines
   assert any('1 input(s) done' in line for line in lines), lines  # Our own INFO log.
+  # The device line (cli/device.py), the one start-up line that is ours.
+  assert any('no GPU found: running on' in line or '] GPU 0: ' in line for line in lines), lines
+
+
+def test_cuda_registration_errors_are_hidden_other_errors_are_not():
+  from mixstereo_tf.cli import startup  # pylint: disable=g-import-not-at-top
+  assert startup._is_noise('E0000 00:00:1731.5 77 cuda_fft.cc:485] Unable to register cuFFT '
+                           'factory: Attempting to register factory for plugin cuFFT when one '
+                           'has already been registered')
+  assert startup._is_noise('W0000 00:00:1731.5 77 py_utils.cc:38] TF-TRT Warning: Could not '
+                           'find TensorRT')
+  assert not startup._is_noise('E0000 00:00:1731.5 77 gpu_device.cc:2342] Cannot dlopen some '
+                               'GPU libraries.')
+  assert startup._is_noise('I0000 00:00:1731.5 77 cpu_feature_guard.cc:210] This TensorFlow '
+                           'binary is optimized')
