@@ -25,7 +25,7 @@ from mixstereo_tf.classical import fast_postprocess
 from mixstereo_tf.classical import sgm
 
 
-def _run(fn, tasks, threads: int) -> None:
+def run_tasks(fn, tasks, threads: int) -> None:
   """fn(task) for every task, on `threads` threads (in this thread when threads == 1)."""
   if threads == 1 or len(tasks) == 1:
     for task in tasks:
@@ -53,7 +53,7 @@ def census_codes(channels: np.ndarray, height: int, width: int,
   bounds = np.linspace(0, h, min(h, threads) + 1).round().astype(int)
   padded = [np.pad(channels[..., c], ((ry, ry), (rx, rx)), mode='reflect') for c in range(k)]
   tasks = [(c, a, b) for c in range(k) for a, b in zip(bounds[:-1], bounds[1:])]
-  _run(lambda t: census_costs.census_rows(padded[t[0]][t[1]:t[2] + 2 * ry], height, width,
+  run_tasks(lambda t: census_costs.census_rows(padded[t[0]][t[1]:t[2] + 2 * ry], height, width,
                                         out[t[0], t[1]:t[2]]), tasks, threads)
   return out
 
@@ -103,7 +103,7 @@ def disparities(codes_left: np.ndarray, codes_right: np.ndarray, lo: np.ndarray,
                          min(h, b + overlap), a, b, p1, p2, np.uint8(out_of_image_cost),
                          dl, dr)
 
-  _run(strip, list(range(len(bounds) - 1)), threads)
+  run_tasks(strip, list(range(len(bounds) - 1)), threads)
   return dl, dr
 
 
@@ -119,11 +119,32 @@ def match_volume(volume: np.ndarray, config: sgm.SgmConfig) -> dict:
   Returns:
     As `sgm.match`.
   """
+  # A right pixel no left pixel reaches: `sgm.select_disparities` gives it d_0.
+  return match_cost_volume(volume, config.min_disparity, config.p1, config.p2,
+                           config.lr_threshold, unreached=float(config.min_disparity))
+
+
+def match_cost_volume(volume: np.ndarray, min_disparity: int, p1: int, p2: int,
+                      lr_threshold: float, unreached: float = None) -> dict:
+  """SGM, winners and post-processing (`fast_postprocess`) of a left-referenced uint8
+  cost volume over a signed range, in one strip.
+
+  Args:
+    volume: uint8 [H, W, D]; volume[y, x, i] scores the left pixel x against the right
+      pixel x - d_i, d_i = min_disparity + i (any sign).
+    min_disparity: d_0, pixels; p1, p2: SGM penalties (cost units).
+    lr_threshold: largest accepted left-right difference, pixels.
+    unreached: the right disparity of a right pixel no left pixel reaches (None: a value
+      the left-right check always refuses).
+
+  Returns:
+    As `sgm.match`.
+  """
   h, w, _ = volume.shape
   d_left = np.empty((h, w), np.float32)
   d_right = np.empty((h, w), np.float32)
-  census_sgm.volume_sgm(np.ascontiguousarray(volume, np.uint8), int(config.min_disparity),
-                        int(config.p1), int(config.p2), d_left, d_right)
-  # A right pixel no left pixel reaches: `sgm.select_disparities` gives it d_0.
-  d_right[np.isnan(d_right)] = np.float32(config.min_disparity)
-  return fast_postprocess.postprocess(d_left, d_right, config.lr_threshold)
+  census_sgm.volume_sgm(np.ascontiguousarray(volume, np.uint8), int(min_disparity),
+                        int(p1), int(p2), d_left, d_right)
+  d_right[np.isnan(d_right)] = np.float32(
+      min_disparity - 1e4 if unreached is None else unreached)
+  return fast_postprocess.postprocess(d_left, d_right, lr_threshold)

@@ -1,0 +1,54 @@
+"""Tests of the descriptor cost volumes and the SGM of a signed stored volume."""
+
+import numpy as np
+import pytest
+
+from mixstereo_tf.classical import feature_costs
+from mixstereo_tf.classical import parallel_sgm
+
+
+def _unit(rng, shape):
+  x = rng.normal(size=shape).astype(np.float32)
+  return x / np.linalg.norm(x, axis=-1, keepdims=True)
+
+
+@pytest.mark.parametrize('threads', [1, 2])
+def test_costs_match_the_definition(threads):
+  rng = np.random.default_rng(0)
+  left, right = _unit(rng, (5, 20, 4)), _unit(rng, (5, 20, 4))
+  volume = feature_costs.cosine_costs(left, right, -3, 7, 32.0, outside=200, threads=threads)
+  for x in range(20):
+    for i in range(7):
+      xr = x - (-3 + i)
+      if 0 <= xr < 20:
+        expected = np.floor((1 - (left[:, x] * right[:, xr]).sum(-1)) * 32 + 0.5)
+        np.testing.assert_allclose(volume[:, x, i], expected, atol=1)
+      else:
+        assert (volume[:, x, i] == 200).all()
+
+
+def test_identical_descriptors_cost_zero_at_their_disparity():
+  rng = np.random.default_rng(1)
+  right = _unit(rng, (4, 30, 8))
+  left = np.roll(right, -2, axis=1)  # left x = right x + 2: d = -2 (x matches x - d).
+  volume = feature_costs.cosine_costs(left, right, -5, 11, 32.0)
+  assert (volume[:, :27, -2 + 5] == 0).all()
+  assert (volume[:, :27].argmin(-1) == 3).all()
+
+
+def test_sgm_of_a_signed_volume_finds_the_planted_disparity():
+  rng = np.random.default_rng(2)
+  h, w, low = 24, 40, -6
+  volume = rng.integers(20, 60, size=(h, w, 13)).astype(np.uint8)
+  volume[:, :, 4] = 2  # d = low + 4 = -2 everywhere.
+  out = parallel_sgm.match_cost_volume(volume, low, 8, 60, 1.0)
+  assert np.median(out['disparity_left']) == pytest.approx(-2, abs=0.01)
+  inner = out['disparity_left'][:, 8:-8]
+  assert (np.abs(inner + 2) < 0.5).mean() > 0.95
+
+
+def test_bad_arguments_are_refused():
+  with pytest.raises(ValueError, match='one shape'):
+    feature_costs.cosine_costs(np.zeros((2, 3, 4)), np.zeros((2, 4, 4)), 0, 2, 32.0)
+  with pytest.raises(ValueError, match='num_disparities'):
+    feature_costs.cosine_costs(np.zeros((2, 3, 4)), np.zeros((2, 3, 4)), 0, 0, 32.0)
