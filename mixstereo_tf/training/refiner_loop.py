@@ -18,8 +18,6 @@ at the end; re-running the same command continues from the newest.
 
 import dataclasses
 import os
-import signal
-import time
 from typing import Dict, Mapping
 
 from absl import logging
@@ -30,6 +28,7 @@ from mixstereo_tf.artifacts import runs
 from mixstereo_tf.core import image_range
 from mixstereo_tf.models import refiner
 from mixstereo_tf.training import refiner_data
+from mixstereo_tf.training import resumable
 
 
 @dataclasses.dataclass(frozen=True)
@@ -138,12 +137,7 @@ def train(config: RefinerTrainConfig, examples: refiner_data.ExampleConfig,
   tf.keras.utils.set_random_seed(config.seed)
   model = refiner.build_refiner(refiner_config)
   optimizer = tf.keras.optimizers.Adam(config.learning_rate)
-  step = tf.Variable(0, dtype=tf.int64, name='step')
-  checkpoint = tf.train.Checkpoint(model=model, optimizer=optimizer, step=step)
-  manager = tf.train.CheckpointManager(checkpoint, config.model_dir, max_to_keep=3)
-  if manager.latest_checkpoint:
-    checkpoint.restore(manager.latest_checkpoint)
-    logging.info('Resumed from %s at step %d.', manager.latest_checkpoint, int(step))
+  step, manager = resumable.checkpointed(model, optimizer, config.model_dir)
 
   @tf.function(reduce_retracing=True)
   def train_step(batch):
@@ -154,26 +148,11 @@ def train(config: RefinerTrainConfig, examples: refiner_data.ExampleConfig,
     optimizer.apply_gradients(zip(grads, model.trainable_variables))
     return losses
 
-  stop = []
-  previous = {s: signal.signal(s, lambda *_: stop.append(True))
-              for s in (signal.SIGINT, signal.SIGTERM)}
-  try:
-    start, running = time.perf_counter(), []
-    while int(step) < config.num_steps and not stop:
-      losses = train_step(draw_batch(data, config, int(step)))
-      step.assign_add(1)
-      running.append([float(losses[k]) for k in ('loss', 'disparity', 'views')])
-      if int(step) % config.log_every == 0:
-        mean = np.mean(running, axis=0)
-        logging.info('step %d/%d  loss %.4f  disparity %.3f px  views %.4f  %.2f steps/s',
-                     int(step), config.num_steps, *mean,
-                     len(running) / (time.perf_counter() - start))
-        start, running = time.perf_counter(), []
-      if int(step) % config.checkpoint_every == 0:
-        manager.save(checkpoint_number=int(step))
-  finally:
-    for sig, handler in previous.items():
-      signal.signal(sig, handler)
-    if manager.latest_checkpoint != os.path.join(config.model_dir, f'ckpt-{int(step)}'):
-      manager.save(checkpoint_number=int(step))
+  def one_step():
+    losses = train_step(draw_batch(data, config, int(step)))
+    step.assign_add(1)
+    return [float(losses[k]) for k in ('loss', 'disparity', 'views')]
+
+  resumable.run_steps(one_step, step, config.num_steps, manager, config.checkpoint_every,
+                      config.log_every, 'loss %.4f  disparity %.3f px  views %.4f')
   return manager.latest_checkpoint

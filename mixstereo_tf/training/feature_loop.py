@@ -1,0 +1,186 @@
+"""Training of the learned matching features (`models/matching_features.py`) on
+photographs warped by drawn disparity fields (`data/photo_warps.py`).
+
+Example (`draw_batch`): a warped pair, one encoding of `mixtures` drawn uniformly, mixed,
+degraded like a real file with p = `degrade_probability` (`data/degrade.py`), quantised to
+8 bits; the mixture's eye channels (`mixtures.MixtureSpec.eye_channels`) go to the 'single'
+and 'pair' branches, whichever eye each carries; flipped upside down with p = 1/2 (keeps
+the epipolar geometry).
+Loss (not in the paper; these pairs have exact disparities): the correlation volume of the
+left and right descriptors over [min_disparity, min_disparity + num_disparities) is read
+as logits (cosine * logit_scale) of a distribution over disparities, and the cross-entropy
+against the true disparity's two nearest integers (weights 1 - frac, frac) is averaged over
+the left pixels whose match is visible. It asks the true match to beat every other
+candidate, which is what winner-take-all and SGM need.
+Every draw of step s comes from (seed, s), so a resumed run sees the batches an
+uninterrupted one would. Checkpoints every `checkpoint_every` steps, on SIGINT/SIGTERM and
+at the end; re-running the same command continues from the newest.
+"""
+
+import dataclasses
+from typing import Dict
+
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.data import degrade
+from mixstereo_tf.data import photo_warps
+from mixstereo_tf.data import synthetic
+from mixstereo_tf.models import matching_features
+from mixstereo_tf.training import resumable
+
+
+@dataclasses.dataclass(frozen=True)
+class FeatureTrainConfig:
+  """How the matching features are trained.
+
+  Attributes:
+    model_dir: checkpoints and config.json go here.
+    texture_dir: a folder of photographs (None: scikit-image's training photographs).
+    mixtures: encodings drawn from (`mixtures.parse_names` text; anaglyphs only).
+    batch_size: pairs per step.
+    learning_rate: Adam step size.
+    num_steps: optimizer steps to reach (a resumed run continues to this total).
+    min_disparity, num_disparities: the candidates of the loss, signed pixels.
+    logit_scale: cosine -> logit factor.
+    degrade_probability: share of mixtures degraded like real files.
+    checkpoint_every, log_every: steps between checkpoints / log lines.
+    seed: seed of the initialisation and of every draw.
+  """
+  model_dir: str
+  texture_dir: str = None
+  mixtures: str = 'anaglyphs'
+  batch_size: int = 4
+  learning_rate: float = 1e-3
+  num_steps: int = 4000
+  min_disparity: int = -40
+  num_disparities: int = 96
+  logit_scale: float = 10.0
+  degrade_probability: float = 0.7
+  checkpoint_every: int = 250
+  log_every: int = 50
+  seed: int = 0
+
+  def __post_init__(self):
+    if not self.model_dir:
+      raise ValueError('FeatureTrainConfig.model_dir is required.')
+    names = mixtures.parse_names(self.mixtures)
+    bad = [n for n in names if not mixtures.get_mixture(n).is_anaglyph]
+    if bad:
+      raise ValueError(f'FeatureTrainConfig.mixtures must be anaglyph encodings; got {bad}.')
+    for field in ('batch_size', 'num_steps', 'num_disparities', 'checkpoint_every',
+                  'log_every'):
+      if getattr(self, field) <= 0:
+        raise ValueError(f'FeatureTrainConfig.{field} must be positive, got '
+                         f'{getattr(self, field)}.')
+    if not self.learning_rate > 0 or not self.logit_scale > 0:
+      raise ValueError('FeatureTrainConfig.learning_rate and logit_scale must be positive.')
+
+
+def textures(config: FeatureTrainConfig) -> synthetic.TextureAtlas:
+  """The photographs of the warps (long side at most 1024 px, blurred by sigma 1)."""
+  if config.texture_dir:
+    return synthetic.load_texture_dir(config.texture_dir, 1.0, 1024)
+  return synthetic.load_textures('train')
+
+
+def _example(rng, config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas):
+  pair = photo_warps.warped_pair(int(rng.integers(2 ** 31)), warp, atlas)
+  names = mixtures.parse_names(config.mixtures)
+  name = names[rng.integers(len(names))]
+  mixed = image_range.signed_to_unit(mixtures.mix(
+      name, image_range.u8_to_signed(pair['left']), image_range.u8_to_signed(pair['right'])))
+  if rng.uniform() < config.degrade_probability:
+    mixed = degrade.degrade(mixed, tf.constant(rng.integers(2 ** 31, size=2), tf.int32))
+  mixture = image_range.unit_to_u8(np.asarray(mixed)).astype(np.float32) / 255.0
+  single, both, single_is_left = matching_features.eye_inputs(mixture, name)
+  flip = slice(None, None, -1) if rng.uniform() < 0.5 else slice(None)
+  return {'single': single[flip], 'pair': both[flip], 'single_is_left': single_is_left,
+          'disparity': pair['disparity_left'][flip], 'valid': pair['nonocc_left'][flip]}
+
+
+def draw_batch(config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas,
+               step: int) -> Dict[str, np.ndarray]:
+  """Step `step`'s batch: single [B, H, W, 1], pair [B, H, W, 2], single_is_left [B],
+  disparity [B, H, W] (signed pixels), valid [B, H, W]."""
+  rng = np.random.default_rng([config.seed, step])
+  rows = [_example(rng, config, warp, atlas) for _ in range(config.batch_size)]
+  return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
+
+
+def matching_loss(left: tf.Tensor, right: tf.Tensor, disparity: tf.Tensor, valid: tf.Tensor,
+                  min_disparity: int, num_disparities: int,
+                  logit_scale: float) -> Dict[str, tf.Tensor]:
+  """The module docstring's cross-entropy.
+
+  The candidates of a left pixel x are the right pixels x' of its row with x - x' in
+  [min_disparity, min_disparity + num_disparities): the row's full correlation matrix (a
+  batched matmul, [B * H, W, W]) masked to that band.
+
+  Args:
+    left, right: [B, H, W, C] unit descriptors of the left and right eyes.
+    disparity: [B, H, W] true left disparities, signed pixels (x matches x - d).
+    valid: [B, H, W] bool, pixels to count (their match visible in the right view).
+    min_disparity, num_disparities: the candidates.
+    logit_scale: cosine -> logit factor.
+
+  Returns:
+    'loss' (nats per counted pixel) and 'accuracy' (share of counted pixels whose best
+    candidate is within 1 px of the truth).
+  """
+  shape = tf.shape(left)
+  width = shape[2]
+  rows = lambda t: tf.reshape(t, [-1, width, shape[3]])
+  logits = tf.matmul(rows(left), rows(right), transpose_b=True) * logit_scale  # [BH, x, x']
+  x = tf.range(width, dtype=tf.float32)
+  offset = x[:, None] - x[None, :] - float(min_disparity)  # x - x' - d_0, [x, x']
+  band = (offset >= 0) & (offset <= num_disparities - 1)
+  logits = tf.where(band[None], logits, -1e4)
+  match = tf.reshape(x[None, None, :] - disparity, [-1, width])  # x - d, [BH, x]
+  valid = tf.reshape(valid, [-1, width]) & (match >= 0) & (match <= tf.cast(width - 1, tf.float32))
+  offset_true = tf.reshape(disparity, [-1, width]) - float(min_disparity)
+  valid &= (offset_true >= 0) & (offset_true <= num_disparities - 1)
+  # Two-hot: 1 - frac at floor(x - d), frac at the next column.
+  target = tf.nn.relu(1.0 - tf.abs(x[None, None, :] - match[..., None]))
+  cross = -tf.reduce_sum(target * tf.nn.log_softmax(logits, axis=-1), axis=-1)
+  weight = tf.cast(valid, tf.float32)
+  count = tf.maximum(tf.reduce_sum(weight), 1.0)
+  best = tf.cast(tf.argmax(logits, axis=-1), tf.float32)
+  hit = tf.cast(tf.abs(best - match) <= 1.0, tf.float32)
+  return {'loss': tf.reduce_sum(cross * weight) / count,
+          'accuracy': tf.reduce_sum(hit * weight) / count}
+
+def train(config: FeatureTrainConfig, warp: photo_warps.WarpConfig,
+          feature_config: matching_features.FeatureConfig, flags_text: str = None) -> str:
+  """Trains (resuming from `config.model_dir`) and returns the newest checkpoint prefix."""
+  runs.write_run_files(config.model_dir, flags_text, train=config, warp=warp,
+                       features=feature_config.to_dict())
+  atlas = textures(config)
+  tf.keras.utils.set_random_seed(config.seed)
+  model = matching_features.build_features(feature_config)
+  optimizer = tf.keras.optimizers.Adam(config.learning_rate)
+  step, manager = resumable.checkpointed(model, optimizer, config.model_dir)
+
+  @tf.function(reduce_retracing=True)
+  def train_step(batch):
+    with tf.GradientTape() as tape:
+      single, pair = model((batch['single'], batch['pair']), training=True)
+      is_left = batch['single_is_left'][:, None, None, None]
+      losses = matching_loss(tf.where(is_left, single, pair), tf.where(is_left, pair, single),
+                             batch['disparity'], batch['valid'], config.min_disparity,
+                             config.num_disparities, config.logit_scale)
+    grads = tape.gradient(losses['loss'], model.trainable_variables)
+    optimizer.apply_gradients(zip(grads, model.trainable_variables))
+    return losses
+
+  def one_step():
+    losses = train_step(draw_batch(config, warp, atlas, int(step)))
+    step.assign_add(1)
+    return [float(losses['loss']), float(losses['accuracy'])]
+
+  resumable.run_steps(one_step, step, config.num_steps, manager, config.checkpoint_every,
+                 config.log_every, 'loss %.4f  accuracy %.3f')
+  return manager.latest_checkpoint

@@ -1,0 +1,75 @@
+"""Tests of the matching-feature training: the loss's known answers, batches, resuming."""
+
+import os
+
+import numpy as np
+import pytest
+import tensorflow as tf
+
+from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.data import photo_warps
+from mixstereo_tf.models import matching_features
+from mixstereo_tf.training import feature_loop
+
+
+def _shifted_pair(d):
+  """Distinct unit descriptors per column; the left pixel x shows the right pixel x - d."""
+  w = 24
+  right = np.eye(w, dtype=np.float32)[None, None].repeat(2, axis=1)  # [1, 2, W, W]
+  left = np.roll(right, d, axis=2)  # left[x] = right[x - d]
+  return tf.constant(left), tf.constant(right)
+
+
+def test_the_true_disparity_wins_and_costs_little():
+  left, right = _shifted_pair(3)
+  disparity = tf.fill([1, 2, 24], 3.0)
+  valid = tf.ones([1, 2, 24], tf.bool)
+  good = feature_loop.matching_loss(left, right, disparity, valid, -4, 12, 10.0)
+  wrong = feature_loop.matching_loss(left, right, disparity + 4.0, valid, -4, 12, 10.0)
+  assert float(good['accuracy']) == pytest.approx(1.0)
+  assert float(wrong['accuracy']) == pytest.approx(0.0)
+  # Logit 10 at the match, 0 at the (at most 11) others: loss <= log(1 + 11 exp(-10)).
+  assert float(good['loss']) < 1e-3 < float(wrong['loss'])
+
+
+def test_fractional_disparities_split_the_target_and_invalid_pixels_do_not_count():
+  left, right = _shifted_pair(2)
+  valid = tf.constant(np.arange(24)[None, None].repeat(2, 1) >= 12)
+  half = feature_loop.matching_loss(left, right, tf.fill([1, 2, 24], 2.5), valid, -4, 12, 10.0)
+  # Half the target sits on a candidate 10 logits below the winner: ~0.5 * 10 nats.
+  assert float(half['loss']) == pytest.approx(5.0, abs=0.05)
+  assert float(half['accuracy']) == pytest.approx(1.0)
+
+
+def test_batches_are_deterministic_and_shaped(tmp_path):
+  config = feature_loop.FeatureTrainConfig(model_dir=str(tmp_path), batch_size=2)
+  warp = photo_warps.WarpConfig(height=32, width=64, max_disparity=16)
+  atlas = feature_loop.textures(config)
+  a = feature_loop.draw_batch(config, warp, atlas, 5)
+  b = feature_loop.draw_batch(config, warp, atlas, 5)
+  assert a['single'].shape == (2, 32, 64, 1) and a['pair'].shape == (2, 32, 64, 2)
+  assert a['disparity'].shape == (2, 32, 64) and a['valid'].dtype == bool
+  for key in a:
+    np.testing.assert_array_equal(a[key], b[key])
+
+
+def test_training_resumes_and_exports(tmp_path):
+  warp = photo_warps.WarpConfig(height=32, width=64, max_disparity=16)
+  features = matching_features.FeatureConfig(width=4, layers=2)
+  config = feature_loop.FeatureTrainConfig(model_dir=str(tmp_path / 'run'), batch_size=1,
+                                           num_steps=2, min_disparity=-8, num_disparities=24,
+                                           checkpoint_every=1, log_every=1)
+  assert feature_loop.train(config, warp, features).endswith('ckpt-2')
+  config = feature_loop.FeatureTrainConfig(**dict(vars(config), num_steps=3))
+  assert feature_loop.train(config, warp, features).endswith('ckpt-3')
+  entry = pretrained.from_run(str(tmp_path / 'run'), str(tmp_path / 'shipped'), 'recipe', 'r')
+  assert entry.kind == 'features' and entry.mixtures[0] == 'anaglyph'
+  assert pretrained.load_model(entry).count_params() > 0
+  assert os.path.exists(tmp_path / 'shipped' / 'weights.npz')
+
+
+@pytest.mark.parametrize('field, value', [('mixtures', 'diplopia'), ('num_steps', 0),
+                                          ('logit_scale', 0.0)])
+def test_bad_config_is_refused(field, value):
+  with pytest.raises(ValueError, match=field if field != 'mixtures' else 'anaglyph'):
+    feature_loop.FeatureTrainConfig(model_dir='x', **{field: value})
