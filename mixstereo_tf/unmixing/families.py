@@ -17,7 +17,7 @@ A family answers, for each of its encodings (`names`):
   * the network plan: `signed` families may have disparities of either sign, so the plan
     may shift their `right_eye` channels (`disparity_range.plan`, `to_network`);
   * learned stages: `learned_stages` names the networks built on its classical stage
-    ('refiner'; a learned matcher would be registered here);
+    ('refiner', 'features': the learned matching stage);
   * `input_is_left`: a network's input is the left view itself (monocular).
 A registry maps each mixture name to its family (`of`); a new family is one `Family`
 subclass and one `register` call.
@@ -103,7 +103,7 @@ class Anaglyph(Family):
   signed = True
   restores_views = True
   has_classical = True
-  learned_stages = ('refiner',)
+  learned_stages = ('refiner', 'features')
 
   def matching(self, hint: Optional[hints.FrameHint] = None) -> matcher.MatcherConfig:
     """The matcher's configuration for a frame: the defaults, with a hint's prior window

@@ -33,7 +33,8 @@ def test_what_each_family_says():
     assert (family.detectable, family.signed, family.restores_views) == (False,) * 3
   assert (anaglyph.has_classical, double.has_classical, single.has_classical) == (
       True, True, False)
-  assert anaglyph.learned_stages == double.learned_stages == ('refiner',)
+  assert anaglyph.learned_stages == ('refiner', 'features')
+  assert double.learned_stages == ('refiner',)
   assert single.learned_stages == () and single.input_is_left
   # The network plan shifts the right eye's channels of anaglyphs only.
   assert anaglyph.right_eye('anaglyph') == (1, 2)

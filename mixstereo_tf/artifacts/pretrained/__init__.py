@@ -5,7 +5,9 @@ the recipe that trained it and its held-out numbers) and `weights.npz` (every we
 model in `model.weights` order, stored as float16: half the bytes, and its rounding moves a
 disparity by far less than the metrics' 1-pixel thresholds). Kinds:
   * 'joint': the paper's network (`models.MixStereoNet`, config `models.ModelConfig`);
-  * 'refiner': the hybrid that refines the classical result (`models.refiner`).
+  * 'refiner': the hybrid that refines the classical result (`models.refiner`);
+  * 'features': the learned matching features of anaglyphs' eyes
+    (`models.matching_features`), run by `unmixing/learned_matching.py`.
 `--pretrained=NAME` picks one (or a folder holding such files); `--pretrained=list` lists
 them; with no model flag at all, the tools take the first shipped model that unmixes the
 mixture asked for (`choose`).
@@ -22,6 +24,7 @@ import tensorflow as tf
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.models import matching_features
 from mixstereo_tf.models import refiner
 
 FOLDER = os.path.dirname(os.path.abspath(__file__))
@@ -33,7 +36,11 @@ LIST = 'list'
 _BUILDERS: Dict[str, Callable[[Mapping[str, Any]], tf.keras.Model]] = {
     'joint': lambda config: models.build_model(models.ModelConfig.from_dict(config)),
     'refiner': lambda config: refiner.build_refiner(refiner.RefinerConfig.from_dict(config)),
+    'features': lambda config: matching_features.build_features(
+        matching_features.FeatureConfig.from_dict(config)),
 }
+# kind -> the config.json section of a training run that holds its architecture.
+_SECTIONS = {'refiner': 'refiner', 'features': 'features', 'joint': 'model'}
 KINDS = tuple(_BUILDERS)
 
 
@@ -171,8 +178,8 @@ def save(model: tf.keras.Model, folder: str, kind: str, mixture: str,
 
 def from_run(path: str, folder: str, recipe: str, results: str) -> Pretrained:
   """Writes the newest checkpoint of a training run (or a checkpoint prefix) as a
-  pretrained folder: a joint run (`config.json` section 'model') or a refiner run
-  (section 'refiner').
+  pretrained folder: a joint run (`config.json` section 'model'), a refiner run (section
+  'refiner') or a matching-features run (section 'features').
 
   Raises:
     ValueError: not a run, or weights that do not fit its architecture.
@@ -180,10 +187,12 @@ def from_run(path: str, folder: str, recipe: str, results: str) -> Pretrained:
   model_dir, prefix = runs.resolve_checkpoint(path)
   with open(os.path.join(model_dir, runs.CONFIG_FILE), encoding='utf-8') as f:
     sections = json.load(f)
-  kind = 'refiner' if 'refiner' in sections else 'joint'
-  config = sections['refiner' if kind == 'refiner' else 'model']
+  kind = next(k for k in ('refiner', 'features', 'joint') if _SECTIONS[k] in sections)
+  config = sections[_SECTIONS[kind]]
   model = _BUILDERS[kind](config)
   runs.restore_model_weights(model, prefix)
+  if kind == 'features':  # Trained on whole warped pairs: no network crop to record.
+    return save(model, folder, kind, sections['train']['mixtures'], config, recipe, results)
   pipeline = sections['pipeline']
   return save(model, folder, kind, pipeline['mixture'], config, recipe, results,
               (int(pipeline['crop_height']), int(pipeline['crop_width'])))

@@ -1,0 +1,135 @@
+"""The learned matching stage of anaglyphs: learned descriptors, cosine costs, SGM.
+
+For a colour anaglyph the classical matcher compares census codes of the left eye's channel
+with those of the right eye's other channels, which doubles its errors against a gray
+anaglyph of the same pair (experiments/results/same_channel.md). Here the eyes are matched
+through learned descriptors (`models/matching_features.py`, one branch per eye):
+  1. descriptors of both eyes from the mixture's eye channels;
+  2. cost volume 1 - cosine over the signed range, uint8 (`feature_costs.cosine_costs`);
+  3. the numba SGM of a stored volume with the matcher's post-processing (median,
+     left-right check, background-favouring fill; `parallel_sgm.match_cost_volume`);
+  4. both views restored from the encoding's matrices and these disparities, as the
+     classical method does (`Family.restore`).
+Images whose volume would pass `max_cells` cells are matched at 1/f scale (f a power of 2,
+area downsampling), and the upsampled result is the prior of the census matcher at full
+scale, which then searches only windows of ceil(f) + 2 px around it (`matcher.match`).
+A video frame with a prior (`hints.FrameHint.prior`) goes to the census matcher around it,
+as in the classical method.
+"""
+
+import dataclasses
+import math
+from typing import Callable, Dict, Optional, Tuple
+
+import cv2
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf.classical import anaglyph
+from mixstereo_tf.classical import feature_costs
+from mixstereo_tf.classical import matcher
+from mixstereo_tf.classical import parallel_sgm
+from mixstereo_tf.core import hints
+from mixstereo_tf.core import image_range
+from mixstereo_tf.models import matching_features
+from mixstereo_tf.unmixing import families
+
+_KEYS = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
+Descriptors = Callable[[tf.Tensor, tf.Tensor], Tuple[tf.Tensor, tf.Tensor]]
+
+
+@dataclasses.dataclass(frozen=True)
+class LearnedMatchConfig:
+  """Parameters of the learned matching stage.
+
+  Attributes:
+    cost_scale: uint8 cost units per unit of 1 - cosine.
+    p1, p2: SGM penalties, cost units.
+    lr_threshold: largest accepted left-right difference, pixels.
+    max_cells: above H * W * D cells the stage runs at a reduced scale (module docstring).
+  """
+  cost_scale: float = 32.0
+  p1: int = 12
+  p2: int = 80
+  lr_threshold: float = 1.0
+  max_cells: int = 100_000_000
+
+  def __post_init__(self):
+    if not 0 < self.cost_scale <= 127 or not 0 < self.p1 <= self.p2 or self.max_cells <= 0:
+      raise ValueError(f'LearnedMatchConfig needs 0 < cost_scale <= 127, 0 < p1 <= p2 and '
+                       f'max_cells > 0; got {self}.')
+
+
+def descriptor_function(model: matching_features.MatchingFeatures) -> Descriptors:
+  """The model as a traced function of (single [1, H, W, 1], pair [1, H, W, 2])."""
+  signature = [tf.TensorSpec([1, None, None, 1], tf.float32),
+               tf.TensorSpec([1, None, None, 2], tf.float32)]
+  return tf.function(lambda single, pair: model((single, pair)), input_signature=signature)
+
+
+def _full_match(descriptors: Descriptors, mixture01: np.ndarray, name: str, low: int,
+                high: int, config: LearnedMatchConfig, threads: int) -> dict:
+  single, pair, single_is_left = matching_features.eye_inputs(mixture01, name)
+  first, second = descriptors(tf.constant(single[None], tf.float32),
+                              tf.constant(pair[None], tf.float32))
+  left, right = (first, second) if single_is_left else (second, first)
+  volume = feature_costs.cosine_costs(left[0].numpy(), right[0].numpy(), low,
+                                      high - low + 1, config.cost_scale, threads=threads)
+  return parallel_sgm.match_cost_volume(volume, low, config.p1, config.p2,
+                                        config.lr_threshold)
+
+
+def match(descriptors: Descriptors, mixture01: np.ndarray, name: str, low: int, high: int,
+          config: LearnedMatchConfig = LearnedMatchConfig(),
+          matching: matcher.MatcherConfig = matcher.MatcherConfig()) -> dict:
+  """Left and right disparities of an anaglyph by the learned stage (steps 1-3).
+
+  Args:
+    descriptors: `descriptor_function` of a trained model.
+    mixture01: float [H, W, 3] in [0, 1].
+    name: its anaglyph encoding (eyes of one and two channels).
+    low, high: inclusive signed range, pixels (clipped to |d| <= W - 1).
+    config: the stage's parameters; matching: the census matcher's, for large images.
+
+  Returns:
+    As `matcher.match`.
+  """
+  h, w = mixture01.shape[:2]
+  low, high = max(int(low), 1 - w), min(int(high), w - 1)
+  if low >= high:
+    raise ValueError(f'The disparity range [{low}, {high}] leaves no search in an image '
+                     f'{w} px wide.')
+  threads = matching.thread_count()
+  factor = 1
+  while h * w * (high - low + 1) > config.max_cells * factor ** 3 and min(h, w) / factor >= 64:
+    factor *= 2
+  if factor == 1:
+    return _full_match(descriptors, mixture01, name, low, high, config, threads)
+  small = cv2.resize(mixture01.astype(np.float32), (round(w / factor), round(h / factor)),
+                     interpolation=cv2.INTER_AREA)
+  scale = w / small.shape[1]
+  coarse = _full_match(descriptors, small, name, math.floor(low / scale),
+                       math.ceil(high / scale), config, threads)['disparity_left']
+  prior = cv2.resize(coarse, (w, h), interpolation=cv2.INTER_LINEAR) * scale
+  fine = dataclasses.replace(matching, prior_radius=math.ceil(scale) + 2,
+                             prior_spread=math.ceil(scale) + 1)
+  return matcher.match(*anaglyph.eye_images(mixture01, name), low, high, fine, prior)
+
+
+def learned_unmix(descriptors: Descriptors, image: np.ndarray, name: str,
+                  search: Tuple[int, int], hint: Optional[hints.FrameHint] = None,
+                  config: LearnedMatchConfig = LearnedMatchConfig()) -> Dict[str, object]:
+  """The stage on a uint8 anaglyph (steps 1-4): `steps.classical_unmix`'s outputs."""
+  family = families.of(name)
+  if hint is not None and hint.prior is not None:
+    out = family.classical(image, name, search, hint)
+    return {key: out[key] for key in _KEYS}
+  mixture01 = image_range.u8_to_unit(image)
+  matched = match(descriptors, mixture01, name, *search, config, family.matching(hint))
+  restored = family.restore(mixture01, name, matched['disparity_left'],
+                            matched['disparity_right'])
+  return {'left': image_range.unit_to_u8(restored['left']),  # As _KEYS.
+          'right': image_range.unit_to_u8(restored['right']),
+          'disparity_left': matched['disparity_left'],
+          'disparity_right': matched['disparity_right'],
+          'consistent_left': matched['consistent_left']}

@@ -1,0 +1,74 @@
+"""The Unmixers of the models shipped with the package (`artifacts/pretrained`), by kind:
+  * 'joint': the paper's network, run like a trained run (`unmixer.model_unmixer`);
+  * 'refiner': the classical method, then the refiner on its result (`steps.refiner_unmix`);
+  * 'features': the learned matching stage of anaglyphs (`learned_matching`): learned
+    descriptors of both eyes, cosine costs, SGM, views restored from the encoding.
+A model that knows several encodings detects each image's when no mixture is given.
+"""
+
+import dataclasses
+from typing import Callable, Dict
+
+import tensorflow as tf
+
+from mixstereo_tf.artifacts import graphs
+from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.models import refiner
+from mixstereo_tf.unmixing import families
+from mixstereo_tf.unmixing import learned_matching
+from mixstereo_tf.unmixing import steps
+from mixstereo_tf.unmixing import unmixer
+
+Solve = Callable[..., Dict[str, object]]
+
+
+def _refiner_solver(model: tf.keras.Model) -> Solve:
+  signature = [tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)]
+  network = tf.function(lambda x: model(x, training=False), input_signature=signature)
+  return lambda image, name, search, hint: steps.refiner_unmix(
+      network, model.size_multiple, image, name, search, hint)
+
+
+def _features_solver(model: tf.keras.Model) -> Solve:
+  descriptors = learned_matching.descriptor_function(model)
+  return lambda image, name, search, hint: learned_matching.learned_unmix(
+      descriptors, image, name, search, hint)
+
+
+# kind -> the `steps.run` solver of a stage built on the classical method's range.
+_SOLVERS: Dict[str, Callable[[tf.keras.Model], Solve]] = {
+    'refiner': _refiner_solver, 'features': _features_solver}
+
+
+def pretrained_unmixer(entry: pretrained.Pretrained,
+                       config: unmixer.PredictorConfig = unmixer.PredictorConfig()
+                       ) -> unmixer.Unmixer:
+  """The 'model' Unmixer of a shipped model (module docstring).
+
+  Raises:
+    ValueError: a mixture the model does not unmix, or one without the model's stage.
+  """
+  model = pretrained.load_model(entry)
+  if entry.kind == 'joint':
+    run_info = runs.RunInfo(entry.mixture, entry.crop[0], entry.crop[1], model.model_config)
+    graph = tf.function(graphs.serving_function(model),
+                        input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)])
+    return unmixer.model_unmixer(graph, run_info, config)
+  trained = entry.mixtures
+  lacking = [m for m in trained if entry.kind not in families.of(m).learned_stages]
+  if lacking:
+    raise ValueError(f'{entry.name}: mixtures {", ".join(lacking)} have no {entry.kind} stage.')
+  if config.mixture is None and len(trained) > 1:  # Several encodings: detect each image's.
+    config = dataclasses.replace(config, mixture=steps.AUTO)
+  requested = unmixer.check_mixture(config, trained)
+  stage = _SOLVERS[entry.kind](model)
+
+  def solve(image, name, search, hint):
+    outputs = stage(image, name, search, hint)
+    outputs['info'] = {'pretrained': entry.name}
+    return outputs
+
+  return unmixer.image_unmixer('model', requested, trained, config, unmixer.classical_range,
+                               solve, unmixer.family_of(trained[0]).display_range(),
+                               any(families.of(m).restores_views for m in trained))

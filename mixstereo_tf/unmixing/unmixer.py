@@ -1,0 +1,142 @@
+"""The predictor's common parts: `PredictorConfig`, the `Unmixer` every tool calls, and how a
+method's step 3 (`solve`) becomes an Unmixer of mixture images (`image_unmixer`, around
+`steps.run`). The methods themselves are registered in `predictors`; the shipped models'
+Unmixers are made in `shipped`.
+"""
+
+import dataclasses
+from typing import Callable, Dict, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf.artifacts import runs
+from mixstereo_tf.unmixing import families
+from mixstereo_tf.unmixing import steps
+
+Outputs = Dict[str, np.ndarray]
+
+
+def as_rgb(image) -> np.ndarray:
+  """A uint8 mixture as [H, W, 3]; gray [H, W] / [H, W, 1] is replicated to RGB."""
+  image = np.asarray(image)
+  if image.dtype != np.uint8:
+    raise ValueError(f'Unmixer expects a uint8 image, got {image.dtype}.')
+  if image.ndim == 2:
+    image = image[:, :, None]
+  if image.ndim != 3 or image.shape[2] not in (1, 3):
+    raise ValueError(f'Unmixer expects [H, W, 3] or gray [H, W], got {image.shape}.')
+  return np.repeat(image, 3, axis=2) if image.shape[2] == 1 else image
+
+
+@dataclasses.dataclass(frozen=True)
+class PredictorConfig:
+  """Which unmixer to build (the tools' predictor flags).
+
+  Attributes:
+    method: a name of METHODS.
+    checkpoint: run directory or checkpoint prefix ('model', 'oracle').
+    saved_model: SavedModel directory ('model'); exclusive with checkpoint.
+    mixture: the inputs' mixture operator; 'auto': detected per image (anaglyphs); None:
+      the model's own (required for 'classical'). A model refuses encodings it was not
+      trained on.
+    restore_colour: restore both views from the encoding and the disparities with the
+      network's views as the prior (paper 4.2; None: on for anaglyphs); 'model' only.
+    disparity_range: (min, max) signed pixels of the input; None: estimated per image;
+      disparity_range.NETWORK: the method's own (a network's [0, D - 1], input as is).
+    max_network_pixels: a model's input is reduced to at most this many pixels.
+    pretrained: a shipped model's name or folder ('model' without checkpoint and
+      saved_model; None: the first shipped model for the mixture, `pretrained.choose`).
+  """
+  method: str = 'model'
+  checkpoint: Optional[str] = None
+  saved_model: Optional[str] = None
+  mixture: Optional[str] = None
+  restore_colour: Optional[bool] = None
+  disparity_range: Union[None, str, Tuple[int, int]] = None
+  max_network_pixels: Optional[int] = 2_000_000
+  pretrained: Optional[str] = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Unmixer:
+  """A predictor: `unmixer(mixture_u8)`, or `unmixer(left_u8, right_u8)` when takes_pair.
+
+  Called on a uint8 mixture [H, W, 3] it returns {'left', 'right': uint8 [H, W, 3],
+  'disparity_left', 'disparity_right': float32 [H, W] signed pixels, 'info': what was done
+  (`steps`)}; an 'oracle' returns the disparities of the clean pair. A video frame
+  may be given a `hints.FrameHint` (`unmixer(frame, hint=hint)`: its shot's encoding,
+  range and prior); `fn` is then called with `hint=` as well.
+
+  Attributes:
+    fn: the function behind the call.
+    method: the METHODS name that built it.
+    mixture: the mixture its inputs are made with ('auto': detected per image).
+    max_disparity: the largest disparity of its default range, pixels (display range).
+    restore_colour: whether it restores the views from the encoding (paper 4.2).
+    takes_pair: True for 'oracle' (inputs are the clean views).
+  """
+  fn: Callable[..., Outputs]
+  method: str
+  mixture: str
+  max_disparity: float
+  restore_colour: bool = False
+  takes_pair: bool = False
+
+  def __call__(self, *images: np.ndarray, hint=None) -> Outputs:
+    return self.fn(*images) if hint is None else self.fn(*images, hint=hint)
+
+
+def check_mixture(config: PredictorConfig, trained: Sequence[str]) -> str:
+  """The mixture asked for (default: the model's first).
+
+  Raises:
+    ValueError: an encoding the model was not trained on.
+  """
+  requested = config.mixture or trained[0]
+  if requested != steps.AUTO and requested not in trained:
+    raise ValueError(f'PredictorConfig.mixture={requested} but the model was trained on '
+                     f'{", ".join(repr(m) for m in trained)} mixtures '
+                     f'({config.saved_model or config.checkpoint or "this model"}).')
+  return requested
+
+
+def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: runs.RunInfo,
+                  config: PredictorConfig = PredictorConfig()) -> Unmixer:
+  """The 'model' Unmixer around a uint8 serving graph (`graphs.serving_function`) of a run."""
+  trained = run_info.mixtures
+  requested = check_mixture(config, trained)
+  levels = run_info.model_config.max_disparity
+  restore = config.restore_colour
+  if restore is None:
+    restore = any(families.of(m).restores_views for m in trained)
+
+  def solve(image, name, search, hint):
+    del hint  # The network takes no prior.
+    return steps.model_unmix(graph, image, name, search, levels,
+                                   config.max_network_pixels, bool(restore))
+
+  return image_unmixer('model', requested, trained, config, lambda _: (0, levels - 1),
+                        solve, levels, bool(restore))
+
+
+def image_unmixer(method: str, requested: str, allowed: Sequence[str],
+                   config: PredictorConfig, default_range: Callable[[str], Tuple[int, int]],
+                   solve: Callable[..., Outputs], display: float, restore: bool) -> Unmixer:
+  """An Unmixer of mixture images: `steps.run`'s steps around `solve`."""
+  fn = lambda image, hint=None: steps.run(as_rgb(image), requested, allowed,
+                                                config.disparity_range, default_range,
+                                                method, solve, hint)
+  return Unmixer(fn, method, requested, display, restore)
+
+
+def family_of(mixture: str) -> families.Family:
+  """The family of a mixture name; for 'auto', the one detection finds."""
+  return families.detected() if mixture == steps.AUTO else families.of(mixture)
+
+
+def classical_range(mixture: str) -> Tuple[int, int]:
+  """The classical method's own range for a mixture (`Family.classical_range`)."""
+  return families.of(mixture).classical_range()
+
+
