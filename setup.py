@@ -17,7 +17,8 @@ setuptools.setup(
         'mixstereo_tf.data_lists'],
     package_dir={'mixstereo_tf.data_lists': 'data_lists'},
     # The shipped models (mixstereo_tf/artifacts/pretrained/NAME/{info.json,weights.npz}).
-    package_data={'mixstereo_tf.data_lists': ['README.md', 'kitti/*.txt', 'middlebury/*.txt'],
+    package_data={'mixstereo_tf.data_lists': ['README.md', 'kitti/*.txt', 'middlebury/*.txt',
+                                              'photos/*.txt'],
                   'mixstereo_tf.artifacts.pretrained': ['*/info.json', '*/weights.npz']},
     include_package_data=True,
     # classical/sgm.py uses np.bitwise_count (numpy >= 2.0). The TF, OpenCV, scikit-image and

@@ -20,10 +20,13 @@ from absl import logging
 from mixstereo_tf import models
 from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.data import photo_warps
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import sources
+from mixstereo_tf.models import matching_features
 from mixstereo_tf.models import refiner
 from mixstereo_tf.training import config as config_lib
+from mixstereo_tf.training import feature_loop
 from mixstereo_tf.training import loop
 from mixstereo_tf.training import objective
 from mixstereo_tf.training import optimizers
@@ -131,12 +134,19 @@ flags.DEFINE_float('large_probability', refiner_data.ExampleConfig.large_probabi
                    'The share of refiner examples cut from a scene twice as large and deep '
                    '(photo-sized disparities and occlusions; not in the paper).')
 
-flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner'), "joint: the paper's "
-                  'network; refiner: the hybrid that refines the classical result '
+flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner', 'features'), "joint: the "
+                  "paper's network; refiner: the hybrid that refines the classical result "
                   '(models/refiner.py; trained on cached `sample` examples with ground truth, '
                   'from --sample_scenes, --sample_height/width, --max_disparity, --mixture, '
                   '--texture_dir, --degrade, --clean_probability, --large_probability; not in the '
-                  'paper).')
+                  'paper); features: the learned matching features of anaglyphs '
+                  '(models/matching_features.py; trained on photographs of --texture_dir warped '
+                  'by drawn disparity fields, --crop_height x --crop_width, --max_disparity, '
+                  '--mixture, --degrade, --feature_width, --feature_layers; not in the paper).')
+flags.DEFINE_integer('feature_width', matching_features.FeatureConfig.width,
+                     '--architecture=features: descriptor length (channels per convolution).')
+flags.DEFINE_integer('feature_layers', matching_features.FeatureConfig.layers,
+                     '--architecture=features: 3x3 convolutions per eye branch.')
 
 _RENAMED = {'DataConfig.split_list': 'train_list'}
 
@@ -215,11 +225,32 @@ def _train_refiner() -> None:
   refiner_loop.train(config, examples, refiner.RefinerConfig(), FLAGS.flags_into_string())
 
 
+def _train_features() -> None:
+  """--architecture=features: `training/feature_loop.py` on the flags it reads."""
+  if FLAGS.num_steps is None:
+    raise app.UsageError('--architecture=features needs --num_steps.')
+  try:
+    warp = photo_warps.WarpConfig(height=FLAGS.crop_height, width=FLAGS.crop_width,
+                                  max_disparity=FLAGS.max_disparity)
+    low, count = feature_loop.candidates(FLAGS.max_disparity)
+    config = feature_loop.FeatureTrainConfig(
+        model_dir=FLAGS.model_dir, texture_dir=FLAGS.texture_dir,
+        mixtures=FLAGS.mixture or 'anaglyphs', batch_size=FLAGS.batch_size,
+        learning_rate=FLAGS.learning_rate, num_steps=FLAGS.num_steps, min_disparity=low,
+        num_disparities=count, degrade_probability=0.7 if FLAGS.degrade else 0.0,
+        checkpoint_every=FLAGS.checkpoint_every, log_every=FLAGS.log_every, seed=FLAGS.seed)
+    features = matching_features.FeatureConfig(FLAGS.feature_width, FLAGS.feature_layers)
+  except ValueError as e:
+    raise cli_flags.usage_error(e) from None
+  logging.info('Training the matching features for %d steps.', config.num_steps)
+  feature_loop.train(config, warp, features, FLAGS.flags_into_string())
+
+
 def main(argv):
   del argv
   device.log_line()
-  if FLAGS.architecture == 'refiner':
-    _train_refiner()
+  if FLAGS.architecture in ('refiner', 'features'):
+    (_train_refiner if FLAGS.architecture == 'refiner' else _train_features)()
     return
   if (FLAGS.num_steps is None) == (FLAGS.num_epochs is None):
     raise app.UsageError('Give exactly one of --num_steps and --num_epochs.')

@@ -54,7 +54,7 @@ def test_every_flagfile_builds_valid_configs():
           'middlebury_anaglyph_finetune.flags'} <= set(parsed)
   for name, run in parsed.items():
     assert (run['num_steps'] is None) != (run['num_epochs'] is None), name
-    if name == 'demo.flags' or run['architecture'] == 'refiner':
+    if name == 'demo.flags' or run['architecture'] in ('refiner', 'features'):
       continue
     # Paper configuration: 96 levels, batch 1, the paper's loss weights, full widths.
     assert run['model']['max_disparity'] == 96, name
@@ -72,6 +72,7 @@ def test_every_flagfile_builds_valid_configs():
                         ('pretrained_diplopia.flags', 'diplopia')):
     assert parsed[name]['architecture'] == 'refiner'
     assert parsed[name]['pipeline']['mixture'] == mixture
+  assert parsed['pretrained_features.flags']['architecture'] == 'features'
   assert parsed['eigen_monocular.flags']['num_epochs'] == 10
   assert parsed['kitti_anaglyph_separation_only.flags']['mode'] == 'separation_only'
 
@@ -118,3 +119,29 @@ def test_the_middlebury_finetune_flagfile_runs_on_a_tiny_layout(tmp_path):
   assert '24 scene(s) of' in result.stderr  # The list's scenes this layout lacks.
   assert 'Initialised the model from' in result.stderr
   assert tf.train.latest_checkpoint(str(tmp_path / 'run')).endswith('ckpt-2')
+
+
+def test_the_matching_features_flagfile_runs_on_a_tiny_photo_folder(tmp_path):
+  """As shipped, with a tiny crop, width and step count, on two random 'photographs'; a
+  folder holding an evaluation image is refused, naming it."""
+  photos = tmp_path / 'photos'
+  photos.mkdir()
+  rng = np.random.default_rng(0)
+  for name in ('a.jpg', 'b.png'):
+    cv2.imwrite(str(photos / name), cv2.GaussianBlur(
+        rng.integers(0, 256, (80, 120, 3), np.uint8), (0, 0), 1.5))
+  env = dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2', CUDA_VISIBLE_DEVICES='',
+             PYTHONPATH=REPO + os.pathsep + os.environ.get('PYTHONPATH', ''))
+  command = [sys.executable, '-m', 'mixstereo_tf.train',
+             '--flagfile=experiments/pretrained_features.flags', f'--texture_dir={photos}',
+             f'--model_dir={tmp_path / "run"}', '--num_steps=2', '--crop_height=32',
+             '--crop_width=64', '--max_disparity=16', '--feature_width=4',
+             '--batch_size=1']
+  result = subprocess.run(command, cwd=REPO, env=env, capture_output=True, text=True,
+                          timeout=300, check=False)
+  assert result.returncode == 0, result.stderr[-3000:]
+  assert tf.train.latest_checkpoint(str(tmp_path / 'run')).endswith('ckpt-2')
+  cv2.imwrite(str(photos / 'teddy.png'), np.zeros((40, 40, 3), np.uint8))
+  result = subprocess.run(command, cwd=REPO, env=env, capture_output=True, text=True,
+                          timeout=300, check=False)
+  assert result.returncode != 0 and 'teddy.png looks like an evaluation image' in result.stderr

@@ -21,11 +21,18 @@ pixels whose match is visible in the right view.
 """
 
 import dataclasses
+import os
+import re
 from typing import Dict
 
 import numpy as np
 
+from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import synthetic
+
+# Names of the project's evaluation images: KITTI frames (000151_10.png), Motorcycle and
+# the SceneFlow frames of the real-world set, besides `middlebury.is_evaluation_scene`.
+_EVALUATION_NAMES = re.compile(r'^\d{6}_1[01]$|motorcycle|kitti|sceneflow|middlebury')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,6 +65,19 @@ class WarpConfig:
       if not 0.0 <= getattr(self, field) <= 1.0:
         raise ValueError(f'WarpConfig.{field} must be in [0, 1], got '
                          f'{getattr(self, field)}.')
+
+
+def refuse_evaluation_photos(folder: str) -> None:
+  """Raises ValueError naming the first file of `folder` that looks like an evaluation
+  image (a Middlebury evaluation scene, a KITTI frame, Motorcycle, SceneFlow): evaluation
+  data is never training data."""
+  for name in sorted(os.listdir(folder)):
+    stem = os.path.splitext(name)[0].lower()
+    words = set(re.split(r'[^a-z]+', stem)) & set(middlebury.EVALUATION_SCENES)
+    if words or middlebury.is_evaluation_scene(stem) or _EVALUATION_NAMES.search(stem):
+      raise ValueError(f'{os.path.join(folder, name)} looks like an evaluation image (the '
+                       f"paper's test scenes, KITTI, Motorcycle, SceneFlow); evaluation data "
+                       'is never training data: remove it from the photographs.')
 
 
 def _photo_layers(rng, layers, atlas: synthetic.TextureAtlas, config: WarpConfig,

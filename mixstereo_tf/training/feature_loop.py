@@ -80,9 +80,22 @@ class FeatureTrainConfig:
       raise ValueError('FeatureTrainConfig.learning_rate and logit_scale must be positive.')
 
 
+def candidates(max_disparity: int):
+  """(min_disparity, num_disparities) of the loss for warps of `max_disparity`
+  (`photo_warps.WarpConfig`): disparities lie in [1, 0.8 max] before window alignment,
+  which moves them down by at most 0.7 of that span, so [-5/8 max, 7/8 max) holds them."""
+  low = -(5 * max_disparity) // 8
+  return low, (7 * max_disparity) // 8 - low
+
+
 def textures(config: FeatureTrainConfig) -> synthetic.TextureAtlas:
-  """The photographs of the warps (long side at most 1024 px, blurred by sigma 1)."""
+  """The photographs of the warps (long side at most 1024 px, blurred by sigma 1).
+
+  Raises:
+    ValueError: a file of the folder looks like an evaluation image.
+  """
   if config.texture_dir:
+    photo_warps.refuse_evaluation_photos(config.texture_dir)
     return synthetic.load_texture_dir(config.texture_dir, 1.0, 1024)
   return synthetic.load_textures('train')
 

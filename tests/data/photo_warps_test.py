@@ -54,3 +54,18 @@ def test_window_alignment_gives_both_signs_and_is_deterministic(atlas):
 def test_bad_config_names_the_field(field, value):
   with pytest.raises(ValueError):
     photo_warps.WarpConfig(**{field: value})
+
+
+@pytest.mark.parametrize('name', ['Teddy.png', 'tsukuba_left.png', '000151_10.png',
+                                  'motorcycle_im0.png', 'sceneflow_a.png'])
+def test_evaluation_images_are_refused_as_photographs(tmp_path, name):
+  (tmp_path / 'Dune.jpg').write_bytes(b'')
+  (tmp_path / name).write_bytes(b'')
+  with pytest.raises(ValueError, match=name):
+    photo_warps.refuse_evaluation_photos(str(tmp_path))
+
+
+def test_ordinary_photographs_pass_the_guard(tmp_path):
+  for name in ('Dune.jpg', 'Kleiber_by_Lukas_Baubkus.jpg', '2004default.jpg'):
+    (tmp_path / name).write_bytes(b'')
+  photo_warps.refuse_evaluation_photos(str(tmp_path))
