@@ -19,6 +19,7 @@ from mixstereo_tf.core import colormap
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.unmixing import unmixer
 from mixstereo_tf.video import jobs
 from tests.unmixing import predictors_test
 from tests.video import streams_test
@@ -35,7 +36,7 @@ def model():
 @pytest.fixture(scope='module')
 def setup(model):
   graph = tf.function(graphs.serving_function(model))
-  return predictors.model_unmixer(graph, INFO, predictors.PredictorConfig(
+  return unmixer.model_unmixer(graph, INFO, predictors.PredictorConfig(
       mixture='anaglyph', disparity_range=(0, 7)))
 
 
