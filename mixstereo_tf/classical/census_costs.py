@@ -97,3 +97,16 @@ def cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
             acc[i] += np.uint32(_popcount(ca ^ rev[b, k0 + i]))
       for i in range(ia, ib):
         out[x, i] = np.uint8((acc[i] + half) // np.uint32(pairs))
+
+
+@numba.njit(**JIT)
+def volume_rows(cl, cr, low, y0, y1, oob, out):
+  """Rows [y0, y1) of a stored census cost volume: out[y, x, i] (uint8 [H, W, D]) = the
+  `cost_row` cost of left (y, x) against right (y, x - low - i)."""
+  h, w, nd = out.shape
+  lo = np.full((h, w), low, np.int32)
+  nds = np.full((h, w), nd, np.int32)
+  rev = np.empty((cr.shape[0], w), np.uint64)
+  acc = np.zeros(nd, np.uint32)
+  for y in range(y0, y1):
+    cost_row(cl, cr, lo, nds, y, oob, rev, acc, out[y])

@@ -58,6 +58,29 @@ def census_codes(channels: np.ndarray, height: int, width: int,
   return out
 
 
+def census_volume(left: np.ndarray, right: np.ndarray, min_disparity: int,
+                  num_disparities: int, height: int, width: int, threads: int) -> np.ndarray:
+  """The census cost volume the matcher aggregates without storing (`census_costs.cost_row`:
+  mean Hamming distance over channel pairs, (height * width - 1) // 2 outside the image),
+  stored: uint8 [H, W, D], [y, x, i] scores left x against right x - (min_disparity + i).
+
+  Args:
+    left, right: float32 [H, W, K_L], [H, W, K_R] intensities.
+    min_disparity, num_disparities: the signed range; height, width: the census window.
+    threads: worker threads (codes and row blocks).
+  """
+  codes_left = census_codes(left, height, width, threads)
+  codes_right = census_codes(right, height, width, threads)
+  h, w = left.shape[:2]
+  out = np.empty((h, w, num_disparities), np.uint8)
+  bounds = np.linspace(0, h, min(h, threads) + 1).round().astype(int)
+  oob = np.uint8((height * width - 1) // 2)
+  run_tasks(lambda t: census_costs.volume_rows(codes_left, codes_right, int(min_disparity),
+                                               int(t[0]), int(t[1]), oob, out),
+            list(zip(bounds[:-1], bounds[1:])), threads)
+  return out
+
+
 def strip_bounds(widths: np.ndarray, threads: int, strips: int,
                  max_strip_bytes: int) -> np.ndarray:
   """Row bounds [0, ..., H] of the strips, cut so that they hold equal numbers of cells.

@@ -5,7 +5,9 @@ with those of the right eye's other channels, which doubles its errors against a
 anaglyph of the same pair (experiments/results/same_channel.md). Here the eyes are matched
 through learned descriptors (`models/matching_features.py`, one branch per eye):
   1. descriptors of both eyes from the mixture's eye channels;
-  2. cost volume 1 - cosine over the signed range, uint8 (`feature_costs.cosine_costs`);
+  2. cost volume over the signed range: `census_weight` of the census matcher's cost (the
+     eyes' census codes, `parallel_sgm.census_volume`) plus the rest of (1 - cosine) x
+     `cost_scale` (`feature_costs.cosine_costs`), uint8;
   3. the numba SGM of a stored volume with the matcher's post-processing (median,
      left-right check, background-favouring fill; `parallel_sgm.match_cost_volume`);
   4. both views restored from the encoding's matrices and these disparities, as the
@@ -44,20 +46,23 @@ class LearnedMatchConfig:
 
   Attributes:
     cost_scale: uint8 cost units per unit of 1 - cosine.
+    census_weight: share of the census cost in the blended cost (0: learned cost only).
     p1, p2: SGM penalties, cost units.
     lr_threshold: largest accepted left-right difference, pixels.
     max_cells: above H * W * D cells the stage runs at a reduced scale (module docstring).
   """
   cost_scale: float = 32.0
+  census_weight: float = 0.5
   p1: int = 12
   p2: int = 80
   lr_threshold: float = 1.0
   max_cells: int = 100_000_000
 
   def __post_init__(self):
-    if not 0 < self.cost_scale <= 127 or not 0 < self.p1 <= self.p2 or self.max_cells <= 0:
-      raise ValueError(f'LearnedMatchConfig needs 0 < cost_scale <= 127, 0 < p1 <= p2 and '
-                       f'max_cells > 0; got {self}.')
+    if (not 0 < self.cost_scale <= 127 or not 0 < self.p1 <= self.p2 or
+        self.max_cells <= 0 or not 0 <= self.census_weight < 1):
+      raise ValueError(f'LearnedMatchConfig needs 0 < cost_scale <= 127, 0 < p1 <= p2, '
+                       f'max_cells > 0 and census_weight in [0, 1); got {self}.')
 
 
 def descriptor_function(model: matching_features.MatchingFeatures) -> Descriptors:
@@ -68,13 +73,20 @@ def descriptor_function(model: matching_features.MatchingFeatures) -> Descriptor
 
 
 def _full_match(descriptors: Descriptors, mixture01: np.ndarray, name: str, low: int,
-                high: int, config: LearnedMatchConfig, threads: int) -> dict:
+                high: int, config: LearnedMatchConfig, threads: int,
+                census_window: Tuple[int, int]) -> dict:
   single, pair, single_is_left = matching_features.eye_inputs(mixture01, name)
   first, second = descriptors(tf.constant(single[None], tf.float32),
                               tf.constant(pair[None], tf.float32))
   left, right = (first, second) if single_is_left else (second, first)
   volume = feature_costs.cosine_costs(left[0].numpy(), right[0].numpy(), low,
                                       high - low + 1, config.cost_scale, threads=threads)
+  if config.census_weight:
+    census = parallel_sgm.census_volume(*anaglyph.eye_images(mixture01, name), low,
+                                        high - low + 1, census_window[0], census_window[1],
+                                        threads)
+    volume = np.rint(config.census_weight * census.astype(np.float32) +
+                     (1 - config.census_weight) * volume).astype(np.uint8)
   return parallel_sgm.match_cost_volume(volume, low, config.p1, config.p2,
                                         config.lr_threshold)
 
@@ -100,16 +112,17 @@ def match(descriptors: Descriptors, mixture01: np.ndarray, name: str, low: int, 
     raise ValueError(f'The disparity range [{low}, {high}] leaves no search in an image '
                      f'{w} px wide.')
   threads = matching.thread_count()
+  window = (matching.census_height, matching.census_width)
   factor = 1
   while h * w * (high - low + 1) > config.max_cells * factor ** 3 and min(h, w) / factor >= 64:
     factor *= 2
   if factor == 1:
-    return _full_match(descriptors, mixture01, name, low, high, config, threads)
+    return _full_match(descriptors, mixture01, name, low, high, config, threads, window)
   small = cv2.resize(mixture01.astype(np.float32), (round(w / factor), round(h / factor)),
                      interpolation=cv2.INTER_AREA)
   scale = w / small.shape[1]
   coarse = _full_match(descriptors, small, name, math.floor(low / scale),
-                       math.ceil(high / scale), config, threads)['disparity_left']
+                       math.ceil(high / scale), config, threads, window)['disparity_left']
   prior = cv2.resize(coarse, (w, h), interpolation=cv2.INTER_LINEAR) * scale
   fine = dataclasses.replace(matching, prior_radius=math.ceil(scale) + 2,
                              prior_spread=math.ceil(scale) + 1)

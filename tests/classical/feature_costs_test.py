@@ -52,3 +52,19 @@ def test_bad_arguments_are_refused():
     feature_costs.cosine_costs(np.zeros((2, 3, 4)), np.zeros((2, 4, 4)), 0, 2, 32.0)
   with pytest.raises(ValueError, match='num_disparities'):
     feature_costs.cosine_costs(np.zeros((2, 3, 4)), np.zeros((2, 3, 4)), 0, 0, 32.0)
+
+
+def test_the_stored_census_volume_is_the_matchers_cost_bit_for_bit():
+  """SGM of `census_volume` = the census matcher's full search in one strip, which never
+  stores the volume; a red eye against green and blue, a signed range."""
+  from mixstereo_tf.classical import matcher  # pylint: disable=g-import-not-at-top
+  rng = np.random.default_rng(3)
+  base = rng.uniform(0, 255, (30, 64, 3)).astype(np.float32)
+  left, right = base[..., :1], np.roll(base, -3, axis=1)[..., 1:]
+  config = matcher.MatcherConfig(strips=1, threads=1)
+  expected = matcher.match(left, right, -6, 9, config)
+  volume = parallel_sgm.census_volume(left, right, -6, 16, 7, 9, threads=2)
+  assert volume.shape == (30, 64, 16)
+  got = parallel_sgm.match_cost_volume(volume, -6, config.p1, config.p2, config.lr_threshold)
+  for key in ('disparity_left', 'disparity_right', 'consistent_left'):
+    np.testing.assert_array_equal(got[key], expected[key])
