@@ -42,9 +42,16 @@ FLAGS = flags.FLAGS
 
 FRACTION = 0.3
 REFERENCE = 'gray'
-RUNS = (('anaglyph', 'classical'), ('half_color', 'classical'),
-        ('dubois_ffmpeg', 'classical'), (REFERENCE, 'classical'), ('anaglyph', 'sgbm'),
-        (REFERENCE, 'sgbm'))
+# Row label -> the predictor: the classical method, the learned matching stage (the shipped
+# 'anaglyph_matching' features), the shipped default (the refiner on the classical
+# result), and OpenCV's SGBM, the peer baseline.
+METHODS = {'classical': dict(method='classical'),
+           'learned': dict(method='model', pretrained='anaglyph_matching'),
+           'shipped': dict(method='model'),
+           'sgbm': dict(method='sgbm')}
+ENCODINGS = ('anaglyph', 'half_color', 'dubois_ffmpeg', REFERENCE)
+RUNS = tuple((name, method) for method in ('classical', 'learned', 'shipped')
+             for name in ENCODINGS) + (('anaglyph', 'sgbm'), (REFERENCE, 'sgbm'))
 KITTI_FRAME = 'kitti_object_velodyne'
 
 
@@ -54,7 +61,7 @@ def _group(name):
 
 @functools.cache
 def _unmixer(name, method):
-  return predictors.build_unmixer(predictors.PredictorConfig(method, mixture=name))
+  return predictors.build_unmixer(predictors.PredictorConfig(mixture=name, **METHODS[method]))
 
 
 def kitti_velodyne_scene(folder):
@@ -151,7 +158,11 @@ def main(argv):
           f'{time.perf_counter() - start:.0f} s. Each pair window-aligned at '
           f'{FRACTION:.0%} (`realworld.window_align`), anaglyphs made by FFmpeg\'s stereo3d '
           '(imageio-ffmpeg); disparity range estimated from each image (as '
-          '`--disparity_range=auto`). classical = `--method=classical`; sgbm = '
+          '`--disparity_range=auto`). classical = `--method=classical`; learned = the '
+          'learned matching stage (`--pretrained=anaglyph_matching`: learned descriptors of '
+          'both eyes, cosine costs, SGM; trained on warped photographs only, so every '
+          'camera here is unseen); shipped = the default (`--pretrained=anaglyph`, the '
+          'refiner on the classical result); sgbm = '
           "`--method=sgbm`, OpenCV's StereoSGBM untuned (block 5, P1 = 200, P2 = 800, "
           "OpenCV's defaults otherwise) on the left eye's channel against the mean of the "
           "right eye's (`mixstereo_tf/classical/sgbm.py`). gray: both eyes carry "
