@@ -59,9 +59,7 @@ def cosine_costs(left: np.ndarray, right: np.ndarray, min_disparity: int,
                      f'{num_disparities} and {outside}.')
   h = left.shape[0]
   out = np.empty((h, left.shape[1], num_disparities), np.uint8)
-  bounds = np.linspace(0, h, min(h, max(1, threads)) + 1).round().astype(int)
-  tasks = list(zip(bounds[:-1], bounds[1:]))
-  parallel_sgm.run_tasks(lambda t: _rows(left, right, int(t[0]), int(t[1]),
-                                         int(min_disparity), np.float32(scale),
-                                         np.uint8(outside), out), tasks, threads)
+  parallel_sgm.run_tasks(lambda t: _rows(left, right, t[0], t[1], int(min_disparity),
+                                         np.float32(scale), np.uint8(outside), out),
+                         parallel_sgm.row_blocks(h, max(1, threads)), max(1, threads))
   return out

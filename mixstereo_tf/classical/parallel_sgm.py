@@ -35,6 +35,13 @@ def run_tasks(fn, tasks, threads: int) -> None:
     list(pool.map(fn, tasks))
 
 
+def row_blocks(height: int, threads: int):
+  """(start, stop) row ranges cutting `height` rows into min(height, threads) near-equal
+  blocks, one task each for `run_tasks`."""
+  bounds = np.linspace(0, height, min(height, max(1, threads)) + 1).round().astype(int)
+  return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
+
+
 def census_codes(channels: np.ndarray, height: int, width: int,
                  threads: int) -> np.ndarray:
   """Census codes of every channel, as `sgm.census_transform` (reflected borders).
@@ -50,11 +57,10 @@ def census_codes(channels: np.ndarray, height: int, width: int,
   h, w, k = channels.shape
   ry, rx = height // 2, width // 2
   out = np.empty((k, h, w), np.uint64)
-  bounds = np.linspace(0, h, min(h, threads) + 1).round().astype(int)
   padded = [np.pad(channels[..., c], ((ry, ry), (rx, rx)), mode='reflect') for c in range(k)]
-  tasks = [(c, a, b) for c in range(k) for a, b in zip(bounds[:-1], bounds[1:])]
-  run_tasks(lambda t: census_costs.census_rows(padded[t[0]][t[1]:t[2] + 2 * ry], height, width,
-                                        out[t[0], t[1]:t[2]]), tasks, threads)
+  tasks = [(c, a, b) for c in range(k) for a, b in row_blocks(h, threads)]
+  run_tasks(lambda t: census_costs.census_rows(padded[t[0]][t[1]:t[2] + 2 * ry], height,
+                                               width, out[t[0], t[1]:t[2]]), tasks, threads)
   return out
 
 
@@ -73,11 +79,10 @@ def census_volume(left: np.ndarray, right: np.ndarray, min_disparity: int,
   codes_right = census_codes(right, height, width, threads)
   h, w = left.shape[:2]
   out = np.empty((h, w, num_disparities), np.uint8)
-  bounds = np.linspace(0, h, min(h, threads) + 1).round().astype(int)
   oob = np.uint8((height * width - 1) // 2)
   run_tasks(lambda t: census_costs.volume_rows(codes_left, codes_right, int(min_disparity),
-                                               int(t[0]), int(t[1]), oob, out),
-            list(zip(bounds[:-1], bounds[1:])), threads)
+                                               t[0], t[1], oob, out),
+            row_blocks(h, threads), threads)
   return out
 
 
