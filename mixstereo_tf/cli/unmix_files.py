@@ -67,7 +67,7 @@ def failure_message(report: UnmixReport) -> Optional[str]:
           f'input(s) failed: {paths}{more}')
 
 
-def _reason(error: Exception) -> str:
+def reason(error: Exception) -> str:
   """A one-line reason for a failed input (TensorFlow messages can span many lines),
   naming the predictor flags (`--mixture`) instead of PredictorConfig fields."""
   message = error.message if isinstance(error, tf.errors.OpError) else str(error)
@@ -79,7 +79,7 @@ def _reason(error: Exception) -> str:
 # What one input may raise without stopping the others: unreadable or malformed files
 # (ValueError, cv2.error, FFmpeg's errors), failures inside TensorFlow (e.g. an image too
 # large for memory) and file-system errors while reading or writing.
-_INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError)
+INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError)
 
 
 def _video_settings(unmixer: predictors.Unmixer) -> Dict[str, object]:
@@ -170,6 +170,48 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   return 1
 
 
+@dataclasses.dataclass(frozen=True)
+class OutputOptions:
+  """How each input's results are written (`unmix_item`; flags of `mixstereo-unmix`).
+
+  layout: one of `media.LAYOUTS`. max_display_disparity: the colour maps span 0..this many
+  pixels (None: each image's disparities found; videos: the unmixer's range).
+  video_config: resumable segments (`video.jobs`). settings: a JSON-serialisable
+  description of the unmixer for a video job's manifest (None: its method, mixture and
+  range). temporal_config: a video's per-shot decisions and disparity prior (`temporal`).
+  """
+  layout: str = 'separate'
+  max_display_disparity: Optional[float] = None
+  video_config: jobs.VideoConfig = jobs.VideoConfig()
+  settings: Optional[Dict[str, object]] = None
+  temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()
+
+  def __post_init__(self):
+    if self.layout not in media.LAYOUTS:
+      raise ValueError(f'Unknown layout {self.layout!r}; valid: {", ".join(media.LAYOUTS)}.')
+    if self.max_display_disparity is not None and not self.max_display_disparity > 0:
+      raise ValueError('max_display_disparity must be positive, got '
+                       f'{self.max_display_disparity}.')
+
+
+def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
+               options: OutputOptions, report: UnmixReport,
+               progress_stream: Optional[TextIO] = None) -> int:
+  """Unmixes one image or video into `output_dir` (existing); returns the frames unmixed.
+
+  The one path every tool writes an input's results by (`mixstereo-unmix`, the batch
+  pipeline). Errors propagate (`INPUT_ERRORS` are the per-input ones); `report` gains the
+  seconds spent unmixing.
+  """
+  if item.is_video:
+    return _unmix_video(unmixer, item, output_dir, options.layout,
+                        options.max_display_disparity or unmixer.max_disparity,
+                        options.settings or _video_settings(unmixer), options.video_config,
+                        progress_stream, report, options.temporal_config)
+  return _unmix_image(unmixer, item, output_dir, options.layout,
+                      options.max_display_disparity, report)
+
+
 def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
                  layout: str = 'separate', max_display_disparity: Optional[float] = None,
                  progress_stream: Optional[TextIO] = None,
@@ -177,7 +219,7 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
                  settings: Optional[Dict[str, object]] = None,
                  temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()
                  ) -> UnmixReport:
-  """Unmixes every image / video of `input_spec` (see `media.iter_inputs`).
+  """Unmixes every image / video of `input_spec` (see `media.iter_inputs`) by `unmix_item`.
 
   An input that cannot be read, unmixed or written is logged with its path and the reason,
   recorded in `UnmixReport.failures` and skipped; the others still run.
@@ -195,32 +237,23 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
   Raises:
     ValueError: bad layout / display range, or `input_spec` names nothing usable.
   """
-  if layout not in media.LAYOUTS:
-    raise ValueError(f'Unknown layout {layout!r}; valid: {", ".join(media.LAYOUTS)}.')
-  if max_display_disparity is not None and not max_display_disparity > 0:
-    raise ValueError(f'max_display_disparity must be positive, got {max_display_disparity}.')
-  max_disparity = max_display_disparity or unmixer.max_disparity
+  options = OutputOptions(layout, max_display_disparity, video_config, settings,
+                          temporal_config)
   items = list(media.iter_inputs(input_spec))
   os.makedirs(output_dir, exist_ok=True)
   report = UnmixReport()
   run_start = time.perf_counter()
   bar = progress.ProgressBar(len(items), stream=progress_stream) if len(items) > 1 else None
   for index, item in enumerate(items, 1):
+    if bar and item.is_video:
+      bar.clear()  # The video draws its own frame progress.
     try:
-      if item.is_video:
-        if bar:
-          bar.clear()  # The video draws its own frame progress.
-        frames = _unmix_video(unmixer, item, output_dir, layout, max_disparity,
-                              settings or _video_settings(unmixer), video_config,
-                              progress_stream, report, temporal_config)
-      else:
-        frames = _unmix_image(unmixer, item, output_dir, layout, max_display_disparity,
-                              report)
-    except _INPUT_ERRORS as e:
+      frames = unmix_item(unmixer, item, output_dir, options, report, progress_stream)
+    except INPUT_ERRORS as e:
       if bar:
         bar.clear()
-      logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, _reason(e))
-      report.failures.append((item.path, _reason(e)))
+      logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, reason(e))
+      report.failures.append((item.path, reason(e)))
     else:
       report.processed += 1
       report.frames += frames
