@@ -62,6 +62,7 @@ def video_speed(method: str, width: int, height: int, frames: int = 12) -> dict:
   # pylint: disable=g-import-not-at-top
   from mixstereo_tf.unmixing import predictors
   from mixstereo_tf.video import temporal
+  from mixstereo_tf.cli import media
   from mixstereo_tf.cli import unmix_files
   from mixstereo_tf.video import streams
   root = tempfile.mkdtemp()
@@ -76,9 +77,8 @@ def video_speed(method: str, width: int, height: int, frames: int = 12) -> dict:
     result = {'frames': frames, 'package': os.path.dirname(mixstereo_tf.__file__)}
     for name, enabled in QUALITY_VARIANTS:
       output_dir = os.path.join(root, name.replace(' ', '_'))
-      report = unmix_files.unmix_inputs(unmixer, path, output_dir, layout='sbs',
-                                        temporal_config=temporal.TemporalConfig(
-                                            enabled=enabled))
+      report = unmix_files.unmix_inputs(unmixer, path, output_dir, media.OutputOptions(
+          layout='sbs', temporal_config=temporal.TemporalConfig(enabled=enabled)))
       if report.failures or report.frames != frames:
         raise RuntimeError(f'unmix_inputs: {report}')
       result[name] = {'fps': report.frames_per_second,

@@ -24,11 +24,8 @@ from absl import logging
 
 from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flags as cli_flags
-from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
-from mixstereo_tf.video import jobs
-from mixstereo_tf.video import temporal
 
 FLAGS = flags.FLAGS
 
@@ -36,20 +33,7 @@ cli_flags.define_predictor()
 flags.DEFINE_string('input', None, 'Image, folder, glob pattern or video.')
 cli_flags.define_output_dir()
 cli_flags.require_unless_listing('input', 'output_dir')
-flags.DEFINE_enum('layout', 'separate', media.LAYOUTS,
-                  'Views as two files (separate), side by side (sbs), side by side at '
-                  'half width (sbs_half) or top-bottom (tb).')
-flags.DEFINE_float('max_display_disparity', None, 'Disparity (pixels) shown brightest in '
-                   "the colour maps, fixed for the run (default: the predictor's range).")
-flags.DEFINE_integer('segment_frames', jobs.VideoConfig.segment_frames,
-                     'Videos are written in resumable segments of this many frames: '
-                     'running the same command again after an interruption continues '
-                     'from the last finished segment.')
-flags.DEFINE_boolean('temporal', temporal.TemporalConfig.enabled,
-                     'Videos: decide the encoding and the disparity range once per shot '
-                     '(scene cuts found from colour histograms) and search each frame '
-                     "around the previous frame's disparity (classical method); "
-                     '--notemporal unmixes every frame alone.')
+cli_flags.define_output_options()
 
 
 def main(argv):
@@ -62,13 +46,10 @@ def main(argv):
       raise ValueError('--method=oracle needs the clean stereo pair; it is for evaluation '
                        'only.')
     unmixer = predictors.build_unmixer(config)
-    report = unmix_files.unmix_inputs(unmixer, FLAGS.input, FLAGS.output_dir, FLAGS.layout,
-                                      FLAGS.max_display_disparity,
-                                      progress_stream=sys.stderr,
-                                      video_config=jobs.VideoConfig(FLAGS.segment_frames),
-                                      settings=dataclasses.asdict(config),
-                                      temporal_config=temporal.TemporalConfig(
-                                          enabled=FLAGS.temporal))
+    report = unmix_files.unmix_inputs(
+        unmixer, FLAGS.input, FLAGS.output_dir,
+        cli_flags.output_options(settings=dataclasses.asdict(config)),
+        progress_stream=sys.stderr)
   except ValueError as e:
     raise cli_flags.usage_error(e) from None
   logging.info('%d input(s) done, %d failed; %d frame(s) in %.2f s: %.2f frames/s '

@@ -18,9 +18,12 @@ from absl import flags
 
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.cli import media
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import jobs
+from mixstereo_tf.video import temporal
 
 FLAGS = flags.FLAGS
 # The flags of `define_predictor`: one per PredictorConfig field, of the field's name.
@@ -65,6 +68,37 @@ def define_max_disparity() -> None:
 def define_output_dir() -> None:
   """--output_dir (each tool says whether it is required)."""
   flags.DEFINE_string('output_dir', None, 'Where to write the results.')
+
+
+@functools.lru_cache(maxsize=None)
+def define_output_options() -> None:
+  """How results are written (`media.OutputOptions`): --layout, --max_display_disparity,
+  --segment_frames, --temporal (mixstereo-unmix and mixstereo-batch)."""
+  options = defaults(media.OutputOptions)
+  flags.DEFINE_enum('layout', options['layout'], media.LAYOUTS,
+                    'Views as two files (separate), side by side (sbs), side by side at '
+                    'half width (sbs_half) or top-bottom (tb).')
+  flags.DEFINE_float('max_display_disparity', options['max_display_disparity'],
+                     'Disparity (pixels) shown brightest in the colour maps, fixed for the '
+                     "run (default: the range found; videos: the predictor's range).")
+  flags.DEFINE_integer('segment_frames', jobs.VideoConfig.segment_frames,
+                       'Videos are written in resumable segments of this many frames: '
+                       'running the same command again after an interruption continues '
+                       'from the last finished segment.')
+  flags.DEFINE_boolean('temporal', temporal.TemporalConfig.enabled,
+                       'Videos: decide the encoding and the disparity range once per shot '
+                       '(scene cuts found from colour histograms) and search each frame '
+                       "around the previous frame's disparity (classical method); "
+                       '--notemporal unmixes every frame alone.')
+
+
+def output_options(settings: Optional[Dict[str, object]] = None) -> media.OutputOptions:
+  """`media.OutputOptions` from the flags of `define_output_options`; `settings` describes
+  the unmixer in a video job's manifest."""
+  return media.OutputOptions(
+      layout=FLAGS.layout, max_display_disparity=FLAGS.max_display_disparity,
+      video_config=jobs.VideoConfig(FLAGS.segment_frames), settings=settings,
+      temporal_config=temporal.TemporalConfig(enabled=FLAGS.temporal))
 
 
 @functools.lru_cache(maxsize=None)

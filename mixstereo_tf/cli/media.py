@@ -15,6 +15,8 @@ import numpy as np
 
 from mixstereo_tf.core import colormap
 from mixstereo_tf.data import image_io
+from mixstereo_tf.video import jobs
+from mixstereo_tf.video import temporal
 
 LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
@@ -135,6 +137,30 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
   np.save(paths[-1], disparity)
   written['files'] = [os.path.basename(p) for p in paths]
   return written
+
+
+@dataclasses.dataclass(frozen=True)
+class OutputOptions:
+  """How each input's results are written (`unmix_files.unmix_item`; flags of `mixstereo-unmix`).
+
+  layout: one of `LAYOUTS`. max_display_disparity: the colour maps span 0..this many
+  pixels (None: each image's disparities found; videos: the unmixer's range).
+  video_config: resumable segments (`video.jobs`). settings: a JSON-serialisable
+  description of the unmixer for a video job's manifest (None: its method, mixture and
+  range). temporal_config: a video's per-shot decisions and disparity prior (`temporal`).
+  """
+  layout: str = 'separate'
+  max_display_disparity: Optional[float] = None
+  video_config: jobs.VideoConfig = jobs.VideoConfig()
+  settings: Optional[Dict[str, object]] = None
+  temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()
+
+  def __post_init__(self):
+    if self.layout not in LAYOUTS:
+      raise ValueError(f'Unknown layout {self.layout!r}; valid: {", ".join(LAYOUTS)}.')
+    if self.max_display_disparity is not None and not self.max_display_disparity > 0:
+      raise ValueError('max_display_disparity must be positive, got '
+                       f'{self.max_display_disparity}.')
 
 
 @dataclasses.dataclass(frozen=True)

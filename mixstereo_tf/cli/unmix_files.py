@@ -170,32 +170,8 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   return 1
 
 
-@dataclasses.dataclass(frozen=True)
-class OutputOptions:
-  """How each input's results are written (`unmix_item`; flags of `mixstereo-unmix`).
-
-  layout: one of `media.LAYOUTS`. max_display_disparity: the colour maps span 0..this many
-  pixels (None: each image's disparities found; videos: the unmixer's range).
-  video_config: resumable segments (`video.jobs`). settings: a JSON-serialisable
-  description of the unmixer for a video job's manifest (None: its method, mixture and
-  range). temporal_config: a video's per-shot decisions and disparity prior (`temporal`).
-  """
-  layout: str = 'separate'
-  max_display_disparity: Optional[float] = None
-  video_config: jobs.VideoConfig = jobs.VideoConfig()
-  settings: Optional[Dict[str, object]] = None
-  temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()
-
-  def __post_init__(self):
-    if self.layout not in media.LAYOUTS:
-      raise ValueError(f'Unknown layout {self.layout!r}; valid: {", ".join(media.LAYOUTS)}.')
-    if self.max_display_disparity is not None and not self.max_display_disparity > 0:
-      raise ValueError('max_display_disparity must be positive, got '
-                       f'{self.max_display_disparity}.')
-
-
 def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
-               options: OutputOptions, report: UnmixReport,
+               options: media.OutputOptions, report: UnmixReport,
                progress_stream: Optional[TextIO] = None) -> int:
   """Unmixes one image or video into `output_dir` (existing); returns the frames unmixed.
 
@@ -213,32 +189,21 @@ def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: s
 
 
 def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
-                 layout: str = 'separate', max_display_disparity: Optional[float] = None,
-                 progress_stream: Optional[TextIO] = None,
-                 video_config: jobs.VideoConfig = jobs.VideoConfig(),
-                 settings: Optional[Dict[str, object]] = None,
-                 temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()
-                 ) -> UnmixReport:
+                 options: media.OutputOptions = media.OutputOptions(),
+                 progress_stream: Optional[TextIO] = None) -> UnmixReport:
   """Unmixes every image / video of `input_spec` (see `media.iter_inputs`) by `unmix_item`.
 
   An input that cannot be read, unmixed or written is logged with its path and the reason,
   recorded in `UnmixReport.failures` and skipped; the others still run.
 
-  Videos are written in resumable segments (`video.jobs`, `video_config`): re-running the
-  same call after an interruption continues from the last finished segment, as long as
-  the input and `settings` (a JSON-serialisable description of the unmixer; default its
-  method, mixture and range) are unchanged. `temporal_config`: a video's per-shot
-  decisions and disparity prior (`temporal`; on by default).
-
-  `max_display_disparity` fixes the colour maps to 0..that many pixels; by default each
-  image's map spans the disparities found (videos: the unmixer's range). Progress
-  (`ProgressBar`) is drawn on `progress_stream` when it is a terminal, else logged.
+  Videos are written in resumable segments (`video.jobs`, `options.video_config`):
+  re-running the same call after an interruption continues from the last finished segment,
+  as long as the input and `options.settings` are unchanged. Progress (`ProgressBar`) is
+  drawn on `progress_stream` when it is a terminal, else logged.
 
   Raises:
-    ValueError: bad layout / display range, or `input_spec` names nothing usable.
+    ValueError: `input_spec` names nothing usable.
   """
-  options = OutputOptions(layout, max_display_disparity, video_config, settings,
-                          temporal_config)
   items = list(media.iter_inputs(input_spec))
   os.makedirs(output_dir, exist_ok=True)
   report = UnmixReport()

@@ -131,3 +131,10 @@ def test_iter_inputs_marks_videos(tmp_path):
   _write_png(tmp_path / 'still.png', 5)
   items = list(media.iter_inputs(str(tmp_path / '*')))
   assert [(i.name, i.is_video) for i in items] == [('clip', True), ('still', False)]
+
+
+def test_output_options_reject_bad_layout_and_display_range():
+  with pytest.raises(ValueError, match="Unknown layout 'sideways'"):
+    media.OutputOptions('sideways')
+  with pytest.raises(ValueError, match='max_display_disparity must be positive'):
+    media.OutputOptions(max_display_disparity=0.0)

@@ -62,7 +62,8 @@ def test_every_layout_for_one_image(setup, tmp_path):
             'scene_tb.png': (80, 50, 3)}
   for layout, names in expected.items():
     out = tmp_path / layout
-    report = unmix_files.unmix_inputs(setup, str(tmp_path / 'scene.png'), str(out), layout)
+    report = unmix_files.unmix_inputs(setup, str(tmp_path / 'scene.png'), str(out),
+                                      media.OutputOptions(layout))
     assert (report.processed, report.frames, report.failures) == (1, 1, [])
     common = ['scene_disparity.png', 'scene_disparity16.png', 'scene_disparity.npy',
               'scene_info.json']
@@ -92,8 +93,8 @@ def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
   (folder / 'b.png').write_bytes(b'\x89PNG\r\n\x1a\n truncated')
   cv2.imwrite(str(folder / 'c.jpg'), np.full((33, 47), 90, np.uint8))  # Gray.
   terminal = _Terminal()
-  report = unmix_files.unmix_inputs(setup, str(folder), str(tmp_path / 'out'), 'sbs_half',
-                                 progress_stream=terminal)
+  report = unmix_files.unmix_inputs(setup, str(folder), str(tmp_path / 'out'),
+                                    media.OutputOptions('sbs_half'), progress_stream=terminal)
   assert report.processed == 2 and report.frames == 2
   assert '[##########] 3/3' in terminal.getvalue() and terminal.getvalue().endswith('\n')
   assert [os.path.basename(p) for p, _ in report.failures] == ['b.png']
@@ -154,8 +155,9 @@ def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extensio
   keys = ['left', 'right'] if layout == 'separate' else [layout]
   names = [f'clip_{key}{extension}' for key in keys + ['disparity']]
   terminal = _Terminal()
-  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'once'), layout,
-                                    progress_stream=terminal, video_config=config)
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'once'),
+                                    media.OutputOptions(layout, video_config=config),
+                                    progress_stream=terminal)
   assert (report.processed, report.frames, report.failures) == (1, 24, [])
   assert f'clip{extension}  [##########] 24/24  ' in terminal.getvalue() or (
       extension == '.mkv')  # Matroska gives no frame count: '24 done'.
@@ -174,10 +176,10 @@ def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extensio
   # Interrupted after 13 frames: nothing under a final name; the re-run resumes at 10.
   with pytest.raises(Interrupted):
     unmix_files.unmix_inputs(_failing_after(unmixer, 13), source, str(tmp_path / 'again'),
-                             layout, video_config=config)
+                             media.OutputOptions(layout, video_config=config))
   assert not any(os.path.exists(tmp_path / 'again' / name) for name in names)
-  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'again'), layout,
-                                    video_config=config)
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'again'),
+                                    media.OutputOptions(layout, video_config=config))
   assert (report.processed, report.frames) == (1, 14)
   assert json.loads((tmp_path / 'again' / 'clip_info.json').read_text())['resumed_frames'] == 10
   assert sorted(os.listdir(tmp_path / 'again')) == sorted(names + ['clip_info.json'])
