@@ -145,6 +145,10 @@ flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner', 'features'), "jo
                   '--mixture, --degrade, --feature_width, --feature_layers; not in the paper).')
 flags.DEFINE_integer('feature_width', matching_features.FeatureConfig.width,
                      '--architecture=features: descriptor length (channels per convolution).')
+flags.DEFINE_boolean('photo_warps', photo_warps.WarpConfig.photo_warps,
+                     '--architecture=features: each pair is one photograph warped by a drawn '
+                     'disparity field (data/photo_warps.py); --nophoto_warps: procedural '
+                     'scenes textured from the same photographs (the ablation).')
 flags.DEFINE_integer('feature_layers', matching_features.FeatureConfig.layers,
                      '--architecture=features: 3x3 convolutions per eye branch.')
 
@@ -231,7 +235,8 @@ def _train_features() -> None:
     raise app.UsageError('--architecture=features needs --num_steps.')
   try:
     warp = photo_warps.WarpConfig(height=FLAGS.crop_height, width=FLAGS.crop_width,
-                                  max_disparity=FLAGS.max_disparity)
+                                  max_disparity=FLAGS.max_disparity,
+                                  photo_warps=FLAGS.photo_warps)
     low, count = feature_loop.candidates(FLAGS.max_disparity)
     config = feature_loop.FeatureTrainConfig(
         model_dir=FLAGS.model_dir, texture_dir=FLAGS.texture_dir,

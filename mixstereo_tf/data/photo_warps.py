@@ -47,6 +47,9 @@ class WarpConfig:
     realistic_probability: chance of ground planes and poles (`SceneConfig.realistic`).
     object_probability: chance that foreground layers show other parts of a photograph.
     window_probability: chance of window alignment (signed disparities).
+    photo_warps: step 2 on (the recipe); off, every layer keeps the texture, gain and
+      offset `synthetic.random_layers` drew: the project's procedural scenes, textured
+      from the same atlas (the ablation without warps of photographs).
   """
   height: int = 128
   width: int = 256
@@ -55,6 +58,7 @@ class WarpConfig:
   realistic_probability: float = 0.5
   object_probability: float = 0.5
   window_probability: float = 0.5
+  photo_warps: bool = True
 
   def __post_init__(self):
     synthetic.SceneConfig(self.max_disparity, self.height, self.width)
@@ -114,8 +118,9 @@ def warped_pair(seed: int, config: WarpConfig,
   wide = config.width + config.max_disparity  # Rendered wider so a window shift fits.
   scene = synthetic.SceneConfig(config.max_disparity, config.height, wide,
                                 realistic=realistic)
-  layers = _photo_layers(rng, synthetic.random_layers(seed, scene, len(atlas)), atlas,
-                         config, wide)
+  layers = synthetic.random_layers(seed, scene, len(atlas))
+  if config.photo_warps:
+    layers = _photo_layers(rng, layers, atlas, config, wide)
   pair = synthetic.render_layers(layers, atlas, config.height, wide)
   shift = 0
   if rng.uniform() < config.window_probability:

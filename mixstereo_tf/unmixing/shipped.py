@@ -7,7 +7,7 @@ A model that knows several encodings detects each image's when no mixture is giv
 """
 
 import dataclasses
-from typing import Callable, Dict
+from typing import Callable, Dict, Optional
 
 import tensorflow as tf
 
@@ -23,28 +23,33 @@ from mixstereo_tf.unmixing import unmixer
 Solve = Callable[..., Dict[str, object]]
 
 
-def _refiner_solver(model: tf.keras.Model) -> Solve:
+def _refiner_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
   signature = [tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)]
   network = tf.function(lambda x: model(x, training=False), input_signature=signature)
   return lambda image, name, search, hint: steps.refiner_unmix(
-      network, model.size_multiple, image, name, search, hint)
+      network, model.size_multiple, image, name, search, hint, base)
 
 
-def _features_solver(model: tf.keras.Model) -> Solve:
+def _features_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
+  if base is not None:
+    raise ValueError('The learned matching stage replaces the classical matching; it '
+                     'cannot run on top of another stage.')
   descriptors = learned_matching.descriptor_function(model)
   return lambda image, name, search, hint: learned_matching.learned_unmix(
       descriptors, image, name, search, hint)
 
 
 # kind -> the `steps.run` solver of a stage built on the classical method's range.
-_SOLVERS: Dict[str, Callable[[tf.keras.Model], Solve]] = {
+# The optional second argument: the stage it runs on instead of the classical method.
+_SOLVERS: Dict[str, Callable[[tf.keras.Model, Optional[Solve]], Solve]] = {
     'refiner': _refiner_solver, 'features': _features_solver}
 
 
 def pretrained_unmixer(entry: pretrained.Pretrained,
-                       config: unmixer.PredictorConfig = unmixer.PredictorConfig()
-                       ) -> unmixer.Unmixer:
-  """The 'model' Unmixer of a shipped model (module docstring).
+                       config: unmixer.PredictorConfig = unmixer.PredictorConfig(),
+                       base: Optional[pretrained.Pretrained] = None) -> unmixer.Unmixer:
+  """The 'model' Unmixer of a shipped model (module docstring); with `base`, a shipped
+  stage that `entry` (a refiner) runs on instead of the classical method.
 
   Raises:
     ValueError: a mixture the model does not unmix, or one without the model's stage.
@@ -62,11 +67,12 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
   if config.mixture is None and len(trained) > 1:  # Several encodings: detect each image's.
     config = dataclasses.replace(config, mixture=steps.AUTO)
   requested = unmixer.check_mixture(config, trained)
-  stage = _SOLVERS[entry.kind](model)
+  base_stage = base and _SOLVERS[base.kind](pretrained.load_model(base), None)
+  stage = _SOLVERS[entry.kind](model, base_stage)
 
   def solve(image, name, search, hint):
     outputs = stage(image, name, search, hint)
-    outputs['info'] = {'pretrained': entry.name}
+    outputs['info'] = {'pretrained': entry.name + (f' on {base.name}' if base else '')}
     return outputs
 
   return unmixer.image_unmixer('model', requested, trained, config, unmixer.classical_range,

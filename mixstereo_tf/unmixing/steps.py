@@ -125,13 +125,16 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
 
 
 def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, name: str,
-                  search: Range, hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
-  """The hybrid (`models/refiner.py`): the classical method, the refiner on its result
+                  search: Range, hint: Optional[hints.FrameHint] = None,
+                  base_stage: Optional[Callable[..., Dict[str, object]]] = None
+                  ) -> Dict[str, object]:
+  """The hybrid (`models/refiner.py`): the base stage (`classical_unmix`, or another with
+  its signature and outputs, e.g. the learned matching stage), the refiner on its result
   (in tiles), then, for anaglyphs, both views restored from the refined disparities with,
   as the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
   the rest of the classical colour transfer (each alone was worse on some encodings);
   'consistent_left' is that restoration's left-right check of the refined disparities."""
-  base = classical_unmix(image, name, search, hint)
+  base = (base_stage or classical_unmix)(image, name, search, hint)
   refined = tiling.apply(network, refiner.network_input(
       image, base['left'], base['right'], base['disparity_left'],
       base['disparity_right']), multiple)

@@ -69,3 +69,14 @@ def test_ordinary_photographs_pass_the_guard(tmp_path):
   for name in ('Dune.jpg', 'Kleiber_by_Lukas_Baubkus.jpg', '2004default.jpg'):
     (tmp_path / name).write_bytes(b'')
   photo_warps.refuse_evaluation_photos(str(tmp_path))
+
+
+def test_without_photo_warps_the_same_geometry_keeps_its_drawn_textures(atlas):
+  warped = photo_warps.WarpConfig(height=48, width=96, max_disparity=32, window_probability=0)
+  procedural = photo_warps.WarpConfig(height=48, width=96, max_disparity=32,
+                                      window_probability=0, photo_warps=False)
+  for seed in range(3):
+    a, b = (photo_warps.warped_pair(seed, c, atlas) for c in (warped, procedural))
+    np.testing.assert_array_equal(a['disparity_left'], b['disparity_left'])
+    assert np.abs(a['left'].astype(float) - b['left']).mean() > 5.0  # Other textures.
+    assert _warp_error(b) < 2.0  # Still exact correspondences.

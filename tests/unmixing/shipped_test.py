@@ -3,6 +3,8 @@ loads, runs through the tools' predictor, and beats the classical method on cros
 scenes it never trained on (held-out procedural scenes: textures it never saw, and no
 procedural scene at all in its training)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 import tensorflow as tf
@@ -12,6 +14,7 @@ from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import sources
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.unmixing import shipped
 
 NAME = 'anaglyph_matching'
 # Measured on these scenes: mean bad-1 20.1% against 21.8% (5 scenes).
@@ -58,3 +61,19 @@ def test_the_learned_stage_beats_classical_on_unseen_cross_channel_scenes(scenes
     ours.append(_bad1(out, scene))
     theirs.append(_bad1(classical(image), scene))
   assert np.mean(ours) < np.mean(theirs) - MARGIN, (ours, theirs)
+
+
+def test_the_refiner_runs_on_the_learned_stage_when_given_it_as_base(scenes):
+  config = predictors.PredictorConfig(mixture='anaglyph', disparity_range=(0, 47))
+  stacked = shipped.pretrained_unmixer(pretrained.get('anaglyph'), config,
+                                       base=pretrained.get(NAME))
+  image = _anaglyph(scenes[0])
+  out = stacked(image)
+  assert out['info']['pretrained'] == f'anaglyph on {NAME}'
+  assert out['left'].shape == image.shape and out['disparity_left'].shape == image.shape[:2]
+  # The refiner moves the learned stage's disparities (it is not skipped) but stays near.
+  alone = predictors.build_unmixer(dataclasses.replace(config, pretrained=NAME))(image)
+  change = np.abs(out['disparity_left'] - alone['disparity_left'])
+  assert 0.0 < np.median(change) < 2.0
+  with pytest.raises(ValueError, match='cannot run on top of another stage'):
+    shipped.pretrained_unmixer(pretrained.get(NAME), config, base=pretrained.get('anaglyph'))
