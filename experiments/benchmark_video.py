@@ -12,7 +12,9 @@ Speed (`video_speed`): the first shot of that clip upscaled (bicubic) to 1280x72
 as `mixstereo-unmix --input=clip.mp4 --layout=sbs` does (decoding, unmixing, encoding the
 side-by-side and disparity videos, segments and manifest), after one warm-up frame
 (numba's cache, tf.function tracing). Frames/s = frames / wall seconds of the whole call;
-"unmix only" = frames / seconds inside the unmixer.
+"unmix only" = frames / seconds inside the unmixer. Methods: classical, model (the shipped
+default, the refiner) and learned (the learned matching stage, `--pretrained=anaglyph_matching`;
+with the temporal prior only a shot's first frame is matched by it, the others around the prior).
 """
 
 import fractions
@@ -24,7 +26,10 @@ import cv2
 
 QUALITY_VARIANTS = (('per frame', False), ('per shot + prior', True))
 SPEED_SIZES = ((1280, 720), (1920, 1080))
-METHODS = ('classical', 'model')
+# Row label -> the predictor: the classical method, the shipped default (the refiner) and
+# the learned matching stage (`--pretrained=anaglyph_matching`).
+METHODS = {'classical': dict(method='classical'), 'model': dict(method='model'),
+           'learned': dict(method='model', pretrained='anaglyph_matching')}
 
 
 def video_quality(method: str, frames_per_shot: int = 20) -> dict:
@@ -35,7 +40,8 @@ def video_quality(method: str, frames_per_shot: int = 20) -> dict:
   from mixstereo_tf.video import temporal
   clip = clip_lib.make_clip(frames_per_shot)
   frames = [c[0] for c in clip]
-  unmixer = predictors.build_unmixer(predictors.PredictorConfig(method, mixture='auto'))
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(mixture='auto',
+                                                                **METHODS[method]))
   clip_lib.unmix_clip(unmixer, frames[:2], temporal.TemporalConfig())  # Compiles kernels.
   result = {}
   for name, enabled in QUALITY_VARIANTS:
@@ -69,7 +75,8 @@ def video_speed(method: str, width: int, height: int, frames: int = 12) -> dict:
   try:
     path = os.path.join(root, 'clip.mp4')
     _write_clip(path, (width, height), frames)
-    unmixer = predictors.build_unmixer(predictors.PredictorConfig(method, mixture='auto'))
+    unmixer = predictors.build_unmixer(predictors.PredictorConfig(mixture='auto',
+                                                                  **METHODS[method]))
     _, decoded = streams.open_video(path)
     unmixer(next(iter(decoded)).image)  # Warm-up: numba's cache, tracing.
     decoded.close()

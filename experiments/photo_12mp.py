@@ -2,7 +2,7 @@
 or the shipped model: seconds and the process' peak resident memory (issues 13 and 15).
 
     python experiments/photo_12mp.py [--photo_encoding=anaglyph] [--photo_method=model]
-        [--photo_size=1242x375]
+        [--photo_pretrained=anaglyph_matching] [--photo_size=1242x375]
 
 The pair is scikit-image's Motorcycle (Middlebury 2014, 2964x2000) resized to 4000x3000,
 so its disparities reach ~360 px; the anaglyph is FFmpeg's when imageio-ffmpeg is there.
@@ -25,6 +25,9 @@ flags.DEFINE_string('photo_encoding', 'anaglyph', 'The anaglyph encoding to make
 flags.DEFINE_enum('photo_method', 'classical', ('classical', 'model'),
                   'classical, or model: the shipped model (no model flag).')
 flags.DEFINE_string('photo_size', '4000x3000', 'WIDTHxHEIGHT of the photo.')
+flags.DEFINE_string('photo_pretrained', None, 'With --photo_method=model: the shipped model '
+                    '(e.g. anaglyph_matching, the learned matching stage; default: the '
+                    "tools' default).")
 FLAGS = flags.FLAGS
 
 
@@ -43,13 +46,14 @@ def main(argv):
     image = realworld.make_anaglyph({'left': left, 'right': right}, FLAGS.photo_encoding, 'ours')
   del left, right
   before = _peak_gib()
-  unmixer = predictors.build_unmixer(predictors.PredictorConfig(FLAGS.photo_method,
-                                                              mixture='auto'))
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      FLAGS.photo_method, mixture='auto', pretrained=FLAGS.photo_pretrained))
   start, cpu = time.perf_counter(), time.process_time()
   out = unmixer(image)
   wall, cpu = time.perf_counter() - start, time.process_time() - cpu
   info = out['info']
-  print(f'{FLAGS.photo_size} {FLAGS.photo_encoding}, {FLAGS.photo_method}: detected {info["detected"]} '
+  print(f'{FLAGS.photo_size} {FLAGS.photo_encoding}, {FLAGS.photo_method} '
+        f'{FLAGS.photo_pretrained or ""}: detected {info["detected"]} '
         f'({info["confidence"]:.2f}), range {info["disparity_range"]}, '
         f'{wall:.1f} s wall, {cpu:.1f} CPU-s, peak RSS {_peak_gib():.2f} GiB '
         f'({before:.2f} GiB before the unmix: input images and TensorFlow)')

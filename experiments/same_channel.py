@@ -31,7 +31,9 @@ from mixstereo_tf.data import image_io
 from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.evaluation import velodyne
+from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.unmixing import shipped
 
 import numpy as np
 
@@ -47,21 +49,31 @@ REFERENCE = 'gray'
 # result), and OpenCV's SGBM, the peer baseline.
 METHODS = {'classical': dict(method='classical'),
            'learned': dict(method='model', pretrained='anaglyph_matching'),
+           'learned + refiner': dict(method='model', pretrained='anaglyph'),
            'shipped': dict(method='model'),
            'sgbm': dict(method='sgbm')}
+# Rows whose shipped refiner runs on the learned stage instead of the classical method.
+ON_LEARNED = {'learned + refiner': 'anaglyph_matching'}
 ENCODINGS = ('anaglyph', 'half_color', 'dubois_ffmpeg', REFERENCE)
-RUNS = tuple((name, method) for method in ('classical', 'learned', 'shipped')
+RUNS = tuple((name, method) for method in ('classical', 'learned', 'learned + refiner',
+                                           'shipped')
              for name in ENCODINGS) + (('anaglyph', 'sgbm'), (REFERENCE, 'sgbm'))
 KITTI_FRAME = 'kitti_object_velodyne'
 
 
-def _group(name):
+def group(name):
+  """The table's scene group of a scene name."""
   return 'procedural (mean)' if name.startswith('synthetic') else name
 
 
 @functools.cache
-def _unmixer(name, method):
-  return predictors.build_unmixer(predictors.PredictorConfig(mixture=name, **METHODS[method]))
+def unmixer(name, method):
+  """The Unmixer of a row label (`METHODS`) for encoding `name`."""
+  config = predictors.PredictorConfig(mixture=name, **METHODS[method])
+  if method in ON_LEARNED:
+    return shipped.pretrained_unmixer(pretrained.choose(config.pretrained, name), config,
+                                      pretrained.get(ON_LEARNED[method]))
+  return predictors.build_unmixer(config)
 
 
 def kitti_velodyne_scene(folder):
@@ -82,7 +94,8 @@ def kitti_velodyne_scene(folder):
           'disparity_left': disparity.astype(np.float32), 'valid_left': valid}
 
 
-def _scenes(shared_dir):
+def scenes(shared_dir):
+  """(name, data) of every scene with ground truth (module docstring)."""
   yield from realworld.scenes(shared_dir)
   folder = os.path.join(shared_dir or '', KITTI_FRAME)
   if shared_dir and os.path.isdir(folder):
@@ -100,13 +113,13 @@ def _score(pair, out):
 
 def _evaluate(shared_dir):
   rows = []
-  for scene, data in _scenes(shared_dir):
+  for scene, data in scenes(shared_dir):
     pair = realworld.window_align(data, FRACTION)
     for name, method in RUNS:
       image = realworld.make_anaglyph(pair, name, 'ffmpeg')
       start = time.perf_counter()
-      out = _unmixer(name, method)(image)
-      rows.append(dict(scene=scene, group=_group(scene), encoding=name, method=method,
+      out = unmixer(name, method)(image)
+      rows.append(dict(scene=scene, group=group(scene), encoding=name, method=method,
                        shift=pair['shift'], searched=out['info']['disparity_range'],
                        seconds=round(time.perf_counter() - start, 2), **_score(pair, out)))
       print(scene, name, method, f"bad-1 {rows[-1]['bad1']:.3f}", file=sys.stderr,
@@ -161,7 +174,8 @@ def main(argv):
           '`--disparity_range=auto`). classical = `--method=classical`; learned = the '
           'learned matching stage (`--pretrained=anaglyph_matching`: learned descriptors of '
           'both eyes, cosine costs, SGM; trained on warped photographs only, so every '
-          'camera here is unseen); shipped = the default (`--pretrained=anaglyph`, the '
+          'camera here is unseen); learned + refiner = the shipped refiner on the learned '
+          'stage instead of the classical method; shipped = the default (`--pretrained=anaglyph`, the '
           'refiner on the classical result); sgbm = '
           "`--method=sgbm`, OpenCV's StereoSGBM untuned (block 5, P1 = 200, P2 = 800, "
           "OpenCV's defaults otherwise) on the left eye's channel against the mean of the "
