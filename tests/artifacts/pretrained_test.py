@@ -91,3 +91,18 @@ def test_untrained_refiner_unmixes_like_the_classical_method(tmp_path):
   with pytest.raises(ValueError, match='pretrained excludes'):
     predictors.build_unmixer(predictors.PredictorConfig(pretrained=entry.folder,
                                                       checkpoint=str(tmp_path)))
+
+
+def test_choose_prefers_the_model_marked_default(tmp_path, monkeypatch):
+  model = refiner.build_refiner(TINY)
+  for name, default in (('a_first', False), ('b_marked', True), ('c_other', False)):
+    pretrained.save(model, str(tmp_path / name), 'refiner', 'anaglyph' if name != 'c_other'
+                    else 'gray', TINY.to_dict(), 'r', 'n')
+    if default:
+      info = json.loads((tmp_path / name / 'info.json').read_text())
+      (tmp_path / name / 'info.json').write_text(json.dumps(dict(info, default=True)))
+  monkeypatch.setattr(pretrained, 'FOLDER', str(tmp_path))
+  assert pretrained.choose(None, 'auto').name == 'b_marked'
+  assert pretrained.choose(None, 'gray').name == 'c_other'  # No default among those.
+  assert pretrained.choose('a_first', 'anaglyph').name == 'a_first'  # Named: as named.
+  assert 'b_marked: refiner model for anaglyph (the default)' in pretrained.describe()

@@ -57,6 +57,8 @@ class Pretrained:
     recipe: how to retrain it (a command).
     results: its held-out numbers, a short text.
     crop: its training crop (height, width).
+    default: the tools' model for the mixtures it unmixes (`choose`; chosen by the
+      evaluation of its `results`).
   """
   name: str
   folder: str
@@ -66,6 +68,7 @@ class Pretrained:
   recipe: str = ''
   results: str = ''
   crop: Tuple[int, int] = (0, 0)
+  default: bool = False
 
   @property
   def mixtures(self) -> Tuple[str, ...]:
@@ -87,7 +90,8 @@ def read(folder: str) -> Pretrained:
     entry = Pretrained(name=os.path.basename(os.path.normpath(folder)), folder=folder,
                        kind=info['kind'], mixture=info['mixture'], config=info['config'],
                        recipe=info.get('recipe', ''), results=info.get('results', ''),
-                       crop=tuple(info.get('crop', (0, 0))))
+                       crop=tuple(info.get('crop', (0, 0))),
+                       default=bool(info.get('default', False)))
   except (json.JSONDecodeError, KeyError, TypeError) as e:
     raise ValueError(f'{path} is not a valid pretrained model description: {e!r}') from None
   if entry.kind not in _BUILDERS:
@@ -117,8 +121,8 @@ def get(name: str) -> Pretrained:
 
 
 def choose(name: Optional[str], mixture: Optional[str]) -> Pretrained:
-  """The model named, else the first shipped one that unmixes `mixture` ('auto' and None:
-  the anaglyph model).
+  """The model named, else the shipped default (`Pretrained.default`; otherwise the first by
+  name) among those that unmix `mixture` ('auto' and None: the anaglyph model).
 
   Raises:
     ValueError: none fits; the message lists what the shipped models unmix.
@@ -126,9 +130,9 @@ def choose(name: Optional[str], mixture: Optional[str]) -> Pretrained:
   if name:
     return get(name)
   wanted = 'anaglyph' if mixture in (None, 'auto') else mixture
-  for entry in available():
-    if wanted in entry.mixtures:
-      return entry
+  fitting = [entry for entry in available() if wanted in entry.mixtures]
+  if fitting:
+    return next((entry for entry in fitting if entry.default), fitting[0])
   raise ValueError(f'No shipped model unmixes {wanted!r} mixtures; shipped: ' + '; '.join(
       f'{e.name} ({", ".join(e.mixtures)})' for e in available()) + '.')
 
@@ -137,7 +141,8 @@ def describe() -> str:
   """Text for `--pretrained=list`: each model, what it unmixes, its recipe and numbers."""
   lines = []
   for entry in available():
-    lines += [f'{entry.name}: {entry.kind} model for {", ".join(entry.mixtures)}',
+    lines += [f'{entry.name}: {entry.kind} model for {", ".join(entry.mixtures)}'
+              + (' (the default)' if entry.default else ''),
               f'  recipe: {entry.recipe}', f'  held-out: {entry.results}', '']
   return '\n'.join(lines) or 'No pretrained models are installed.'
 
