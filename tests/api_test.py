@@ -49,7 +49,7 @@ def test_default_shipped_model(anaglyph):
   image, truth_median = anaglyph
   result = mixstereo_tf.unmix(image)
   _check_known_answer(result, truth_median, 'model')
-  assert result.info['pretrained'] == 'anaglyph'
+  assert result.info['pretrained'] == 'anaglyph_matching'  # The default (info.json).
 
 
 def test_path_and_gray_inputs(anaglyph, tmp_path):
