@@ -45,18 +45,18 @@ FLAGS = flags.FLAGS
 FRACTION = 0.3
 REFERENCE = 'gray'
 # Row label -> the predictor: the classical method, the learned matching stage (the shipped
-# 'anaglyph_matching' features), the shipped default (the refiner on the classical
-# result), and OpenCV's SGBM, the peer baseline.
+# 'anaglyph_matching' features, the default), the refiner on it, the refiner on the
+# classical result (the previous default), and OpenCV's SGBM, the peer baseline.
 METHODS = {'classical': dict(method='classical'),
            'learned': dict(method='model', pretrained='anaglyph_matching'),
            'learned + refiner': dict(method='model', pretrained='anaglyph'),
-           'shipped': dict(method='model'),
+           'refiner': dict(method='model', pretrained='anaglyph'),
            'sgbm': dict(method='sgbm')}
 # Rows whose shipped refiner runs on the learned stage instead of the classical method.
 ON_LEARNED = {'learned + refiner': 'anaglyph_matching'}
 ENCODINGS = ('anaglyph', 'half_color', 'dubois_ffmpeg', REFERENCE)
 RUNS = tuple((name, method) for method in ('classical', 'learned', 'learned + refiner',
-                                           'shipped')
+                                           'refiner')
              for name in ENCODINGS) + (('anaglyph', 'sgbm'), (REFERENCE, 'sgbm'))
 KITTI_FRAME = 'kitti_object_velodyne'
 
@@ -172,11 +172,11 @@ def main(argv):
           f'{FRACTION:.0%} (`realworld.window_align`), anaglyphs made by FFmpeg\'s stereo3d '
           '(imageio-ffmpeg); disparity range estimated from each image (as '
           '`--disparity_range=auto`). classical = `--method=classical`; learned = the '
-          'learned matching stage (`--pretrained=anaglyph_matching`: learned descriptors of '
-          'both eyes, cosine costs, SGM; trained on warped photographs only, so every '
-          'camera here is unseen); learned + refiner = the shipped refiner on the learned '
-          'stage instead of the classical method; shipped = the default (`--pretrained=anaglyph`, the '
-          'refiner on the classical result); sgbm = '
+          'learned matching stage, the default (`--pretrained=anaglyph_matching`: learned '
+          'descriptors of both eyes, cosine costs, SGM; trained on warped photographs only, '
+          'so every camera here is unseen); learned + refiner = the shipped refiner on the '
+          'learned stage instead of the classical method; refiner = the previous default '
+          '(`--pretrained=anaglyph`, the refiner on the classical result); sgbm = '
           "`--method=sgbm`, OpenCV's StereoSGBM untuned (block 5, P1 = 200, P2 = 800, "
           "OpenCV's defaults otherwise) on the left eye's channel against the mean of the "
           "right eye's (`mixstereo_tf/classical/sgbm.py`). gray: both eyes carry "
