@@ -13,12 +13,15 @@ from typing import Dict, Iterator, List, Optional, Sequence, Tuple, Union
 import cv2
 import numpy as np
 
+from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
 from mixstereo_tf.data import image_io
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import temporal
 
 LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
+# The stereo mode a layout's video is tagged with (`streams.STEREO_MODES`).
+STEREO_MODES = {'sbs': 'left_right', 'sbs_half': 'left_right', 'tb': 'top_bottom'}
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
                     '.tiff', '.webp')
 VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv')
@@ -100,7 +103,8 @@ def display_range(disparity: np.ndarray,
 
 
 def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: str,
-                        layout: str, max_display_disparity: Optional[float] = None
+                        layout: str, max_display_disparity: Optional[float] = None,
+                        formats: Sequence[str] = (), mixture: Optional[np.ndarray] = None
                         ) -> Dict[str, object]:
   """Writes one image's results (mixstereo_tf/cli/unmix_files.py).
 
@@ -110,6 +114,9 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
     name: the file-name prefix.
     layout: one of LAYOUTS.
     max_display_disparity: a fixed colour-map range 0..this; None: the range found.
+    formats: `stereo_formats.FORMATS` names also written (depth images span the colour
+      map's range).
+    mixture: the input image, uint8 RGB [H, W, 3] (the 'html' viewer page needs it).
 
   Returns:
     {'files': the paths written, 'display_range': the colour map's (low, high),
@@ -123,7 +130,8 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
   disparity = np.asarray(outputs['disparity_left'], np.float32)
   low, high = display_range(disparity, max_display_disparity)
   paths.append(os.path.join(output_dir, f'{name}_disparity.png'))
-  write_image(paths[-1], colormap.colorize(disparity, high, low))
+  colour = colormap.colorize(disparity, high, low)
+  write_image(paths[-1], colour)
   written = {'display_range': [round(low, 3), round(high, 3)]}
   smallest, largest = float(np.nanmin(disparity)), float(np.nanmax(disparity))
   if smallest >= 0.0 and largest <= PNG16_LIMIT:
@@ -135,6 +143,9 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
                               'KITTI-style uint16 PNG holds; see the .npy')
   paths.append(os.path.join(output_dir, f'{name}_disparity.npy'))
   np.save(paths[-1], disparity)
+  paths.extend(stereo_formats.write_formats(stereo_formats.StereoResult(
+      outputs['left'], outputs['right'], disparity, colour, (low, high), mixture),
+      os.path.join(output_dir, name), formats))
   written['files'] = [os.path.basename(p) for p in paths]
   return written
 
@@ -148,14 +159,17 @@ class OutputOptions:
   video_config: resumable segments (`video.jobs`). settings: a JSON-serialisable
   description of the unmixer for a video job's manifest (None: its method, mixture and
   range). temporal_config: a video's per-shot decisions and disparity prior (`temporal`).
+  formats: `stereo_formats.FORMATS` names written besides the layout (default none).
   """
   layout: str = 'separate'
   max_display_disparity: Optional[float] = None
   video_config: jobs.VideoConfig = jobs.VideoConfig()
   settings: Optional[Dict[str, object]] = None
   temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()
+  formats: Tuple[str, ...] = ()
 
   def __post_init__(self):
+    object.__setattr__(self, 'formats', stereo_formats.check_formats(self.formats))
     if self.layout not in LAYOUTS:
       raise ValueError(f'Unknown layout {self.layout!r}; valid: {", ".join(LAYOUTS)}.')
     if self.max_display_disparity is not None and not self.max_display_disparity > 0:

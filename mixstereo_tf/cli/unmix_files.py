@@ -6,14 +6,17 @@ Outputs per input `<name>` in the output folder, where `<name>` is the file stem
 `<name>_<layout>.png`), the colour-mapped left disparity `<name>_disparity.png` (over the
 range found, or a fixed one), KITTI-style `<name>_disparity16.png` (uint16, d * 256; only
 when every disparity lies in 0..255.996 px) and float32 signed pixels
-`<name>_disparity.npy`, and a side-car `<name>_info.json` (mixture used and detected,
-range searched, scale, method, seconds; `write_info`). Per video, in the input's container
+`<name>_disparity.npy`, the stereo formats asked for (`OutputOptions.formats`,
+`stereo_formats`), and a side-car `<name>_info.json` (mixture used and detected, range
+searched, scale, method, seconds, files; `write_info`). Per video, in the input's container
 (`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps, rotation and audio streams
-(copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`), `<name>_disparity<ext>`
-and `<name>_info.json` (the first unmixed frame's info, frames, frame rate, rotation, audio
-streams, the scene cuts found in this run, files). Videos are written resumably
-(`video.jobs`). Progress (`progress.ProgressBar`) is shown for several inputs and for
-every video's frames.
+(copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`; side by side and
+top-bottom tagged as such: `streams.STEREO_MODES`), `<name>_disparity<ext>`,
+`<name>_<format><ext>` for the formats drawn as videos (rgbd, anaglyphs; the others are
+skipped, saying why) and `<name>_info.json` (the first unmixed frame's info, frames, frame
+rate, rotation, audio streams, the scene cuts found in this run, files). Videos are written
+resumably (`video.jobs`). Progress (`progress.ProgressBar`) is shown for several inputs
+and for every video's frames.
 
 Video frames are unmixed with temporal consistency (`temporal`, unless
 `TemporalConfig.enabled` is off): the encoding and the range are decided once per shot and
@@ -35,6 +38,7 @@ import tensorflow as tf
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
+from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import jobs
@@ -88,20 +92,48 @@ def _video_settings(unmixer: predictors.Unmixer) -> Dict[str, object]:
           'max_disparity': unmixer.max_disparity, 'restore_colour': unmixer.restore_colour}
 
 
+def _video_outputs(item: media.MediaItem, output_dir: str, layout: str,
+                   formats: Tuple[str, ...]) -> Tuple[Dict[str, str], Tuple[str, ...],
+                                                      Dict[str, str]]:
+  """A video's ({key: output path}, the stereo formats drawn as videos, {format skipped:
+  why}); the skipped ones are logged."""
+  extension = os.path.splitext(item.path)[1].lower()
+  drawn, skipped = stereo_formats.video_formats(formats)
+  for name, why in skipped.items():
+    logging.warning('%s: --output_format=%s %s.', item.path, name, why)
+  keys = (['left', 'right'] if layout == 'separate' else [layout]) + ['disparity']
+  outputs = {key: os.path.join(output_dir, f'{item.name}_{key}{extension}')
+             for key in keys + list(drawn)}
+  return outputs, drawn, skipped
+
+
+def _frame_images(result: Dict[str, object], layout: str, max_disparity: float,
+                  drawn: Tuple[str, ...]) -> Dict[str, object]:
+  """One unmixed frame's images: {output key: uint8 RGB}."""
+  images = dict(media.layout_images(result['left'], result['right'], layout))
+  images['disparity'] = colormap.colorize(result['disparity_left'], max_disparity)
+  if drawn:
+    pair = stereo_formats.StereoResult(result['left'], result['right'],
+                                       result['disparity_left'], images['disparity'],
+                                       (0.0, max_disparity))
+    images.update((name, stereo_formats.FORMATS[name].frame(pair)) for name in drawn)
+  return images
+
+
 def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
                  layout: str, max_disparity: float, settings: Dict[str, object],
                  video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
-                 report: UnmixReport, temporal_config: temporal.TemporalConfig) -> int:
-  """Unmixes every frame of a video into layout and disparity videos (resumable, see
-  `video.jobs`), writes `<name>_info.json`; returns the frames unmixed in this run.
+                 report: UnmixReport, temporal_config: temporal.TemporalConfig,
+                 formats: Tuple[str, ...] = ()) -> int:
+  """Unmixes every frame of a video into layout, disparity and `formats` videos
+  (resumable, see `video.jobs`; side-by-side and top-bottom ones tagged as such), writes
+  `<name>_info.json`; returns the frames unmixed in this run.
 
   Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
   encoding, range and prior; each segment's first frame starts a shot)."""
   start = time.perf_counter()
   shots = temporal.VideoState(temporal_config)
-  extension = os.path.splitext(item.path)[1].lower()
-  keys = (['left', 'right'] if layout == 'separate' else [layout]) + ['disparity']
-  outputs = {key: os.path.join(output_dir, f'{item.name}_{key}{extension}') for key in keys}
+  outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
   state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
 
   def on_start(info, done):
@@ -118,16 +150,16 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
     report.unmix_seconds += time.perf_counter() - unmix_start
     if state['info'] is None:
       state['info'] = dict(result.get('info', {}))
-    images = dict(media.layout_images(result['left'], result['right'], layout))
-    images['disparity'] = colormap.colorize(result['disparity_left'], max_disparity)
+    images = _frame_images(result, layout, max_disparity, drawn)
     state['rendered'] += 1
     state['bar'].update(state['done'] + state['rendered'], state['rendered'])
     return images
 
   job = jobs.VideoJob(item.path, outputs,
-                           dict(settings, layout=layout, max_disparity=max_disparity,
-                                temporal=dataclasses.asdict(temporal_config)),
-                           video_config)
+                      dict(settings, layout=layout, max_disparity=max_disparity,
+                           temporal=dataclasses.asdict(temporal_config), formats=drawn),
+                      video_config, {layout: media.STEREO_MODES[layout]}
+                      if layout in media.STEREO_MODES else {})
   try:
     done = jobs.run(job, render, on_start)
     # The container's frame count may be wrong or missing.
@@ -142,7 +174,8 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
       temporal=temporal_config.enabled,
       scene_cuts=[state['done'] + index for index in shots.cuts],
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
-      files=[os.path.basename(path) for path in outputs.values()]))
+      files=[os.path.basename(path) for path in outputs.values()],
+      **({'skipped_formats': skipped} if skipped else {})))
   return state['rendered']
 
 
@@ -158,14 +191,15 @@ def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object]) 
 
 def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
                  layout: str, max_display_disparity: Optional[float],
-                 report: UnmixReport) -> int:
-  """Unmixes one image and writes its outputs and `<name>_info.json`; returns 1 (frame)."""
+                 report: UnmixReport, formats: Tuple[str, ...] = ()) -> int:
+  """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
+  returns 1 (frame)."""
   image = media.read_image(item.path)
   unmix_start = time.perf_counter()
   outputs = unmixer(image)
   report.unmix_seconds += time.perf_counter() - unmix_start
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,
-                                      max_display_disparity)
+                                      max_display_disparity, formats, image)
   write_info(output_dir, item, dict(outputs.get('info', {}), **written))
   return 1
 
@@ -183,9 +217,9 @@ def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: s
     return _unmix_video(unmixer, item, output_dir, options.layout,
                         options.max_display_disparity or unmixer.max_disparity,
                         options.settings or _video_settings(unmixer), options.video_config,
-                        progress_stream, report, options.temporal_config)
+                        progress_stream, report, options.temporal_config, options.formats)
   return _unmix_image(unmixer, item, output_dir, options.layout,
-                      options.max_display_disparity, report)
+                      options.max_display_disparity, report, options.formats)
 
 
 def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,

@@ -60,11 +60,14 @@ class VideoJob:
     settings: JSON-serialisable description of everything that changes the frames (the
       unmixer, the layout, ...); finished segments are reused only when it is equal.
     config: segment length.
+    stereo_modes: {key: `streams.STEREO_MODES` name} of the outputs tagged as stereo
+      (frame-packing SEI, Matroska StereoMode).
   """
   input_path: str
   outputs: Dict[str, str]
   settings: Dict[str, object]
   config: VideoConfig = VideoConfig()
+  stereo_modes: Dict[str, str] = dataclasses.field(default_factory=dict)
 
   @property
   def folder(self) -> str:
@@ -85,7 +88,7 @@ def _identity(job: VideoJob) -> Dict[str, object]:
           'size': stat.st_size, 'mtime_ns': stat.st_mtime_ns,
           'segment_frames': job.config.segment_frames, 'outputs': sorted(job.outputs),
           'encoder': dataclasses.asdict(streams.encoder_for(next(iter(job.outputs.values())))),
-          'settings': job.settings}
+          'stereo_modes': job.stereo_modes, 'settings': job.settings}
 
 
 def _segment_path(job: VideoJob, key: str, index: int) -> str:
@@ -132,7 +135,8 @@ class _Segment:
     self.job, self.index, self.start, self.frames = job, index, start, 0
     self.writers = {key: streams.VideoWriter(partial_path(_segment_path(job, key, index)),
                                               info.frame_rate, info.time_base,
-                                              streams.encoder_for(path))
+                                              streams.encoder_for(
+                                                  path, job.stereo_modes.get(key)))
                     for key, path in job.outputs.items()}
 
   def write(self, frame: streams.Frame, images: Dict[str, np.ndarray]) -> None:
@@ -225,7 +229,7 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Dict[str, np.ndarray]],
     parts = [streams.Part(_segment_path(job, key, i), Fraction(entry['start']))
              for i, entry in enumerate(manifest['segments'])]
     streams.assemble(parts, partial_path(path), info.frame_rate, info.time_base,
-                      job.input_path, info.rotation)
+                     job.input_path, info.rotation, job.stereo_modes.get(key))
     os.replace(partial_path(path), path)
   shutil.rmtree(job.folder)
   total = sum(entry['frames'] for entry in manifest['segments'])

@@ -58,13 +58,26 @@ ENCODERS: Dict[str, EncoderSettings] = {
 }
 
 
-def encoder_for(path: str) -> EncoderSettings:
-  """The encoder of a video path's extension (ENCODERS); ValueError naming the path."""
+# Stereo tags (Matroska StereoMode names: the muxer reads the stream's `stereo_mode` tag) ->
+# x264's frame-packing SEI type (any container; ffprobe: frames' "Stereo 3D" side data).
+# MP4 / MOV get the SEI alone: FFmpeg's st3d box needs stream side data PyAV cannot set.
+STEREO_MODES = {'left_right': 3, 'top_bottom': 4}
+
+
+def encoder_for(path: str, stereo_mode: Optional[str] = None) -> EncoderSettings:
+  """The encoder of a video path's extension (ENCODERS); ValueError naming the path.
+
+  `stereo_mode` (a STEREO_MODES key) adds x264's frame-packing SEI (other codecs: none)."""
   extension = os.path.splitext(path)[1].lower()
   if extension not in ENCODERS:
     raise ValueError(f'Cannot write video {path}: extension must be one of '
                      f'{" ".join(ENCODERS)}.')
-  return ENCODERS[extension]
+  settings = ENCODERS[extension]
+  if stereo_mode is None or settings.codec != 'libx264':
+    return settings
+  options = tuple((key, f'{value}:frame-packing={STEREO_MODES[stereo_mode]}')
+                  if key == 'x264-params' else (key, value) for key, value in settings.options)
+  return dataclasses.replace(settings, options=options)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -262,14 +275,15 @@ def _audio_packets(container, streams: Dict[int, object]
 
 def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
              time_base: Optional[Fraction] = None, audio_source: Optional[str] = None,
-             rotation: int = 0) -> None:
+             rotation: int = 0, stereo_mode: Optional[str] = None) -> None:
   """Writes the parts' video one after the other and the source's audio into `output`.
 
   Packets are copied, not re-encoded: the parts must come from one encoder configuration
   (same codec parameters, checked). The video stream gets `frame_rate` and `time_base`
   (AVI: 1 / frame_rate); every audio stream of `audio_source` is copied unchanged; a
   non-zero `rotation` (degrees counter-clockwise) becomes the display matrix (PyAV >= 18;
-  older versions log that it is lost).
+  older versions log that it is lost); `stereo_mode` (a STEREO_MODES key) tags the video
+  stream (Matroska writes it as StereoMode; other containers ignore the tag).
 
   Raises:
     ValueError: no parts, or parts encoded differently.
@@ -288,6 +302,8 @@ def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
     with av.open(output, 'w') as out:
       video = out.add_stream_from_template(template)
       video.time_base, video.framerate = Fraction(time_base), Fraction(frame_rate)
+      if stereo_mode:
+        video.metadata['stereo_mode'] = stereo_mode
       if rotation and hasattr(video, 'set_display_rotation'):
         video.set_display_rotation(rotation)
       elif rotation:

@@ -138,3 +138,14 @@ def test_output_options_reject_bad_layout_and_display_range():
     media.OutputOptions('sideways')
   with pytest.raises(ValueError, match='max_display_disparity must be positive'):
     media.OutputOptions(max_display_disparity=0.0)
+
+
+def test_output_options_formats_are_a_checked_tuple(tmp_path):
+  assert media.OutputOptions().formats == ()
+  assert media.OutputOptions(formats=['jps', 'rgbd']).formats == ('jps', 'rgbd')
+  with pytest.raises(ValueError, match="OutputOptions.formats: unknown output format 'gif'"):
+    media.OutputOptions(formats=('gif',))
+  left, right = _views(6, 8)
+  outputs = {'left': left, 'right': right, 'disparity_left': np.ones((6, 8), np.float32)}
+  written = media.write_image_outputs(outputs, str(tmp_path), 'a', 'sbs', 4.0, ('jps',), left)
+  assert written['files'][-1] == 'a.jps' and os.path.isfile(tmp_path / 'a.jps')

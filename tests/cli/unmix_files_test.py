@@ -4,7 +4,10 @@ import dataclasses
 import io
 import json
 import os
+import shutil
+import subprocess
 
+import av
 import cv2
 import numpy as np
 import pytest
@@ -14,6 +17,7 @@ from mixstereo_tf import models
 from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.cli import media
+from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.core import colormap
 from mixstereo_tf.core import image_range
@@ -272,3 +276,60 @@ def test_failure_message_names_at_most_five_inputs():
   report = unmix_files.UnmixReport(processed=1, failures=[(f'{i}.png', 'bad') for i in range(7)])
   assert unmix_files.failure_message(report) == (
       'error: 7 of 8 input(s) failed: 0.png, 1.png, 2.png, 3.png, 4.png, ...')
+
+
+def test_stereo_formats_of_an_image_are_listed_in_its_info(tmp_path):
+  setup = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='anaglyph'))
+  _image(tmp_path / 'x.png', (24, 32, 3))
+  options = media.OutputOptions('sbs', formats=stereo_formats.FORMAT_NAMES)
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'x.png'), str(tmp_path / 'out'),
+                                    options)
+  assert report.processed == 1 and not report.failures
+  formats = ['x.mpo', 'x.jps', 'x_wiggle.gif', 'x_rgbd.png', 'x_viewer.html'] + [
+      f'x_anaglyph_{n}.png' for n in ('dubois', 'optimized', 'gray', 'colour')]
+  info = json.loads((tmp_path / 'out' / 'x_info.json').read_text())
+  assert info['files'][-len(formats):] == formats
+  assert sorted(os.listdir(tmp_path / 'out')) == sorted(info['files'] + ['x_info.json'])
+
+
+def _stereo_tags(path):
+  """{'tag': the stream's stereo_mode tag, 'stream': its Stereo 3D side data type (Matroska's
+  StereoMode), 'frame': whether the first frame has Stereo 3D side data (the SEI)}: by
+  ffprobe when installed, else the tag alone by FFmpeg's libraries through PyAV."""
+  if shutil.which('ffprobe') is None:
+    print('ffprobe not installed (apt-get install ffmpeg): reading the tag with PyAV')
+    with av.open(path) as container:
+      return {'tag': container.streams.video[0].metadata.get('stereo_mode')}
+  text = subprocess.run(['ffprobe', '-v', 'error', '-show_streams', '-show_frames',
+                         '-read_intervals', '%+#1', '-of', 'json', path],
+                        capture_output=True, text=True, check=True).stdout
+  probe = json.loads(text)
+  stream = probe['streams'][0]
+  return {'tag': stream.get('tags', {}).get('stereo_mode'),
+          'stream': [d.get('type') for d in stream.get('side_data_list', [])
+                     if d.get('side_data_type') == 'Stereo 3D'],
+          'frame': any(d.get('side_data_type') == 'Stereo 3D'
+                       for d in probe['frames'][0].get('side_data_list', []))}
+
+
+def test_side_by_side_video_is_tagged_and_draws_rgbd(tmp_path):
+  source = _anaglyph_clip(tmp_path / 'clip.mkv', 'anaglyph', frames=4)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', disparity_range=(0, 8)))
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'out'), media.OutputOptions(
+      'sbs', formats=('wiggle', 'rgbd')))
+  assert (report.processed, report.frames, report.failures) == (1, 4, [])
+  info = json.loads((tmp_path / 'out' / 'clip_info.json').read_text())
+  assert info['files'] == ['clip_sbs.mkv', 'clip_disparity.mkv', 'clip_rgbd.mkv']
+  assert 'wiggle' in info['skipped_formats']
+  # The Matroska StereoMode, and x264's frame-packing SEI (seen by ffprobe only).
+  tags = _stereo_tags(str(tmp_path / 'out' / 'clip_sbs.mkv'))
+  assert tags.pop('tag') == 'left_right'
+  probed = shutil.which('ffprobe') is not None
+  assert tags == ({'stream': ['side by side'], 'frame': True} if probed else {})
+  plain = _stereo_tags(str(tmp_path / 'out' / 'clip_disparity.mkv'))
+  assert plain == ({'tag': None, 'stream': [], 'frame': False} if probed else {'tag': None})
+  _, frames = streams_test.read_all(tmp_path / 'out' / 'clip_rgbd.mkv')
+  assert len(frames) == 4 and frames[0].image.shape == (64, 192, 3)
+  depth = frames[0].image[:, 96:].astype(int)
+  assert np.abs(depth[..., 0] - depth[..., 2]).max() <= 6  # Gray (after 4:2:0 chroma).

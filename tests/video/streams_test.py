@@ -148,3 +148,13 @@ def test_bad_files_are_named(tmp_path):
     streams.VideoWriter(str(tmp_path / 'clip.flv'), Fraction(25))
   with pytest.raises(ValueError, match='No video'):
     streams.assemble([], str(tmp_path / 'out.mp4'), Fraction(25))
+
+
+def test_stereo_modes_add_x264_frame_packing_only():
+  plain = streams.encoder_for('a.mp4')
+  tagged = streams.encoder_for('a.mp4', 'top_bottom')
+  assert dict(tagged.options)['x264-params'] == dict(plain.options)['x264-params'] + (
+      ':frame-packing=4')
+  assert dict(streams.encoder_for('a.mkv', 'left_right').options)['x264-params'].endswith(
+      'frame-packing=3')
+  assert streams.encoder_for('a.avi', 'left_right') == streams.encoder_for('a.avi')
