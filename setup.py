@@ -28,6 +28,10 @@ setuptools.setup(
         'numpy>=2.0',
         'opencv-python-headless>=4.10',
         'scikit-image>=0.24',
+        # cli/stereo_formats.py: MPO (CIPA DC-007), JPS and the wiggle GIF. scikit-image
+        # pulls it in already; named because without it the MPO's APP2 MP index (entry
+        # offsets patched after both JPEGs are written) is written by hand. MPO saving: 9.3.
+        'Pillow>=9.3',
         # classical/diplopia.py solves its layer system with scipy.sparse.
         'scipy>=1.13',
         # classical/matcher.py's census-SGM kernels. Against the NumPy classical/sgm.py on
@@ -49,8 +53,15 @@ setuptools.setup(
         # imageio-ffmpeg ships a static FFmpeg binary (with the stereo3d filter): the
         # independent anaglyph encoder of tests/unmixing/detection_test.py and the real-world
         # evaluation (evaluation/ffmpeg_encoder.py). PyAV's wheels lack stereo3d.
-        'test': ['pytest>=7', 'imageio-ffmpeg>=0.5'],
+        # apache-beam (tests/cli/beam_batch_test.py runs the batch pipeline) as in 'beam'.
+        'test': ['pytest>=7', 'imageio-ffmpeg>=0.5', 'apache-beam>=2.61'],
         'eval': ['imageio-ffmpeg>=0.5'],
+        # mixstereo-batch (cli/beam_batch.py, the one module importing Beam): an extra, not a
+        # base requirement, since apache-beam 2.77 adds 315 MB to site-packages (pyarrow 156
+        # MB, apache_beam 100 MB; 14 packages), takes 0.8-1.9 s to import and downgrades
+        # protobuf 7 -> 6 and pillow 13 -> 12 (TF 2.21 takes protobuf >= 6.31.1; the cli and
+        # unmix tests pass with both). >= 2.61: the first to accept NumPy 2 (tested: 2.77).
+        'beam': ['apache-beam>=2.61'],
         # A GPU: TensorFlow with its CUDA and cuDNN wheels (`tensorflow` alone finds no GPU
         # and trains on the CPU; every binary's first log line says which).
         'gpu': ['tensorflow[and-cuda]>=2.18,<3'],
@@ -61,6 +72,7 @@ setuptools.setup(
             'mixstereo-eval=mixstereo_tf.evaluate:run',
             'mixstereo-export=mixstereo_tf.export:run',
             'mixstereo-unmix=mixstereo_tf.unmix:run',
+            'mixstereo-batch=mixstereo_tf.batch:run',
         ],
     },
     classifiers=[

@@ -14,7 +14,7 @@ PACKAGE = 'mixstereo_tf'
 RANK = {wing: rank for rank, wing in enumerate((
     'core', 'ops', 'models', 'data', 'restoration', 'classical', 'artifacts', 'unmixing',
     'video', 'training', 'evaluation', 'cli'))}
-TOP = len(RANK)  # The public face and the four binaries.
+TOP = len(RANK)  # The public face and the binaries.
 FORBIDDEN = {
     'core': set(RANK) | {'top'},
     'ops': {'models'},
@@ -26,7 +26,7 @@ FORBIDDEN = {
     'artifacts': {'unmixing'},
     'video': {'training'},
 }
-BINARIES = ('__init__', '__main__', 'train', 'evaluate', 'export', 'unmix')
+BINARIES = ('__init__', '__main__', 'train', 'evaluate', 'export', 'unmix', 'batch')
 
 
 def wing_of(module: str) -> str:

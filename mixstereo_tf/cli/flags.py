@@ -19,6 +19,7 @@ from absl import flags
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.cli import media
+from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import predictors
@@ -36,6 +37,7 @@ _RENAMED = {
     'ModelConfig.separation_widths': 'unet_widths',
     'ModelConfig.stereo_residual_blocks': 'num_res_blocks',
     'ModelConfig.stereo_3d_widths': 'volume_features',
+    'OutputOptions.formats': 'output_format',
 }
 
 
@@ -65,6 +67,12 @@ def define_max_disparity() -> None:
 
 
 @functools.lru_cache(maxsize=None)
+def define_input() -> None:
+  """--input: what to unmix (mixstereo-unmix and mixstereo-batch)."""
+  flags.DEFINE_string('input', None, 'Image, folder, glob pattern or video.')
+
+
+@functools.lru_cache(maxsize=None)
 def define_output_dir() -> None:
   """--output_dir (each tool says whether it is required)."""
   flags.DEFINE_string('output_dir', None, 'Where to write the results.')
@@ -73,7 +81,7 @@ def define_output_dir() -> None:
 @functools.lru_cache(maxsize=None)
 def define_output_options() -> None:
   """How results are written (`media.OutputOptions`): --layout, --max_display_disparity,
-  --segment_frames, --temporal (mixstereo-unmix and mixstereo-batch)."""
+  --segment_frames, --temporal, --output_format (mixstereo-unmix and mixstereo-batch)."""
   options = defaults(media.OutputOptions)
   flags.DEFINE_enum('layout', options['layout'], media.LAYOUTS,
                     'Views as two files (separate), side by side (sbs), side by side at '
@@ -90,6 +98,12 @@ def define_output_options() -> None:
                        '(scene cuts found from colour histograms) and search each frame '
                        "around the previous frame's disparity (classical method); "
                        '--notemporal unmixes every frame alone.')
+  flags.DEFINE_multi_enum('output_format', list(options['formats']),
+                          stereo_formats.FORMAT_NAMES,
+                          'Also write the pair in this stereo format (repeat for several): ' +
+                          '; '.join(f'{name}: {f.description}' for name, f in
+                                    stereo_formats.FORMATS.items()) +
+                          '. Videos: rgbd and the anaglyphs (the others are skipped).')
 
 
 def output_options(settings: Optional[Dict[str, object]] = None) -> media.OutputOptions:
@@ -98,7 +112,8 @@ def output_options(settings: Optional[Dict[str, object]] = None) -> media.Output
   return media.OutputOptions(
       layout=FLAGS.layout, max_display_disparity=FLAGS.max_display_disparity,
       video_config=jobs.VideoConfig(FLAGS.segment_frames), settings=settings,
-      temporal_config=temporal.TemporalConfig(enabled=FLAGS.temporal))
+      temporal_config=temporal.TemporalConfig(enabled=FLAGS.temporal),
+      formats=tuple(FLAGS.output_format))
 
 
 @functools.lru_cache(maxsize=None)
@@ -238,7 +253,7 @@ def flag_names(message: str, renamed: Optional[Dict[str, str]] = None,
     name = names.get(key, match.group(2))
     return f'--{name}' if name in known else match.group(0)
 
-  return re.sub(r'\b([A-Z]\w*Config)\.(\w+)\b', flag, message)
+  return re.sub(r'\b([A-Z]\w*(?:Config|Options))\.(\w+)\b', flag, message)
 
 
 def usage_error(error: Exception, renamed: Optional[Dict[str, str]] = None) -> app.UsageError:

@@ -51,3 +51,21 @@ def test_defaults_come_from_the_config_dataclass():
       'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,
       'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000,
           'pretrained': None}
+
+
+def test_output_format_is_repeatable_and_reaches_output_options():
+  cli_flags.define_output_options()
+  was_parsed = flags.FLAGS.is_parsed()
+  flags.FLAGS.mark_as_parsed()  # The other output flags keep their defaults.
+  try:
+    flags.FLAGS['output_format'].parse('mpo')
+    flags.FLAGS['output_format'].parse('anaglyph_dubois')
+    assert cli_flags.output_options().formats == ('mpo', 'anaglyph_dubois')
+    with pytest.raises(flags.IllegalFlagValueError, match='wiggle'):
+      flags.FLAGS['output_format'].parse('gif')
+    error = cli_flags.usage_error(ValueError("OutputOptions.formats: 'jps' twice"))
+    assert str(error) == "--output_format: 'jps' twice"
+  finally:
+    flags.FLAGS['output_format'].unparse()
+    if not was_parsed:
+      flags.FLAGS.unparse_flags()

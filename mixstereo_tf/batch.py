@@ -1,0 +1,95 @@
+r"""Unmixes an archive of mixture images and videos on Apache Beam (`pip install '.[beam]'`).
+
+  python -m mixstereo_tf.batch --input='scans/*.jpg' --output_dir=out --method=classical \
+      --runner=DirectRunner --direct_num_workers=2 --direct_running_mode=multi_processing
+
+Inputs: `--input` (an image, folder, glob pattern or video, as for `mixstereo-unmix`) or
+`--input_list` (a text file, one path per line, on any file system Beam reads). Every
+input gets exactly `mixstereo-unmix`'s outputs with the same flags; the output folder also
+gets `batch_summary.csv` (per input: status, encoding, range searched, seconds) and
+`batch_dead_letters.csv` (inputs that failed, with the reason; the others still run).
+Running the same command again skips the inputs whose outputs are complete. Arguments
+that are not this tool's flags are Apache Beam pipeline options (`--runner=...`). The exit
+status is non-zero if any input failed. Details: mixstereo_tf/cli/beam_batch.py.
+"""
+
+from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
+
+import dataclasses  # pylint: disable=g-bad-import-order
+import logging as std_logging
+import os
+import sys
+
+from absl import app
+from absl import flags
+from absl import logging
+
+from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.cli import device
+from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.unmixing import predictors
+
+try:
+  from mixstereo_tf.cli import beam_batch  # pylint: disable=g-import-not-at-top
+except ModuleNotFoundError as e:
+  if not (e.name or '').startswith('apache_beam'):
+    raise
+  sys.exit("mixstereo-batch needs Apache Beam: pip install 'mixstereo_tf[beam]'")
+
+FLAGS = flags.FLAGS
+
+cli_flags.define_predictor()
+cli_flags.define_input()
+flags.DEFINE_string('input_list', None, 'A text file of input paths, one per line (instead '
+                    'of --input; local or on any file system Apache Beam reads).')
+cli_flags.define_output_dir()
+cli_flags.require_unless_listing('output_dir')
+cli_flags.define_output_options()
+flags.register_multi_flags_validator(
+    ['input', 'input_list', 'pretrained'],
+    lambda values: ((values['input'] is None) != (values['input_list'] is None) or
+                    values['pretrained'] == pretrained.LIST),
+    message='Give exactly one of --input and --input_list.')
+
+
+def main(argv):
+  cli_flags.exit_if_listing()
+  device.log_line()
+  try:
+    config = cli_flags.predictor_config()
+    if config.method == 'oracle':
+      raise ValueError('--method=oracle needs the clean stereo pair; it is for evaluation '
+                       'only.')
+    predictors.build_unmixer(config)  # A bad predictor flag fails here, not on workers.
+    items = beam_batch.list_inputs(FLAGS.input, FLAGS.input_list)
+    options = cli_flags.output_options(settings=dataclasses.asdict(config))
+    pipeline_options = beam_batch.pipeline_options(argv[1:])
+  except ValueError as e:
+    raise cli_flags.usage_error(e) from None
+  logging.info('%d input(s) to %s.', len(items), FLAGS.output_dir)
+  std_logging.getLogger('apache_beam').setLevel(std_logging.WARNING)  # Runner chatter.
+  counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
+  logging.info('%(done)d input(s) done, %(skipped)d skipped (complete before this run), '
+               '%(failed)d failed. Summary: %(summary)s', dict(
+                   counts, summary=os.path.join(FLAGS.output_dir, beam_batch.SUMMARY)))
+  if counts['failed']:
+    sys.exit(f'error: {counts["failed"]} of {len(items)} input(s) failed: see '
+             f'{os.path.join(FLAGS.output_dir, beam_batch.DEAD_LETTERS)}')
+
+
+def _parse_known_flags(argv):
+  """Parses this tool's flags; the rest of argv (after the program) is for Beam."""
+  try:
+    return FLAGS(argv, known_only=True)
+  except flags.Error as e:
+    sys.exit(f'FATAL Flags parsing error: {e}\nPass --helpshort or --helpfull to see help '
+             'on flags.')
+
+
+def run():
+  """Console-script entry point (`mixstereo-batch`)."""
+  app.run(main, flags_parser=_parse_known_flags)
+
+
+if __name__ == '__main__':
+  run()

@@ -1,0 +1,156 @@
+"""Tests for the Apache Beam batch pipeline (mixstereo_tf.cli.beam_batch) and its binary."""
+
+import csv
+import gzip
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mixstereo_tf.cli import beam_batch
+from mixstereo_tf.cli import media
+from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.unmixing import predictors
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CONFIG = predictors.PredictorConfig('classical', mixture='anaglyph', disparity_range=(0, 8))
+OPTIONS = media.OutputOptions('sbs')
+OWN_FILES = (beam_batch.SUMMARY, beam_batch.DEAD_LETTERS)
+
+
+def _folder(path):
+  """a.png, a.jpg (a shared stem), b.png and a corrupt broken.png; returns the folder."""
+  path.mkdir()
+  for seed, name in enumerate(('a.png', 'a.jpg', 'b.png')):
+    image = np.random.RandomState(seed).randint(0, 256, (36, 52, 3)).astype(np.uint8)
+    media.write_image(str(path / name), image)
+  (path / 'broken.png').write_bytes(b'\x89PNG\r\n\x1a\n truncated')
+  return path
+
+
+def _csv(path):
+  with open(path, encoding='utf-8', newline='') as f:
+    return list(csv.DictReader(f))
+
+
+def _without_seconds(path):
+  info = json.loads(path.read_text())
+  assert info.pop('seconds') > 0
+  return info
+
+
+def test_outputs_equal_the_cli_failures_dead_letter_and_a_rerun_skips(tmp_path, monkeypatch):
+  folder = _folder(tmp_path / 'in')
+  cli = unmix_files.unmix_inputs(predictors.build_unmixer(CONFIG), str(folder),
+                                 str(tmp_path / 'cli'), OPTIONS)
+  assert (cli.processed, len(cli.failures)) == (3, 1)
+  builds = []
+  build = predictors.build_unmixer
+  monkeypatch.setattr(predictors, 'build_unmixer',
+                      lambda config: builds.append(config) or build(config))
+  items = beam_batch.list_inputs(str(folder), None)
+  out = tmp_path / 'batch'
+  counts = beam_batch.run(items, CONFIG, str(out), OPTIONS)
+  assert counts == {'done': 3, 'skipped': 0, 'failed': 1} and builds == [CONFIG]
+  # The CLI's files, byte for byte (info.json: all but the seconds).
+  names = sorted(os.listdir(tmp_path / 'cli'))
+  assert sorted(set(os.listdir(out)) - set(OWN_FILES)) == names
+  assert 'a_png_sbs.png' in names and 'a_jpg_info.json' in names
+  for name in names:
+    if name.endswith('_info.json'):
+      assert _without_seconds(out / name) == _without_seconds(tmp_path / 'cli' / name), name
+    else:
+      assert (out / name).read_bytes() == (tmp_path / 'cli' / name).read_bytes(), name
+  for name in names:  # unmix_item writes each input's info.json last.
+    if name.endswith('_info.json'):
+      listed = json.loads((out / name).read_text())['files']
+      assert os.stat(out / name).st_mtime_ns >= max(os.stat(out / f).st_mtime_ns for f in listed)
+  dead = _csv(out / beam_batch.DEAD_LETTERS)
+  assert [row['input'] for row in dead] == [str(folder / 'broken.png')]
+  assert dead[0]['error'] == cli.failures[0][1]  # 'ValueError: Cannot decode image file: ...'
+  rows = _csv(out / beam_batch.SUMMARY)
+  assert [(row['name'], row['status']) for row in rows] == [
+      ('a_jpg', 'done'), ('a_png', 'done'), ('b', 'done'), ('broken', 'failed')]
+  assert rows[0]['mixture'] == 'anaglyph' and rows[0]['disparity_range'] == '0,8'
+  assert float(rows[0]['seconds']) > 0 and 'Cannot decode' in rows[3]['error']
+  # A re-run skips the complete inputs; b lost a file, so it is unmixed again.
+  os.remove(out / 'b_disparity.npy')
+  stamps = {name: os.stat(out / name).st_mtime_ns for name in names if name.startswith('a_')}
+  counts = beam_batch.run(items, CONFIG, str(out), OPTIONS)
+  assert counts == {'done': 1, 'skipped': 2, 'failed': 1}
+  assert stamps == {name: os.stat(out / name).st_mtime_ns for name in stamps}
+  assert (out / 'b_disparity.npy').read_bytes() == (
+      tmp_path / 'cli' / 'b_disparity.npy').read_bytes()
+  assert [row['status'] for row in _csv(out / beam_batch.SUMMARY)] == [
+      'skipped', 'skipped', 'done', 'failed']
+  assert len(_csv(out / beam_batch.DEAD_LETTERS)) == 1
+
+
+def test_input_list_names_like_the_cli(tmp_path):
+  for folder in ('x', 'y'):
+    (tmp_path / folder).mkdir()
+  paths = [str(tmp_path / 'x' / 'p.png'), str(tmp_path / 'y' / 'p.png'),
+           str(tmp_path / 'clip.MP4')]
+  with gzip.open(tmp_path / 'list.txt.gz', 'wt') as f:  # Beam decompresses by extension.
+    f.write('\n'.join(paths[:2]) + '\n\n  ' + paths[2] + '\n')
+  items = beam_batch.list_inputs(None, str(tmp_path / 'list.txt.gz'))
+  assert [item.path for item in items] == paths
+  assert [item.name for item in items] == media.output_names(paths) == [
+      'p_png', 'p_png_2', 'clip']
+  assert [item.is_video for item in items] == [False, False, True]
+  (tmp_path / 'remote.txt').write_text(f'{paths[0]}\ngs://bucket/scan.jpg\n')
+  with pytest.raises(ValueError, match=r'entry 2 of .*remote.txt, gs://bucket/scan.jpg, is '
+                                       'not a local path'):
+    beam_batch.list_inputs(None, str(tmp_path / 'remote.txt'))
+  (tmp_path / 'empty.txt').write_text('\n \n')
+  with pytest.raises(ValueError, match='--input_list: no paths in .*empty.txt'):
+    beam_batch.list_inputs(None, str(tmp_path / 'empty.txt'))
+  with pytest.raises(ValueError, match='--input_list: cannot read .*missing.txt'):
+    beam_batch.list_inputs(None, str(tmp_path / 'missing.txt'))
+  with pytest.raises(ValueError, match='exactly one of --input and --input_list'):
+    beam_batch.list_inputs(str(tmp_path), str(tmp_path / 'list.txt.gz'))
+
+
+def test_complete_means_the_info_and_every_file_it_lists(tmp_path):
+  assert beam_batch.completed_info(str(tmp_path), 'a') is None
+  (tmp_path / 'a_info.json').write_text('{"files": ["a_left.png", "a_disparity.npy"]')
+  assert beam_batch.completed_info(str(tmp_path), 'a') is None  # Cut short.
+  (tmp_path / 'a_info.json').write_text('{"files": ["a_left.png", "a_disparity.npy"]}')
+  (tmp_path / 'a_left.png').write_bytes(b'')
+  assert beam_batch.completed_info(str(tmp_path), 'a') is None
+  (tmp_path / 'a_disparity.npy').write_bytes(b'')
+  assert beam_batch.completed_info(str(tmp_path), 'a') == {
+      'files': ['a_left.png', 'a_disparity.npy']}
+
+
+def test_pipeline_options_pass_beams_and_name_unknown_flags():
+  options = beam_batch.pipeline_options(['--direct_num_workers=2', '--job_name=scans'])
+  assert options.get_all_options()['runner'] == beam_batch.DEFAULT_RUNNER
+  assert options.get_all_options()['direct_num_workers'] == 2
+  options = beam_batch.pipeline_options(['--runner=DataflowRunner', '--project=p'])
+  assert options.get_all_options()['runner'] == 'DataflowRunner'
+  with pytest.raises(ValueError, match="neither the tool's nor Apache Beam pipeline "
+                                       'options: --layot$'):
+    beam_batch.pipeline_options(['--runner=FnApiRunner', '--layot=sbs'])
+
+
+def test_binary_on_an_input_list(tmp_path):
+  folder = _folder(tmp_path / 'in')
+  (tmp_path / 'list.txt').write_text(f'{folder / "b.png"}\n{folder / "broken.png"}\n')
+  env = dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2')
+  result = subprocess.run(
+      [sys.executable, '-m', 'mixstereo_tf.batch', '--method=classical', '--mixture=anaglyph',
+       '--disparity_range=0,8', f'--input_list={tmp_path / "list.txt"}',
+       f'--output_dir={tmp_path / "out"}', '--layout=tb', '--direct_num_workers=1'],
+      capture_output=True, text=True, env=env, cwd=REPO, timeout=300, check=False)
+  assert result.returncode == 1, result.stderr[-3000:]
+  assert (f'error: 1 of 2 input(s) failed: see {tmp_path / "out" / beam_batch.DEAD_LETTERS}'
+          in result.stderr)
+  assert '1 input(s) done, 0 skipped' in result.stderr
+  assert sorted(os.listdir(tmp_path / 'out')) == sorted(
+      ['b_tb.png', 'b_disparity.png', 'b_disparity16.png', 'b_disparity.npy', 'b_info.json',
+       *OWN_FILES])
+  assert media.read_image(str(tmp_path / 'out' / 'b_tb.png')).shape == (72, 52, 3)
