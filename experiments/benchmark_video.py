@@ -12,9 +12,10 @@ Speed (`video_speed`): the first shot of that clip upscaled (bicubic) to 1280x72
 as `mixstereo-unmix --input=clip.mp4 --layout=sbs` does (decoding, unmixing, encoding the
 side-by-side and disparity videos, segments and manifest), after one warm-up frame
 (numba's cache, tf.function tracing). Frames/s = frames / wall seconds of the whole call;
-"unmix only" = frames / seconds inside the unmixer. Methods: classical, model (the shipped
-default, the refiner) and learned (the learned matching stage, `--pretrained=anaglyph_matching`;
-with the temporal prior only a shot's first frame is matched by it, the others around the prior).
+"unmix only" = frames / seconds inside the unmixer. Methods: classical; model, the shipped
+default (the learned matching stage, `--pretrained=anaglyph_matching`; with the temporal
+prior only a shot's first frame is matched by it, the others around the prior); refiner,
+the previous default (`--pretrained=anaglyph`; rows "model" before 2026-11-25).
 """
 
 import fractions
@@ -26,10 +27,10 @@ import cv2
 
 QUALITY_VARIANTS = (('per frame', False), ('per shot + prior', True))
 SPEED_SIZES = ((1280, 720), (1920, 1080))
-# Row label -> the predictor: the classical method, the shipped default (the refiner) and
-# the learned matching stage (`--pretrained=anaglyph_matching`).
+# Row label -> the predictor: the classical method, the shipped default (the learned
+# matching stage, `--pretrained=anaglyph_matching`) and the previous default, the refiner.
 METHODS = {'classical': dict(method='classical'), 'model': dict(method='model'),
-           'learned': dict(method='model', pretrained='anaglyph_matching')}
+           'refiner': dict(method='model', pretrained='anaglyph')}
 
 
 def video_quality(method: str, frames_per_shot: int = 20) -> dict:
