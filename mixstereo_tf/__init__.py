@@ -48,7 +48,8 @@ class Unmixed:
     info: what the CLI's side-car `<name>_info.json` holds about the unmixing (JSON-able):
       'mixture' (the encoding unmixed), 'detected' and 'confidence' (the detector's
       encoding), 'disparity_range' ([min, max] pixels searched), 'method', 'pretrained'
-      (the shipped model's name, when one ran), 'seconds', and the method's own details.
+      (the shipped model's name, when one ran), 'eye_order' ('as_given' or 'swapped'),
+      'seconds', and the method's own details.
   """
   left: np.ndarray
   right: np.ndarray
@@ -93,8 +94,8 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
           method: str = 'model', model: Optional[str] = None,
           checkpoint: Optional[str] = None, saved_model: Optional[str] = None,
           disparity_range: Union[None, str, Tuple[int, int]] = None,
-          restore_colour: Optional[bool] = None,
-          max_network_pixels: Optional[int] = ...) -> Unmixed:
+          restore_colour: Optional[bool] = None, max_network_pixels: Optional[int] = ...,
+          swap_eyes: Union[bool, str] = False) -> Unmixed:
   """Separates one mixture image into its two views and their disparities.
 
   The keywords are the `mixstereo-unmix` flags of the same names (`model`: --pretrained)
@@ -106,9 +107,8 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
   Args:
     image: a uint8 RGB [H, W, 3] or gray [H, W] array, or the path of an image file (read
       like the CLI reads it: gray and 16-bit files become uint8 RGB).
-    mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g.
-      'gray', 'dubois', 'diplopia'); 'auto' detects an anaglyph's encoding; None: the
-      model's own.
+    mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g. 'gray',
+      'diplopia'); 'auto' detects an anaglyph's encoding; None: the model's own.
     method: 'model' (a network), 'classical' (training-free) or 'sgbm' (OpenCV's, a peer).
     model: a shipped model's name ('anaglyph', 'diplopia') or a folder in its format;
       None with neither checkpoint nor saved_model: the first shipped model that unmixes
@@ -121,6 +121,7 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
       (None: on for anaglyphs); method 'model' only.
     max_network_pixels: a network's input is reduced to at most this many pixels (None:
       no limit).
+    swap_eyes: True: the left eye in the cyan (second) filter's channels; 'auto': detected.
 
   Returns:
     An `Unmixed`: views and disparities the size of the input, and `info`.
@@ -133,7 +134,7 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
   from mixstereo_tf.cli import media  # pylint: disable=g-import-not-at-top
   from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
   given = dict(method=method, checkpoint=checkpoint, saved_model=saved_model,
-               mixture=mixture, restore_colour=restore_colour,
+               mixture=mixture, restore_colour=restore_colour, swap_eyes=swap_eyes,
                max_network_pixels=max_network_pixels, pretrained=model)
   try:
     config = predictors.PredictorConfig(

@@ -22,6 +22,7 @@ from mixstereo_tf.cli import media
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import temporal
@@ -130,10 +131,26 @@ def define_checkpoint() -> None:
                       'or a checkpoint prefix such as runs/demo/ckpt-7000.')
 
 
+class SwapEyesParser(flags.ArgumentParser):
+  """--swap_eyes: a boolean flag (--swap_eyes, --noswap_eyes) that also takes 'auto'."""
+
+  def parse(self, argument):
+    """False, True or eye_order.AUTO from absl's boolean spellings or 'auto'."""
+    if isinstance(argument, str) and argument.strip().lower() == eye_order.AUTO:
+      return eye_order.AUTO
+    try:
+      return flags.BooleanParser().parse(argument)
+    except ValueError:
+      raise ValueError(f'expected true, false or {eye_order.AUTO!r}, got {argument!r}') from None
+
+  def flag_type(self):
+    return 'bool or auto'
+
+
 @functools.lru_cache(maxsize=None)
 def define_predictor() -> None:
   """The predictor group: --method, --checkpoint, --saved_model, --mixture, --restore_colour,
-  --disparity_range, --max_network_pixels."""
+  --disparity_range, --max_network_pixels, --swap_eyes."""
   define_checkpoint()
   define_mixture()
   defaults = predictors.PredictorConfig()
@@ -155,6 +172,13 @@ def define_predictor() -> None:
   flags.DEFINE_integer('max_network_pixels', defaults.max_network_pixels,
                        "A model's input is reduced to at most this many pixels.",
                        lower_bound=1)
+  flags.DEFINE_flag(flags.Flag(
+      SwapEyesParser(), flags.ArgumentSerializer(), 'swap_eyes', defaults.swap_eyes,
+      "Anaglyphs with the left eye in the cyan (second filter's) channels: cyan-red glasses, "
+      "mirrored scans; --swap_eyes=auto detects it per image (a video: per shot) from the "
+      "texture of the pixels hidden beside depth edges; the info JSON records the order "
+      "(eye_order) and the detection's score (eye_order_score).",
+      boolean=True))
   define_pretrained()
 
 
@@ -205,7 +229,8 @@ def predictor_config() -> predictors.PredictorConfig:
   return predictors.PredictorConfig(
       method=FLAGS.method, checkpoint=FLAGS.checkpoint, saved_model=FLAGS.saved_model,
       mixture=FLAGS.mixture, restore_colour=FLAGS.restore_colour, disparity_range=search,
-      max_network_pixels=FLAGS.max_network_pixels, pretrained=FLAGS.pretrained)
+      max_network_pixels=FLAGS.max_network_pixels, pretrained=FLAGS.pretrained,
+      swap_eyes=FLAGS.swap_eyes)
 
 
 def middlebury_scales() -> Tuple[Tuple[str, float], ...]:

@@ -19,8 +19,9 @@ class FrameHint:
   Attributes:
     mixture: the shot's encoding.
     detection: the detection info of the shot's first frame ({'detected', 'confidence'} and
-      'also_fits' when detection gave one).
+      'also_fits', 'eye_order_score' when detection gave them).
     disparity_range: the shot's (min, max) signed pixels.
+    swap_eyes: whether the shot's eyes are swapped (`unmixing.eye_order`).
     prior: the previous frame's left disparity, float32 [H, W] (NaN: no prior there).
     prior_window: (radius, spread) of the search around the prior (`TemporalConfig`).
     full_search_cells: for a shot's first frame, the matcher's coarse-to-fine threshold
@@ -32,6 +33,7 @@ class FrameHint:
   mixture: Optional[str] = None
   detection: Optional[Dict[str, object]] = None
   disparity_range: Optional[Tuple[int, int]] = None
+  swap_eyes: Optional[bool] = None
   prior: Optional[np.ndarray] = None
   prior_window: Optional[Tuple[int, int]] = None
   full_search_cells: Optional[int] = None

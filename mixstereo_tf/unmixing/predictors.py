@@ -20,6 +20,7 @@ from mixstereo_tf.artifacts import runs
 from mixstereo_tf.artifacts import serving
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import shipped
 from mixstereo_tf.unmixing import steps
@@ -107,6 +108,9 @@ def _oracle(config: PredictorConfig) -> Unmixer:
   if not config.checkpoint or config.saved_model:
     raise ValueError("PredictorConfig.method='oracle' needs PredictorConfig.checkpoint (a "
                      'stereo_only training run) and takes no PredictorConfig.saved_model.')
+  if config.swap_eyes is not False:
+    raise ValueError("PredictorConfig.swap_eyes does not apply to method 'oracle' (its "
+                     'inputs are the clean pair).')
   model, run_info = runs.load_run(config.checkpoint)
   return Unmixer(graphs.pair_function(model), 'oracle', config.mixture or run_info.mixtures[0],
                  run_info.model_config.max_disparity, takes_pair=True)
@@ -131,6 +135,9 @@ def build_unmixer(config: PredictorConfig) -> Unmixer:
     raise ValueError("PredictorConfig.pretrained applies to method 'model' only.")
   if config.method != 'model' and config.restore_colour is not None:
     raise ValueError("PredictorConfig.restore_colour applies to method 'model' only.")
+  if config.swap_eyes not in eye_order.SWAP_EYES:
+    raise ValueError(f'PredictorConfig.swap_eyes={config.swap_eyes!r}; give False, True or '
+                     f'{eye_order.AUTO!r}.')
   if isinstance(config.disparity_range, str):
     if config.disparity_range != disparity_range.NETWORK:
       raise ValueError(f'PredictorConfig.disparity_range={config.disparity_range!r}; give '

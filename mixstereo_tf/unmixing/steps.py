@@ -17,8 +17,12 @@ Outputs: 'left', 'right' uint8 [H, W, 3], 'disparity_left', 'disparity_right' fl
 [H, W] signed pixels, and 'info' (a JSON-able dict: mixture, detection, disparity range,
 shift, scale, seconds).
 
-A video frame may come with a `hints.FrameHint`: its shot's encoding and range replace
-steps 1 and 2, and its prior (the previous frame's left disparity) goes to the solver (the
+Eye order (`eye_order`), after step 1: the eyes as given, swapped (cyan-red glasses, mirrored
+scans) or detected ('auto', anaglyphs); swapped images go through steps 2-3 mirrored and
+come back mapped (left view's disparity, positive for near).
+
+A video frame may come with a `hints.FrameHint`: its shot's encoding, eye order and range
+replace steps 1 and 2, and its prior (the previous frame's left disparity) goes to the solver (the
 classical matcher searches around it; the model does not use it); its matcher options
 (`matcher_strips`) reach the range estimation and the classical matcher.
 """
@@ -36,6 +40,7 @@ from mixstereo_tf.core import image_range
 from mixstereo_tf.models import refiner
 from mixstereo_tf.unmixing import detection
 from mixstereo_tf.unmixing import disparity_range
+from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import tiling
 
@@ -185,25 +190,46 @@ def sgbm_unmix(image: np.ndarray, name: str, search: Tuple[int, int],
           'info': {'matcher': 'opencv_stereo_sgbm'}}
 
 
+def _eye_order(image: np.ndarray, name: str, swap_eyes,
+               hint: hints.FrameHint) -> Tuple[bool, Dict[str, object]]:
+  """`eye_order.decide` for the family of `name` (detected: anaglyphs).
+
+  Raises:
+    ValueError: swapped eyes for a single view (monocular).
+  """
+  family = families.of(name)
+  swapped, info = eye_order.decide(image, name, swap_eyes, family.detectable, hint.swap_eyes)
+  if swapped and family.input_is_left:
+    raise ValueError(f'PredictorConfig.swap_eyes: a {name!r} input is one view; it has no '
+                     'eyes to swap.')
+  return swapped, info
+
+
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
         requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
         solve: Callable[..., Dict[str, object]],
-        hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
+        hint: Optional[hints.FrameHint] = None, swap_eyes=False) -> Dict[str, object]:
   """Steps 1-3 for one image; `default_range(encoding)` is the method's own range;
-  `solve(image, name, range, hint)` is the method's step 3. A `hint`'s mixture and range
-  (a video shot's) replace steps 1 and 2; `solve` may use its prior."""
+  `solve(image, name, range, hint)` is the method's step 3; `swap_eyes`: one of
+  `eye_order.SWAP_EYES`. A `hint`'s mixture, eye order and range (a video shot's) replace
+  steps 1 and 2; `solve` may use its prior."""
   start = time.perf_counter()
   hint = hint or hints.FrameHint()
   if hint.mixture is not None:
     name, info = hint.mixture, dict(hint.detection or {})
   else:
     name, info = resolve_mixture(image, requested_mixture, allowed)
+  swapped, eyes = _eye_order(image, name, swap_eyes, hint)
+  if swapped:
+    image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)
   search = hint.disparity_range
   if search is None:
     search = estimate_range(image, name, requested_range, default_range(name), hint)
   outputs = solve(image, name, search, hint)
+  if swapped:
+    outputs = eye_order.unmirror(outputs)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),
-              prior=hint.prior is not None, **outputs.get('info', {}))
+              prior=hint.prior is not None, **eyes, **outputs.get('info', {}))
   info['seconds'] = round(time.perf_counter() - start, 3)
   outputs['info'] = info
   return outputs

@@ -47,6 +47,9 @@ class PredictorConfig:
     max_network_pixels: a model's input is reduced to at most this many pixels.
     pretrained: a shipped model's name or folder ('model' without checkpoint and
       saved_model; None: the first shipped model for the mixture, `pretrained.choose`).
+    swap_eyes: False: the left eye in the first filter's channels (red of red-cyan); True:
+      swapped (cyan-red glasses, mirrored scans), unmixed mirrored; 'auto': detected per
+      image, a video per shot (`eye_order`; anaglyphs, others keep the order given).
   """
   method: str = 'model'
   checkpoint: Optional[str] = None
@@ -56,6 +59,7 @@ class PredictorConfig:
   disparity_range: Union[None, str, Tuple[int, int]] = None
   max_network_pixels: Optional[int] = 2_000_000
   pretrained: Optional[str] = None
+  swap_eyes: Union[bool, str] = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,8 +129,8 @@ def image_unmixer(method: str, requested: str, allowed: Sequence[str],
                    solve: Callable[..., Outputs], display: float, restore: bool) -> Unmixer:
   """An Unmixer of mixture images: `steps.run`'s steps around `solve`."""
   fn = lambda image, hint=None: steps.run(as_rgb(image), requested, allowed,
-                                                config.disparity_range, default_range,
-                                                method, solve, hint)
+                                          config.disparity_range, default_range, method,
+                                          solve, hint, config.swap_eyes)
   return Unmixer(fn, method, requested, display, restore)
 
 

@@ -2,7 +2,8 @@
 
 A video is a sequence of shots. Within a shot the encoding and the disparity range do not
 change and consecutive disparities are close, so `VideoState` keeps, per shot:
-  * the encoding, resolved (detected for 'auto') once at the shot's first frame;
+  * the encoding and the eye order, resolved (detected for 'auto') once at the shot's first
+    frame;
   * the disparity range, estimated once at the shot's first frame;
   * the previous frame's left disparity, handed to the solver as a prior (the classical
     matcher searches around it, `matcher.match(..., prior)`), except where that frame's
@@ -152,13 +153,14 @@ class VideoState:
     if prior is not None and prior.shape != image.shape[:2]:
       prior = None
     return hints.FrameHint(mixture=self._shot.get('mixture'), detection=self._shot.get('detection'),
-                     disparity_range=self._shot.get('disparity_range'), prior=prior,
+                     disparity_range=self._shot.get('disparity_range'),
+                     swap_eyes=self._shot.get('swap_eyes'), prior=prior,
                      prior_window=(self.config.prior_radius, self.config.prior_spread),
                      full_search_cells=self.config.first_frame_cells if starts else None)
 
   def end(self, outputs: Dict[str, object]) -> None:
-    """Records the unmixed frame: its 'info' (mixture, detection, disparity range) when it
-    started the shot, and its 'disparity_left' as the next frame's prior, NaN where its
+    """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range)
+    when it started the shot, and its 'disparity_left' as the next frame's prior, NaN where its
     'consistent_left' (when given) says the match failed the left-right check: there the
     next frame searches the valid prior's range nearby (or everything), so a wrong
     disparity is not inherited."""
@@ -167,10 +169,11 @@ class VideoState:
     info = outputs.get('info', {})
     if not self._shot and 'mixture' in info:
       search = info.get('disparity_range')
+      kept = ('detected', 'confidence', 'also_fits', 'eye_order_score')
       self._shot = {'mixture': info['mixture'],
-                    'detection': {k: info[k] for k in ('detected', 'confidence', 'also_fits')
-                                  if k in info},
-                    'disparity_range': tuple(int(d) for d in search) if search else None}
+                    'detection': {k: info[k] for k in kept if k in info},
+                    'disparity_range': tuple(int(d) for d in search) if search else None,
+                    'swap_eyes': info['eye_order'] == 'swapped' if 'eye_order' in info else None}
     disparity = outputs.get('disparity_left')
     if disparity is None or not np.isfinite(disparity).all():
       self._prior = None

@@ -1,5 +1,6 @@
 """Tests for mixstereo_tf.cli.flags: flags declared once, parsing and error translation."""
 
+import copy
 import re
 
 from absl import app
@@ -50,7 +51,7 @@ def test_defaults_come_from_the_config_dataclass():
   assert cli_flags.defaults(predictors.PredictorConfig) == {
       'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,
       'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000,
-          'pretrained': None}
+          'pretrained': None, 'swap_eyes': False}
 
 
 def test_output_format_is_repeatable_and_reaches_output_options():
@@ -67,5 +68,29 @@ def test_output_format_is_repeatable_and_reaches_output_options():
     assert str(error) == "--output_format: 'jps' twice"
   finally:
     flags.FLAGS['output_format'].unparse()
+    if not was_parsed:
+      flags.FLAGS.unparse_flags()
+
+
+def test_swap_eyes_is_a_boolean_flag_that_also_takes_auto():
+  cli_flags.define_predictor()
+  values = flags.FlagValues()
+  flags.DEFINE_flag(copy.deepcopy(flags.FLAGS['swap_eyes']), flag_values=values)
+  for argv, want in (([], False), (['--swap_eyes'], True), (['--noswap_eyes'], False),
+                     (['--swap_eyes=auto'], 'auto'), (['--swap_eyes=AUTO'], 'auto'),
+                     (['--swap_eyes=false'], False)):
+    values.unparse_flags()
+    values(['prog', *argv])
+    assert values.swap_eyes == want, argv
+  values.unparse_flags()
+  with pytest.raises(flags.IllegalFlagValueError, match="true, false or 'auto'"):
+    values(['prog', '--swap_eyes=maybe'])
+  was_parsed = flags.FLAGS.is_parsed()
+  flags.FLAGS.mark_as_parsed()
+  try:
+    flags.FLAGS['swap_eyes'].parse('auto')
+    assert cli_flags.predictor_config().swap_eyes == 'auto'
+  finally:
+    flags.FLAGS['swap_eyes'].unparse()
     if not was_parsed:
       flags.FLAGS.unparse_flags()

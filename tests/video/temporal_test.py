@@ -9,8 +9,10 @@ from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.unmixing import detection
+from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import temporal
+from tests.unmixing import eye_order_test
 
 HEIGHT, WIDTH, PAN = 48, 80, 2
 
@@ -153,3 +155,25 @@ def test_prior_lowers_flicker_on_a_static_noisy_clip():
         frames, temporal.TemporalConfig(use_prior=use_prior), search=(0, 12))]
     flicker[use_prior] = float(np.mean(np.abs(np.diff(disparities, axis=0))))
   assert flicker[True] < 0.7 * flicker[False], flicker
+
+
+def test_eye_order_decided_once_per_shot_and_the_prior_mirrored(monkeypatch):
+  left, right, disparity = eye_order_test._pair()  # pylint: disable=protected-access
+  frames = [_anaglyph(right, left)] * 3  # Cyan-red: the eyes swapped.
+  detected = _counting(monkeypatch, eye_order, 'detect')
+  matched = _counting(monkeypatch, anaglyph, 'unmix_anaglyph')
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', swap_eyes='auto'))
+  state, outputs = temporal.VideoState(), []
+  for frame in frames:
+    outputs.append(unmixer(frame, hint=state.begin(frame)))
+    state.end(outputs[-1])
+  assert len(detected) == 1
+  assert [o['info']['eye_order'] for o in outputs] == ['swapped'] * 3
+  assert all(o['info']['eye_order_score'] < -2 for o in outputs)
+  # Later frames search around the previous left disparity made the mirrored run's left one.
+  prior = matched[1][1]['prior']
+  np.testing.assert_array_equal(prior, eye_order.right_from_left(np.where(
+      outputs[0]['consistent_left'], outputs[0]['disparity_left'], np.nan))[:, ::-1])
+  for out in outputs:
+    assert np.mean(np.abs(out['disparity_left'] - disparity) > 1) < 0.05
