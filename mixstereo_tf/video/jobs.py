@@ -9,7 +9,7 @@ part holds exact timestamps for every codec), where `<folder>` is the first outp
 each finished segment; a file is renamed into place only once finished, and the manifest is
 replaced atomically after it. A re-run with a matching manifest keeps the finished segments
 and renders from the first missing one; otherwise it starts afresh. At the end each output
-is assembled (`streams.assemble`: the segments' packets and the input's audio, copied) under
+is assembled (`assembly.assemble`: the segments' packets and the input's audio, copied) under
 a temporary name `<stem>.partial<ext>` and renamed, so an interrupted run never leaves a
 file with a final name that is not complete; then the folder is removed.
 """
@@ -23,6 +23,7 @@ from typing import Callable, Dict, Optional
 
 import numpy as np
 
+from mixstereo_tf.video import assembly
 from mixstereo_tf.video import pipelining
 from mixstereo_tf.video import streams
 
@@ -226,10 +227,10 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Dict[str, np.ndarray]],
     _write_manifest(job, manifest)
   frames.close()
   for key, path in job.outputs.items():
-    parts = [streams.Part(_segment_path(job, key, i), Fraction(entry['start']))
+    parts = [assembly.Part(_segment_path(job, key, i), Fraction(entry['start']))
              for i, entry in enumerate(manifest['segments'])]
-    streams.assemble(parts, partial_path(path), info.frame_rate, info.time_base,
-                     job.input_path, info.rotation, job.stereo_modes.get(key))
+    assembly.assemble(parts, partial_path(path), info.frame_rate, info.time_base,
+                      job.input_path, info.rotation, job.stereo_modes.get(key))
     os.replace(partial_path(path), path)
   shutil.rmtree(job.folder)
   total = sum(entry['frames'] for entry in manifest['segments'])

@@ -3,13 +3,13 @@
     info, frames = open_video('in.mp4')        # VideoInfo, iterator of Frame (uint8 RGB)
     with VideoWriter('part.mp4', info.frame_rate) as writer:
       writer.write(image, time)               # time: exact Fraction seconds
-    assemble([Part('part.mp4')], 'out.mp4', info.frame_rate, info.time_base,
-             audio_source='in.mp4', rotation=info.rotation)
+    assembly.assemble([assembly.Part('part.mp4')], 'out.mp4', info.frame_rate,
+                      info.time_base, audio_source='in.mp4', rotation=info.rotation)
 
 Times are exact `Fraction` seconds (a frame's pts times its stream's time base), so frame
 rates like 30000/1001 and variable frame rates survive. The encoder follows the output
-extension (`encoder_for`). `assemble` concatenates encoded parts packet by packet and copies
-the audio packets of the source unchanged (no re-encode). Rotation (the display matrix) is
+extension (`encoder_for`). `assembly.assemble` concatenates encoded parts packet by packet
+and copies the audio packets of the source unchanged (no re-encode). Rotation (the display matrix) is
 read from the decoded frames; FFmpeg's libraries take it into a file only through the
 stream's side data, which PyAV cannot set, so `assemble` adds it with a stream-copy pass of
 imageio-ffmpeg's ffmpeg binary when that package is installed (else it is logged as lost).
@@ -17,12 +17,10 @@ imageio-ffmpeg's ffmpeg binary when that package is installed (else it is logged
 
 import dataclasses
 import fractions
-import heapq
 import itertools
 import os
-from typing import Dict, Iterator, Optional, Sequence, Tuple
+from typing import Dict, Iterator, Optional, Tuple
 
-from absl import logging
 import av
 import numpy as np
 
@@ -234,89 +232,3 @@ class VideoWriter:
 
   def __exit__(self, *exc):
     self.close()
-
-
-@dataclasses.dataclass(frozen=True)
-class Part:
-  """An encoded video file and the seconds added to its timestamps in `assemble`."""
-  path: str
-  start: Fraction = Fraction(0)
-
-
-def _video_packets(parts: Sequence[Part], stream) -> Iterator[Tuple[Fraction, av.Packet]]:
-  """(decode time in seconds, packet) of every part in order, shifted by part.start."""
-  for part in parts:
-    with av.open(part.path) as container:
-      source = container.streams.video[0]
-      for packet in container.demux(source):
-        if packet.size == 0:
-          continue  # The demuxer's end-of-stream marker.
-        shift = round(part.start / Fraction(packet.time_base))
-        packet.pts = None if packet.pts is None else packet.pts + shift
-        packet.dts = None if packet.dts is None else packet.dts + shift
-        packet.stream = stream
-        stamp = packet.dts if packet.dts is not None else packet.pts
-        yield stamp * Fraction(packet.time_base), packet
-
-
-def _audio_packets(container, streams: Dict[int, object]
-                   ) -> Iterator[Tuple[Fraction, av.Packet]]:
-  """(decode time in seconds, packet) of the audio streams, unchanged but re-targeted."""
-  if not streams:
-    return
-  for packet in container.demux([container.streams[i] for i in streams]):
-    if packet.size == 0:
-      continue
-    stamp = packet.dts if packet.dts is not None else packet.pts
-    stamp = 0 if stamp is None else stamp
-    packet.stream = streams[packet.stream.index]
-    yield stamp * Fraction(packet.time_base), packet
-
-
-def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
-             time_base: Optional[Fraction] = None, audio_source: Optional[str] = None,
-             rotation: int = 0, stereo_mode: Optional[str] = None) -> None:
-  """Writes the parts' video one after the other and the source's audio into `output`.
-
-  Packets are copied, not re-encoded: the parts must come from one encoder configuration
-  (same codec parameters, checked). The video stream gets `frame_rate` and `time_base`
-  (AVI: 1 / frame_rate); every audio stream of `audio_source` is copied unchanged; a
-  non-zero `rotation` (degrees counter-clockwise) becomes the display matrix (PyAV >= 18;
-  older versions log that it is lost); `stereo_mode` (a STEREO_MODES key) tags the video
-  stream (Matroska writes it as StereoMode; other containers ignore the tag).
-
-  Raises:
-    ValueError: no parts, or parts encoded differently.
-  """
-  if not parts:
-    raise ValueError(f'No video to write to {output}')
-  if encoder_for(output).codec == 'mjpeg' or not time_base:
-    time_base = 1 / Fraction(frame_rate)
-  with av.open(parts[0].path) as first:
-    template = first.streams.video[0]
-    extradata = template.codec_context.extradata
-    for part in parts[1:]:
-      with av.open(part.path) as other:
-        if other.streams.video[0].codec_context.extradata != extradata:
-          raise ValueError(f'{part.path} is encoded unlike {parts[0].path}; cannot join.')
-    with av.open(output, 'w') as out:
-      video = out.add_stream_from_template(template)
-      video.time_base, video.framerate = Fraction(time_base), Fraction(frame_rate)
-      if stereo_mode:
-        video.metadata['stereo_mode'] = stereo_mode
-      if rotation and hasattr(video, 'set_display_rotation'):
-        video.set_display_rotation(rotation)
-      elif rotation:
-        logging.warning('%s: the input is rotated by %d degrees; writing rotation needs '
-                        'PyAV >= 18, so the output is shown unrotated.', output, rotation)
-      source = av.open(audio_source) if audio_source else None
-      try:
-        audio = {s.index: out.add_stream_from_template(s)
-                 for s in (source.streams.audio if source else ())}
-        merged = heapq.merge(_video_packets(parts, video), _audio_packets(source, audio),
-                             key=lambda item: item[0])
-        for _, packet in merged:
-          out.mux(packet)
-      finally:
-        if source is not None:
-          source.close()

@@ -6,6 +6,7 @@ import av
 import numpy as np
 import pytest
 
+from mixstereo_tf.video import assembly
 from mixstereo_tf.video import streams
 
 Fraction = fractions.Fraction
@@ -82,9 +83,9 @@ def test_parts_assembled_keep_rate_timestamps_and_audio(tmp_path, extension):
                               streams.encoder_for(source)) as writer:
       for frame in frames[first:first + (8 if first == 0 else 12)]:
         writer.write(frame.image, frame.time - frames[first].time)
-    parts.append(streams.Part(part, frames[first].time))
+    parts.append(assembly.Part(part, frames[first].time))
   output = str(tmp_path / f'out{extension}')
-  streams.assemble(parts, output, info.frame_rate, info.time_base, audio_source=source)
+  assembly.assemble(parts, output, info.frame_rate, info.time_base, audio_source=source)
   out_info, out_frames = read_all(output)
   assert out_info.frame_rate == info.frame_rate and len(out_frames) == 20
   assert [f.time for f in out_frames] == [f.time for f in frames]
@@ -109,7 +110,7 @@ def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
       odd = frame.image[:33, :47].copy()  # Odd size: padded by edge replication.
       odd[32] = odd[:, 46] = 255
       writer.write(odd, frame.time)
-  streams.assemble([streams.Part(part)], str(tmp_path / 'out.mp4'), rate, info.time_base,
+  assembly.assemble([assembly.Part(part)], str(tmp_path / 'out.mp4'), rate, info.time_base,
                     rotation=info.rotation)
   out_info, out_frames = read_all(tmp_path / 'out.mp4')
   assert out_info.frame_rate == rate and out_info.rotation == 90
@@ -147,7 +148,7 @@ def test_bad_files_are_named(tmp_path):
   with pytest.raises(ValueError, match=r'clip\.flv'):
     streams.VideoWriter(str(tmp_path / 'clip.flv'), Fraction(25))
   with pytest.raises(ValueError, match='No video'):
-    streams.assemble([], str(tmp_path / 'out.mp4'), Fraction(25))
+    assembly.assemble([], str(tmp_path / 'out.mp4'), Fraction(25))
 
 
 def test_stereo_modes_add_x264_frame_packing_only():
