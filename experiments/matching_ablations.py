@@ -29,7 +29,6 @@ from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import shipped
 
-import numpy as np
 
 from experiments import same_channel
 
@@ -68,18 +67,6 @@ def _evaluate(unmixers, shared_dir):
   return rows
 
 
-def _table(rows, labels):
-  lines = ['| scenes | stage | bad-1 | RGB PSNR L / R (dB) |', '| --- | --- | --- | --- |']
-  for group in dict.fromkeys(same_channel.group(r['scene']) for r in rows):
-    for label in labels:
-      these = [r for r in rows if same_channel.group(r['scene']) == group
-               and r['method'] == label]
-      mean = lambda key: float(np.mean([r[key] for r in these]))  # pylint: disable=cell-var-from-loop
-      lines.append(f"| {group} | {label} | {100 * mean('bad1'):.1f}% | "
-                   f"{mean('psnr_left'):.2f} / {mean('psnr_right'):.2f} |")
-  return lines
-
-
 def main(argv):
   del argv
   start = time.perf_counter()
@@ -92,7 +79,7 @@ def main(argv):
           + ', '.join(f'`{r}`' for r in FLAGS.ablation_runs) + '. Colour anaglyphs by '
           'FFmpeg of the same_channel scenes, window-aligned at 30%; the learned rows are '
           'the stage alone (no refiner); see experiments/results/same_channel.md for the '
-          'refiner on / off.', '', *_table(rows, list(unmixers)), '']
+          'refiner on / off.', '', *same_channel.method_table(rows, list(unmixers), 'stage'), '']
   with open(FLAGS.ablation_output, 'w') as handle:
     handle.write('\n'.join(text))
   print('\n'.join(text))

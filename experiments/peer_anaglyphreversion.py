@@ -98,20 +98,6 @@ def _evaluate(reverse, shared_dir, procedural):
   return rows
 
 
-def _table(rows):
-  lines = ['| scenes | method | bad-1 | RGB PSNR L / R (dB) | seconds |',
-           '| --- | --- | --- | --- | --- |']
-  for group in dict.fromkeys(same_channel.group(r['scene']) for r in rows):
-    for method in ('peer',) + OURS:
-      these = [r for r in rows if same_channel.group(r['scene']) == group
-               and r['method'] == method]
-      mean = lambda key: float(np.mean([r[key] for r in these]))  # pylint: disable=cell-var-from-loop
-      lines.append(f"| {group} | {method} | {100 * mean('bad1'):.1f}% | "
-                   f"{mean('psnr_left'):.2f} / {mean('psnr_right'):.2f} | "
-                   f"{mean('seconds'):.1f} |")
-  return lines
-
-
 def main(argv):
   del argv
   start = time.perf_counter()
@@ -126,7 +112,7 @@ def main(argv):
           'default, `--pretrained=anaglyph_matching`; learned + refiner = the shipped refiner '
           'run on the learned stage instead of the classical method; refiner = the previous '
           'default (`--pretrained=anaglyph`). Seconds on a machine shared with training '
-          'runs.', '', *_table(rows), '']
+          'runs.', '', *same_channel.method_table(rows, ('peer',) + OURS, seconds=True), '']
   with open(FLAGS.peer_output, 'w') as handle:
     handle.write('\n'.join(text))
   print('\n'.join(text))

@@ -132,6 +132,22 @@ def _mean(rows, key):
   return float(np.mean(values)) if values else float('nan')
 
 
+def method_table(rows, methods, title='method', seconds=False):
+  """Markdown rows: per scene group and method (row 'method' of `rows`), the mean bad-1 and
+  RGB PSNR L / R (and seconds): the tables of matching_ablations and peer_anaglyphreversion."""
+  lines = [f'| scenes | {title} | bad-1 | RGB PSNR L / R (dB) |' + (' seconds |' if seconds
+                                                                   else ''),
+           '| --- ' * (5 if seconds else 4) + '|']
+  for name in dict.fromkeys(group(r['scene']) for r in rows):
+    for method in methods:
+      these = [r for r in rows if group(r['scene']) == name and r['method'] == method]
+      mean = lambda key: float(np.mean([r[key] for r in these]))  # pylint: disable=cell-var-from-loop
+      lines.append(f"| {name} | {method} | {100 * mean('bad1'):.1f}% | "
+                   f"{mean('psnr_left'):.2f} / {mean('psnr_right'):.2f} |"
+                   + (f" {mean('seconds'):.1f} |" if seconds else ''))
+  return lines
+
+
 def _table(rows):
   lines = ['| scenes | encoding | method | bad-1 | bad-3 | EPE px | RGB PSNR L / R | '
            f'bad-1 / {REFERENCE} (same method) |', '| --- ' * 8 + '|']

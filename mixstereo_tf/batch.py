@@ -56,10 +56,7 @@ def main(argv):
   cli_flags.exit_if_listing()
   device.log_line()
   try:
-    config = cli_flags.predictor_config()
-    if config.method == 'oracle':
-      raise ValueError('--method=oracle needs the clean stereo pair; it is for evaluation '
-                       'only.')
+    config = cli_flags.unmix_predictor_config()
     predictors.build_unmixer(config)  # A bad predictor flag fails here, not on workers.
     items = beam_batch.list_inputs(FLAGS.input, FLAGS.input_list)
     options = cli_flags.output_options(settings=dataclasses.asdict(config))

@@ -41,10 +41,7 @@ def main(argv):
   cli_flags.exit_if_listing()
   device.log_line()
   try:
-    config = cli_flags.predictor_config()
-    if config.method == 'oracle':
-      raise ValueError('--method=oracle needs the clean stereo pair; it is for evaluation '
-                       'only.')
+    config = cli_flags.unmix_predictor_config()
     unmixer = predictors.build_unmixer(config)
     report = unmix_files.unmix_inputs(
         unmixer, FLAGS.input, FLAGS.output_dir,

@@ -233,6 +233,19 @@ def predictor_config() -> predictors.PredictorConfig:
       swap_eyes=FLAGS.swap_eyes)
 
 
+def unmix_predictor_config() -> predictors.PredictorConfig:
+  """`predictor_config` for the tools that unmix files (mixstereo-unmix, mixstereo-batch).
+
+  Raises:
+    ValueError: --method=oracle, which needs the clean stereo pair.
+  """
+  config = predictor_config()
+  if config.method == 'oracle':
+    raise ValueError('--method=oracle needs the clean stereo pair; it is for evaluation '
+                     'only.')
+  return config
+
+
 def middlebury_scales() -> Tuple[Tuple[str, float], ...]:
   """The parsed --middlebury_scale items as (scene, scale) pairs.
 
