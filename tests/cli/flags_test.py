@@ -94,3 +94,18 @@ def test_swap_eyes_is_a_boolean_flag_that_also_takes_auto():
     flags.FLAGS['swap_eyes'].unparse()
     if not was_parsed:
       flags.FLAGS.unparse_flags()
+
+
+def test_unmix_predictor_config_refuses_the_oracle():
+  cli_flags.define_predictor()
+  was_parsed = flags.FLAGS.is_parsed()
+  flags.FLAGS.mark_as_parsed()
+  try:
+    assert cli_flags.unmix_predictor_config().method == flags.FLAGS.method
+    flags.FLAGS['method'].parse('oracle')
+    with pytest.raises(ValueError, match='--method=oracle needs the clean stereo pair'):
+      cli_flags.unmix_predictor_config()
+  finally:
+    flags.FLAGS['method'].unparse()
+    if not was_parsed:
+      flags.FLAGS.unparse_flags()
