@@ -95,7 +95,8 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
           checkpoint: Optional[str] = None, saved_model: Optional[str] = None,
           disparity_range: Union[None, str, Tuple[int, int]] = None,
           restore_colour: Optional[bool] = None, max_network_pixels: Optional[int] = ...,
-          swap_eyes: Union[bool, str] = False) -> Unmixed:
+          swap_eyes: Union[bool, str] = False,
+          mixing_weight: Union[None, float, str] = None) -> Unmixed:
   """Separates one mixture image into its two views and their disparities.
 
   The keywords are the `mixstereo-unmix` flags of the same names (`model`: --pretrained)
@@ -115,13 +116,11 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
       the mixture ('auto': the anaglyph model).
     checkpoint: a training run directory or checkpoint prefix, instead of a shipped model.
     saved_model: a SavedModel written by mixstereo_tf.export, instead of a shipped model.
-    disparity_range: (min, max) signed pixels to search, or the CLI's text ('-40,120',
-      'auto', 'network'); None: estimated per image.
-    restore_colour: rebuild the views' exact channels from the mixture and disparities
-      (None: on for anaglyphs); method 'model' only.
-    max_network_pixels: a network's input is reduced to at most this many pixels (None:
-      no limit).
+    disparity_range: (min, max) signed pixels, or the CLI's text ('-40,120', 'auto').
+    restore_colour: rebuild the views' exact channels (None: on for anaglyphs); 'model'.
+    max_network_pixels: a network's input is reduced to at most this many pixels.
     swap_eyes: True: the left eye in the cyan (second) filter's channels; 'auto': detected.
+    mixing_weight: a of double images a L + (1 - a) R (None: 1/2, 'auto': estimated).
 
   Returns:
     An `Unmixed`: views and disparities the size of the input, and `info`.
@@ -135,7 +134,8 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
   from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
   given = dict(method=method, checkpoint=checkpoint, saved_model=saved_model,
                mixture=mixture, restore_colour=restore_colour, swap_eyes=swap_eyes,
-               max_network_pixels=max_network_pixels, pretrained=model)
+               max_network_pixels=max_network_pixels, pretrained=model,
+               mixing_weight=mixing_weight)
   try:
     config = predictors.PredictorConfig(
         disparity_range=_search(disparity_range),

@@ -82,6 +82,8 @@ def test_a_photo_that_is_no_anaglyph_names_the_keyword():
     (dict(method='oracle'), "method='oracle' needs the clean stereo pair"),
     (dict(disparity_range='5,5'), "disparity_range='5,5': disparity range needs MIN < MAX"),
     (dict(method='classical', disparity_range=(5, 5)), 'disparity_range= needs MIN < MAX'),
+    (dict(method='classical', mixture='diplopia', mixing_weight=1.0),
+     "mixing_weight= must be None, 'auto' or a number in (0, 1)"),
 ])
 def test_bad_keywords_are_named(keywords, message):
   with pytest.raises(ValueError) as raised:

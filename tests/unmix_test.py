@@ -115,3 +115,24 @@ def test_unmix_with_no_model_flag_uses_the_shipped_model(tmp_path):
   assert listing.returncode == 0
   assert 'anaglyph: refiner model for anaglyph' in listing.stdout
   assert 'diplopia' in listing.stdout and 'recipe: python -m mixstereo_tf.train' in listing.stdout
+
+
+def test_mixing_weight_of_double_images(tmp_path):
+  """--mixture=diplopia separates with a = 1/2 unless --mixing_weight says otherwise (a
+  number, or 'auto': estimated); the info JSON records the a used; a bad value is named.
+  (This fine texture has no isolated edges, so 'auto' finds no clear echo and stays near
+  1/2: the estimate's accuracy is tested in classical/diplopia_layers_test.py.)"""
+  left, right, _ = detection_test._pair()  # pylint: disable=protected-access
+  image = np.rint(0.35 * left.astype(np.float64) + 0.65 * right).astype(np.uint8)
+  media.write_image(str(tmp_path / 'double.png'), image)
+  args = ['--method=classical', '--mixture=diplopia', f'--input={tmp_path}/double.png']
+  found = {}
+  for weight in (None, '0.35', 'auto'):
+    result = _cli(args + ([f'--mixing_weight={weight}'] if weight else []), tmp_path)
+    assert result.returncode == 0, result.stderr[-3000:]
+    info = json.loads((tmp_path / 'out' / 'double_info.json').read_text())
+    found[weight] = info['mixing_weight']
+  assert found[None] == 0.5 and found['0.35'] == 0.35
+  assert 0.05 <= found['auto'] <= 0.95
+  result = _cli(args + ['--mixing_weight=1.5'], tmp_path)
+  assert result.returncode != 0 and '--mixing_weight' in result.stderr

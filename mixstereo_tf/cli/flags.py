@@ -18,6 +18,7 @@ from absl import flags
 
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import mixtures
@@ -147,10 +148,22 @@ class SwapEyesParser(flags.ArgumentParser):
     return 'bool or auto'
 
 
+def parse_mixing_weight(text: Optional[str]):
+  """--mixing_weight: None (unset: 1/2), 'auto', or a number in (0, 1); UsageError naming
+  the flag otherwise."""
+  if text is None or text.strip().lower() == diplopia_layers.AUTO:
+    return None if text is None else diplopia_layers.AUTO
+  try:
+    return diplopia_layers.check_weight(float(text))
+  except ValueError as e:
+    raise app.UsageError(f"--mixing_weight: expected 'auto' or a number in (0, 1), got "
+                         f'{text!r} ({e})') from None
+
+
 @functools.lru_cache(maxsize=None)
 def define_predictor() -> None:
   """The predictor group: --method, --checkpoint, --saved_model, --mixture, --restore_colour,
-  --disparity_range, --max_network_pixels, --swap_eyes."""
+  --disparity_range, --max_network_pixels, --swap_eyes, --mixing_weight."""
   define_checkpoint()
   define_mixture()
   defaults = predictors.PredictorConfig()
@@ -179,6 +192,11 @@ def define_predictor() -> None:
       "texture of the pixels hidden beside depth edges; the info JSON records the order "
       "(eye_order) and the detection's score (eye_order_score).",
       boolean=True))
+  flags.DEFINE_string('mixing_weight', None,
+                      'Double images I = a L + (1 - a) R (--mixture=diplopia): the left '
+                      "view's weight a; unset: 1/2 exactly; 'auto': estimated per image from "
+                      'the echoes of its edges; a number in (0, 1): that weight. The info '
+                      'JSON records the a used (mixing_weight).')
   define_pretrained()
 
 
@@ -230,7 +248,7 @@ def predictor_config() -> predictors.PredictorConfig:
       method=FLAGS.method, checkpoint=FLAGS.checkpoint, saved_model=FLAGS.saved_model,
       mixture=FLAGS.mixture, restore_colour=FLAGS.restore_colour, disparity_range=search,
       max_network_pixels=FLAGS.max_network_pixels, pretrained=FLAGS.pretrained,
-      swap_eyes=FLAGS.swap_eyes)
+      swap_eyes=FLAGS.swap_eyes, mixing_weight=parse_mixing_weight(FLAGS.mixing_weight))
 
 
 def unmix_predictor_config() -> predictors.PredictorConfig:

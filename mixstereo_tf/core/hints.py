@@ -7,7 +7,7 @@ object under one name from the video loop down to the matcher's configuration.
 """
 
 import dataclasses
-from typing import Dict, Optional, Tuple
+from typing import Dict, Optional, Tuple, Union
 
 import numpy as np
 
@@ -29,6 +29,9 @@ class FrameHint:
     matcher_strips: the anaglyph matcher's SGM strips (`MatcherConfig.strips`), for its
       range estimation and its matching; None: its own (they follow the core count, and
       the aggregation differs near strip borders); 1: the same result on every machine.
+    mixing_weight: double images: the left view's weight a of I = a L + (1 - a) R; None:
+      1/2 (`--mixture=diplopia` exactly); 'auto': estimated from the frame; a number in
+      (0, 1): that weight (`classical.diplopia_layers.resolve_weight`).
   """
   mixture: Optional[str] = None
   detection: Optional[Dict[str, object]] = None
@@ -38,3 +41,4 @@ class FrameHint:
   prior_window: Optional[Tuple[int, int]] = None
   full_search_cells: Optional[int] = None
   matcher_strips: Optional[int] = None
+  mixing_weight: Union[None, float, str] = None

@@ -154,9 +154,11 @@ class Diplopia(Family):
     return diplopia.estimate_range(image)
 
   def classical(self, image, name, search=None, hint=None):
-    """`diplopia.unmix_diplopia` over `search` (None: its configured range)."""
-    del name, hint  # No prior: each frame is matched alone.
-    return diplopia.unmix_diplopia(image, search)
+    """`diplopia.unmix_diplopia` over `search` (None: its configured range) with the
+    hint's mixing weight (None: 1/2)."""
+    del name  # No prior: each frame is matched alone.
+    return diplopia.unmix_diplopia(image, search,
+                                   weight=hint.mixing_weight if hint else None)
 
   def display_range(self):
     """The self-matching's largest configured lag."""

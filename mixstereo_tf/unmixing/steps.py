@@ -27,6 +27,7 @@ classical matcher searches around it; the model does not use it); its matcher op
 (`matcher_strips`) reach the range estimation and the classical matcher.
 """
 
+import dataclasses
 import time
 from typing import Callable, Dict, Optional, Sequence, Tuple, Union
 
@@ -171,7 +172,10 @@ def classical_unmix(image: np.ndarray, name: str, search: Range,
   check (`temporal.VideoState` drops the prior where it failed)."""
   out = families.of(name).classical(image, name, search, hint)
   keys = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
-  return {key: out[key] for key in keys if key in out}
+  outputs = {key: out[key] for key in keys if key in out}
+  if 'mixing_weight' in out:  # Double images: the weight a the layers were separated with.
+    outputs['info'] = {'mixing_weight': round(float(out['mixing_weight']), 3)}
+  return outputs
 
 
 def sgbm_unmix(image: np.ndarray, name: str, search: Tuple[int, int],
@@ -208,13 +212,17 @@ def _eye_order(image: np.ndarray, name: str, swap_eyes,
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
         requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
         solve: Callable[..., Dict[str, object]],
-        hint: Optional[hints.FrameHint] = None, swap_eyes=False) -> Dict[str, object]:
+        hint: Optional[hints.FrameHint] = None, swap_eyes=False,
+        mixing_weight=None) -> Dict[str, object]:
   """Steps 1-3 for one image; `default_range(encoding)` is the method's own range;
   `solve(image, name, range, hint)` is the method's step 3; `swap_eyes`: one of
   `eye_order.SWAP_EYES`. A `hint`'s mixture, eye order and range (a video shot's) replace
-  steps 1 and 2; `solve` may use its prior."""
+  steps 1 and 2; `solve` may use its prior; `mixing_weight` (double images) goes to the
+  hint unless it has its own."""
   start = time.perf_counter()
   hint = hint or hints.FrameHint()
+  if hint.mixing_weight is None and mixing_weight is not None:
+    hint = dataclasses.replace(hint, mixing_weight=mixing_weight)
   if hint.mixture is not None:
     name, info = hint.mixture, dict(hint.detection or {})
   else:

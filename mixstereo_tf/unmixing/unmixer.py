@@ -11,6 +11,7 @@ import numpy as np
 import tensorflow as tf
 
 from mixstereo_tf.artifacts import runs
+from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import steps
 
@@ -50,6 +51,9 @@ class PredictorConfig:
     swap_eyes: False: the left eye in the first filter's channels (red of red-cyan); True:
       swapped (cyan-red glasses, mirrored scans), unmixed mirrored; 'auto': detected per
       image, a video per shot (`eye_order`; anaglyphs, others keep the order given).
+    mixing_weight: double images: the left view's weight a of I = a L + (1 - a) R; None:
+      1/2 (`--mixture=diplopia` exactly), 'auto': estimated per image, or a number in (0, 1)
+      (`hints.FrameHint.mixing_weight`).
   """
   method: str = 'model'
   checkpoint: Optional[str] = None
@@ -60,6 +64,14 @@ class PredictorConfig:
   max_network_pixels: Optional[int] = 2_000_000
   pretrained: Optional[str] = None
   swap_eyes: Union[bool, str] = False
+  mixing_weight: Union[None, float, str] = None
+
+  def __post_init__(self):
+    weight = self.mixing_weight
+    if weight is not None and weight != diplopia_layers.AUTO and (
+        isinstance(weight, (bool, str)) or not 0.0 < float(weight) < 1.0):
+      raise ValueError(f"PredictorConfig.mixing_weight must be None, 'auto' or a number in "
+                       f'(0, 1), got {weight!r}.')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -130,7 +142,8 @@ def image_unmixer(method: str, requested: str, allowed: Sequence[str],
   """An Unmixer of mixture images: `steps.run`'s steps around `solve`."""
   fn = lambda image, hint=None: steps.run(as_rgb(image), requested, allowed,
                                           config.disparity_range, default_range, method,
-                                          solve, hint, config.swap_eyes)
+                                          solve, hint, config.swap_eyes,
+                                          config.mixing_weight)
   return Unmixer(fn, method, requested, display, restore)
 
 

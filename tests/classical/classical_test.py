@@ -7,6 +7,7 @@ import tensorflow as tf
 
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
@@ -104,8 +105,7 @@ def test_diplopia_constant_shift_and_layers():
 def test_diplopia_layers_with_true_shift_beat_the_mixture():
   left, right, _, _ = _scene(d_bg=5, d_fg=5)
   mixture01 = _mix('diplopia', left, right) / 255.0
-  layers = diplopia.separate_layers(mixture01, np.full((_H, _W), 5.0),
-                                    diplopia.DiplopiaConfig())
+  layers = diplopia_layers.separate_layers(mixture01, np.full((_H, _W), 5.0))
   gain = (metrics.psnr(image_range.unit_to_u8(layers['left']), left) -
           metrics.psnr(mixture01 * 255.0, left))
   assert gain >= 4.0, gain

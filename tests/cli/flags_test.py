@@ -51,7 +51,7 @@ def test_defaults_come_from_the_config_dataclass():
   assert cli_flags.defaults(predictors.PredictorConfig) == {
       'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,
       'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000,
-          'pretrained': None, 'swap_eyes': False}
+          'pretrained': None, 'swap_eyes': False, 'mixing_weight': None}
 
 
 def test_output_format_is_repeatable_and_reaches_output_options():

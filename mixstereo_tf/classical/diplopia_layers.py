@@ -1,0 +1,209 @@
+"""The two layers of a double image I = a L + (1 - a) R given its disparities, and the
+mixing weight a from the image's echoes.
+
+With the right pixel x matching the left pixel x + d_R(x) (docs/DESIGN.md), R(x) =
+L(x + d_R(x)) wherever the right pixel is visible in the left view, so
+
+    I(x) = a L(x) + (1 - a) L(x + d_R(x)),
+
+one linear equation per pixel in the unknown left view (a = 1/2: `--mixture=diplopia`).
+`separate_layers`: L on the columns [0, W + E) (E covers the largest d_R, content the left
+view never shows inside the image) minimises
+    sum_x (a L(x) + (1 - a) L(x + d_R(x)) - I(x))^2 + smoothness * |grad L|^2
+      + fidelity * |L - I|^2   (I edge-extended to the extra columns)
+(sub-pixel shifts by linear interpolation; horizontal and vertical first differences),
+solved by Jacobi-preconditioned conjugate gradients for all channels at once; then R = L
+sampled at x + d_R. The 2-tap filter a + (1 - a) e^{i w d} is zero only for a = 1/2 (at
+w = pi (2k + 1) / d): there those frequencies are unobservable and the prior sets them.
+
+`estimate_weight`: an edge of the left view at x shows twice in I: at x with weight a (the
+left view's copy) and at x - d_L(x) with weight 1 - a (the right view's, positive
+disparities). Where both copies are clear edges of one sign, |g(x)| / (|g(x)| +
+|g(x - d_L)|) of the horizontal gradient g of I is a; the weighted median over such pairs
+(weights: the smaller magnitude, so clear echoes count most) estimates it. Second-order
+statistics cannot: the power spectrum a^2 + (1 - a)^2 + 2 a (1 - a) cos(w d) is the same
+for a and 1 - a.
+"""
+
+import dataclasses
+from typing import Dict
+
+import cv2
+import numpy as np
+import scipy.sparse
+
+
+@dataclasses.dataclass(frozen=True)
+class LayerConfig:
+  """Prior weights and solver settings of `separate_layers`.
+
+  Attributes:
+    smoothness: weight of the squared-gradient prior on the left layer ([0, 1] units).
+    fidelity: weight of a prior pulling the left layer towards the mixture itself, which
+      fills the unobservable frequencies with the mixture's and limits the damage of
+      wrong shifts.
+    cg_iterations: conjugate-gradient iteration cap.
+    cg_tolerance: relative residual at which CG stops.
+  """
+  smoothness: float = 0.01
+  fidelity: float = 0.05
+  cg_iterations: int = 300
+  cg_tolerance: float = 1e-4
+
+  def __post_init__(self):
+    if not self.smoothness > 0:
+      raise ValueError(f'smoothness must be positive, got {self.smoothness!r}.')
+
+
+def check_weight(weight: float) -> float:
+  """`weight` as a float in (0, 1), or ValueError naming it."""
+  if not 0.0 < float(weight) < 1.0:
+    raise ValueError(f'The mixing weight a of I = a L + (1 - a) R must lie in (0, 1), got '
+                     f'{weight!r}.')
+  return float(weight)
+
+
+def _system(d_right: np.ndarray, extra: int, smoothness: float, weight: float):
+  """The normal-equation matrix and data operator of the layer least squares."""
+  h, w = d_right.shape
+  wide = w + extra
+  index = np.arange(h * wide).reshape(h, wide)
+  rows = np.arange(h * w)
+  own = index[:, :w].ravel()
+  position = np.clip(np.arange(w)[None, :] + d_right, 0, wide - 1.001)
+  x0 = np.floor(position).astype(np.int64)
+  frac = (position - x0).ravel()
+  shifted0 = np.take_along_axis(index, x0, axis=1).ravel()
+  other = 1.0 - weight
+  data = scipy.sparse.csr_matrix(
+      (np.concatenate([np.full(h * w, weight), other * (1 - frac), other * frac]),
+       (np.tile(rows, 3), np.concatenate([own, shifted0, shifted0 + 1]))),
+      shape=(h * w, h * wide))
+  diff_x = scipy.sparse.diags([-1.0, 1.0], [0, 1], shape=(wide - 1, wide))
+  diff_y = scipy.sparse.diags([-1.0, 1.0], [0, 1], shape=(h - 1, h))
+  grad = scipy.sparse.vstack([scipy.sparse.kron(scipy.sparse.identity(h), diff_x),
+                              scipy.sparse.kron(diff_y, scipy.sparse.identity(wide))])
+  normal = (data.T @ data + smoothness * (grad.T @ grad)).tocsr()
+  return normal, data
+
+
+def _conjugate_gradient(matrix, rhs: np.ndarray, start: np.ndarray, iterations: int,
+                        tolerance: float) -> np.ndarray:
+  """Jacobi-preconditioned CG on every column of `rhs` [N, C] at once (SPD `matrix`)."""
+  inverse_diagonal = 1.0 / matrix.diagonal()[:, None]
+  solution = start.copy()
+  residual = rhs - matrix @ solution
+  z = inverse_diagonal * residual
+  direction = z.copy()
+  rz = np.sum(residual * z, axis=0)
+  target = tolerance * np.linalg.norm(rhs, axis=0)
+  for _ in range(iterations):
+    if np.all(np.linalg.norm(residual, axis=0) <= target):
+      break
+    product = matrix @ direction
+    alpha = rz / np.maximum(np.sum(direction * product, axis=0), 1e-30)
+    solution += alpha * direction
+    residual -= alpha * product
+    z = inverse_diagonal * residual
+    rz_new = np.sum(residual * z, axis=0)
+    direction = z + (rz_new / np.maximum(rz, 1e-30)) * direction
+    rz = rz_new
+  return solution
+
+
+def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
+                    config: LayerConfig = LayerConfig(),
+                    weight: float = 0.5) -> Dict[str, np.ndarray]:
+  """Left and right layers of I = a L + (1 - a) R given the right disparity.
+
+  Args:
+    mixture01: float [H, W, 3] in [0, 1].
+    d_right: float [H, W], pixels, positive: right pixel x shows left pixel x + d_R.
+    config: prior weights and solver settings.
+    weight: a, the left view's share of every pixel, in (0, 1).
+
+  Returns:
+    'left', 'right': float32 [H, W, 3] in [0, 1].
+  """
+  weight = check_weight(weight)
+  h, w, channels = mixture01.shape
+  extra = int(np.ceil(max(float(d_right.max()), 0.0))) + 2
+  normal, data = _system(d_right, extra, config.smoothness, weight)
+  # The mixture itself, edge-extended: CG's start and the target of the fidelity prior.
+  start = np.pad(mixture01, ((0, 0), (0, extra), (0, 0)), mode='edge')
+  start = start.reshape(-1, channels).astype(np.float64)
+  normal = normal + config.fidelity * scipy.sparse.identity(normal.shape[0], format='csr')
+  rhs = data.T @ mixture01.reshape(h * w, channels).astype(np.float64) + config.fidelity * start
+  wide = _conjugate_gradient(normal, rhs, start, config.cg_iterations, config.cg_tolerance)
+  wide = wide.reshape(h, w + extra, channels)
+  position = np.clip(np.arange(w)[None, :] + d_right, 0, w + extra - 1.001)
+  x0 = np.floor(position).astype(np.int64)
+  frac = (position - x0)[..., None]
+  gather = lambda cols: np.take_along_axis(wide, cols[..., None], axis=1)
+  right = (1 - frac) * gather(x0) + frac * gather(x0 + 1)
+  return {'left': np.clip(wide[:, :w], 0, 1).astype(np.float32),
+          'right': np.clip(right, 0, 1).astype(np.float32)}
+
+
+def _lagged(values: np.ndarray, lag: np.ndarray):
+  """values[y, x + lag[y, x]] (clipped) and whether x + lag lies inside the row."""
+  width = values.shape[1]
+  column = np.arange(width)[None, :] + lag
+  inside = (column >= 0) & (column < width)
+  return np.take_along_axis(values, np.clip(column, 0, width - 1), axis=1), inside
+
+
+def estimate_weight(mixture01: np.ndarray, d_left: np.ndarray, consistent: np.ndarray,
+                    quantile: float = 0.9, isolation: float = 0.25, min_lag: int = 5,
+                    min_pairs: int = 30) -> float:
+  """The left view's weight a of a double image (module docstring).
+
+  Pairs: consistent left pixels x with d = round(d_L(x)) >= `min_lag` (nearer copies'
+  gradients overlap), |g(x)| + |g(x - d)| at least the `quantile` of |g|, one sign, and
+  isolated: |g(x + d)| and |g(x - 2 d)| (where a third copy of an unrelated edge would show)
+  below `isolation` times the weaker copy. a is the mode of |g(x)| / (|g(x)| + |g(x - d)|)
+  (histogram of 0.01 bins over [0.05, 0.95] weighted by the weaker copy, Gaussian-smoothed
+  by 3 bins): pairs of unrelated edges spread around 1/2, true echoes pile up at a.
+
+  Args:
+    mixture01: float [H, W, 3] (or [H, W]) in [0, 1].
+    d_left: float [H, W], pixels, positive: left pixel x matches right pixel x - d_L.
+    consistent: bool [H, W], left pixels whose disparity passed the left-right check.
+    quantile, isolation, min_lag: the pairs' selection (above).
+    min_pairs: with fewer pairs the image shows no clear echo: 1/2.
+
+  Returns:
+    a in [0.05, 0.95].
+  """
+  gray = np.asarray(mixture01, np.float32)
+  gray = gray.mean(axis=-1) if gray.ndim == 3 else gray
+  grad = cv2.Sobel(cv2.GaussianBlur(gray, (0, 0), 0.7), cv2.CV_32F, 1, 0, ksize=3)
+  lag = np.rint(np.nan_to_num(d_left)).astype(np.int64)
+  echo, inside = _lagged(grad, -lag)
+  after, inside_after = _lagged(grad, lag)
+  before, inside_before = _lagged(grad, -2 * lag)
+  here, there = np.abs(grad), np.abs(echo)
+  weaker = np.minimum(here, there)
+  chosen = (consistent & inside & inside_after & inside_before & (lag >= min_lag) &
+            (here + there >= np.quantile(here, quantile)) & (grad * echo > 0) &
+            (np.abs(after) < isolation * weaker) & (np.abs(before) < isolation * weaker))
+  if np.count_nonzero(chosen) < min_pairs:
+    return 0.5
+  ratio = here[chosen] / (here[chosen] + there[chosen])
+  counts, _ = np.histogram(ratio, bins=90, range=(0.05, 0.95), weights=weaker[chosen])
+  kernel = np.exp(-0.5 * (np.arange(-8, 9) / 3.0) ** 2)
+  return float(0.05 + 0.01 * (np.argmax(np.convolve(counts, kernel, 'same')) + 0.5))
+
+
+AUTO = 'auto'  # A mixing weight estimated from the image (`estimate_weight`).
+
+
+def resolve_weight(weight, mixture01: np.ndarray, d_left: np.ndarray,
+                   consistent: np.ndarray) -> float:
+  """The weight a to separate with: None -> 1/2 (`--mixture=diplopia` exactly), AUTO ->
+  `estimate_weight`, a number in (0, 1) -> itself (ValueError otherwise)."""
+  if weight is None:
+    return 0.5
+  if weight == AUTO:
+    return estimate_weight(mixture01, d_left, consistent)
+  return check_weight(weight)

@@ -1,0 +1,62 @@
+"""Tests of the double-image layers and mixing weight: known answers on drawn echoes."""
+
+import numpy as np
+import pytest
+
+from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.evaluation import metrics
+
+_H, _W, _D = 24, 160, 7
+
+
+def _steps_pair(seed=0):
+  """A left view of vertical steps 20-40 px apart (distinct levels per 8-row band), the
+  right view = left shifted by _D (R(x) = L(x + _D)), float [H, W, 3] in [0, 1]."""
+  rng = np.random.default_rng(seed)
+  wide = np.zeros((_H, _W + _D, 3))
+  for band in range(0, _H, 8):
+    x = 0
+    while x < _W + _D:
+      step = int(rng.integers(20, 41))
+      wide[band:band + 8, x:x + step] = rng.uniform(0.1, 0.9, 3)
+      x += step
+  return wide[:, :_W], wide[:, _D:]
+
+
+@pytest.mark.parametrize('weight', [0.3, 0.4, 0.5, 0.6, 0.7])
+def test_the_weight_comes_from_the_echoes_of_edges(weight):
+  left, right = _steps_pair()
+  mixture = weight * left + (1 - weight) * right
+  d_left = np.full((_H, _W), float(_D))
+  found = diplopia_layers.estimate_weight(mixture, d_left, np.ones((_H, _W), bool))
+  assert found == pytest.approx(weight, abs=0.03)
+
+
+def test_without_echoes_the_weight_stays_one_half():
+  flat = np.full((_H, _W, 3), 0.5)
+  assert diplopia_layers.estimate_weight(flat, np.full((_H, _W), 5.0),
+                                         np.ones((_H, _W), bool)) == 0.5
+
+
+def test_separating_with_the_true_weight_beats_one_half():
+  left, right = _steps_pair(1)
+  mixture = 0.3 * left + 0.7 * right
+  d_right = np.full((_H, _W), float(_D))
+  scores = {}
+  for weight in (0.3, 0.5):
+    layers = diplopia_layers.separate_layers(mixture, d_right, weight=weight)
+    scores[weight] = metrics.psnr(layers['left'] * 255.0, left * 255.0)
+  assert scores[0.3] > scores[0.5] + 3.0, scores
+  assert scores[0.3] > metrics.psnr(mixture * 255.0, left * 255.0) + 10.0, scores
+
+
+def test_resolve_weight_and_bad_weights():
+  left, right = _steps_pair()
+  mixture = 0.6 * left + 0.4 * right
+  args = (mixture, np.full((_H, _W), float(_D)), np.ones((_H, _W), bool))
+  assert diplopia_layers.resolve_weight(None, *args) == 0.5
+  assert diplopia_layers.resolve_weight(0.25, *args) == 0.25
+  assert diplopia_layers.resolve_weight('auto', *args) == pytest.approx(0.6, abs=0.03)
+  for bad in (0.0, 1.0, -0.2):
+    with pytest.raises(ValueError, match='mixing weight'):
+      diplopia_layers.resolve_weight(bad, *args)
