@@ -139,7 +139,8 @@ flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner', 'features'), "jo
                   '(models/refiner.py; trained on cached `sample` examples with ground truth, '
                   'from --sample_scenes, --sample_height/width, --max_disparity, --mixture, '
                   '--texture_dir, --degrade, --clean_probability, --large_probability; not in the '
-                  'paper); features: the learned matching features of anaglyphs '
+                  'paper); features: the learned matching features of anaglyphs, or with '
+                  '--mixture=diplopia the echo features of double images '
                   '(models/matching_features.py; trained on photographs of --texture_dir warped '
                   'by drawn disparity fields, --crop_height x --crop_width, --max_disparity, '
                   '--mixture, --degrade, --feature_width, --feature_layers; not in the paper).')
@@ -233,14 +234,15 @@ def _train_features() -> None:
   """--architecture=features: `training/feature_loop.py` on the flags it reads."""
   if FLAGS.num_steps is None:
     raise app.UsageError('--architecture=features needs --num_steps.')
+  names = FLAGS.mixture or 'anaglyphs'
   try:
-    warp = photo_warps.WarpConfig(height=FLAGS.crop_height, width=FLAGS.crop_width,
-                                  max_disparity=FLAGS.max_disparity,
-                                  photo_warps=FLAGS.photo_warps)
-    low, count = feature_loop.candidates(FLAGS.max_disparity)
+    warp = photo_warps.WarpConfig(
+        height=FLAGS.crop_height, width=FLAGS.crop_width, max_disparity=FLAGS.max_disparity,
+        window_probability=feature_loop.window_probability(names),
+        photo_warps=FLAGS.photo_warps)
+    low, count = feature_loop.candidates(FLAGS.max_disparity, names)
     config = feature_loop.FeatureTrainConfig(
-        model_dir=FLAGS.model_dir, texture_dir=FLAGS.texture_dir,
-        mixtures=FLAGS.mixture or 'anaglyphs', batch_size=FLAGS.batch_size,
+        model_dir=FLAGS.model_dir, texture_dir=FLAGS.texture_dir, mixtures=names, batch_size=FLAGS.batch_size,
         learning_rate=FLAGS.learning_rate, num_steps=FLAGS.num_steps, min_disparity=low,
         num_disparities=count, degrade_probability=0.7 if FLAGS.degrade else 0.0,
         checkpoint_every=FLAGS.checkpoint_every, log_every=FLAGS.log_every, seed=FLAGS.seed)

@@ -1,5 +1,8 @@
 """Training of the learned matching features (`models/matching_features.py`) on
-photographs warped by drawn disparity fields (`data/photo_warps.py`).
+photographs warped by drawn disparity fields (`data/photo_warps.py`), for anaglyphs (two
+branches, one per eye) or for double images (`EchoFeatures`: the 'here' descriptor of the
+mixture at x against the 'there' descriptor at x - d; the mixing weight a of I = a L + (1 - a) R is
+drawn from `weight_range`, the warps keep positive disparities: no window alignment).
 
 Example (`draw_batch`): a warped pair, one encoding of `mixtures` drawn uniformly, mixed,
 degraded like a real file with p = `degrade_probability` (`data/degrade.py`), quantised to
@@ -18,7 +21,7 @@ at the end; re-running the same command continues from the newest.
 """
 
 import dataclasses
-from typing import Dict
+from typing import Callable, Dict, Tuple
 
 import numpy as np
 import tensorflow as tf
@@ -32,6 +35,8 @@ from mixstereo_tf.data import synthetic
 from mixstereo_tf.models import matching_features
 from mixstereo_tf.training import resumable
 
+DIPLOPIA = 'diplopia'  # The double-image encoding (`mixtures`), trained alone.
+
 
 @dataclasses.dataclass(frozen=True)
 class FeatureTrainConfig:
@@ -40,13 +45,15 @@ class FeatureTrainConfig:
   Attributes:
     model_dir: checkpoints and config.json go here.
     texture_dir: a folder of photographs (None: scikit-image's training photographs).
-    mixtures: encodings drawn from (`mixtures.parse_names` text; anaglyphs only).
+    mixtures: encodings drawn from (`mixtures.parse_names` text): anaglyphs, or 'diplopia'
+      alone (the echo features).
     batch_size: pairs per step.
     learning_rate: Adam step size.
     num_steps: optimizer steps to reach (a resumed run continues to this total).
     min_disparity, num_disparities: the candidates of the loss, signed pixels.
     logit_scale: cosine -> logit factor.
     degrade_probability: share of mixtures degraded like real files.
+    weight_range: diplopia: the left eye's weight a, drawn uniformly from this range.
     checkpoint_every, log_every: steps between checkpoints / log lines.
     seed: seed of the initialisation and of every draw.
   """
@@ -60,6 +67,7 @@ class FeatureTrainConfig:
   num_disparities: int = 96
   logit_scale: float = 10.0
   degrade_probability: float = 0.7
+  weight_range: tuple = (0.3, 0.7)
   checkpoint_every: int = 250
   log_every: int = 50
   seed: int = 0
@@ -69,8 +77,13 @@ class FeatureTrainConfig:
       raise ValueError('FeatureTrainConfig.model_dir is required.')
     names = mixtures.parse_names(self.mixtures)
     bad = [n for n in names if not mixtures.get_mixture(n).is_anaglyph]
-    if bad:
-      raise ValueError(f'FeatureTrainConfig.mixtures must be anaglyph encodings; got {bad}.')
+    if bad and names != (DIPLOPIA,):
+      raise ValueError(f'FeatureTrainConfig.mixtures must be anaglyph encodings or '
+                       f'{DIPLOPIA!r} alone; got {bad}.')
+    low, high = self.weight_range
+    if not 0.0 < low <= high < 1.0:
+      raise ValueError(f'FeatureTrainConfig.weight_range needs 0 < low <= high < 1, got '
+                       f'{self.weight_range}.')
     for field in ('batch_size', 'num_steps', 'num_disparities', 'checkpoint_every',
                   'log_every'):
       if getattr(self, field) <= 0:
@@ -80,12 +93,23 @@ class FeatureTrainConfig:
       raise ValueError('FeatureTrainConfig.learning_rate and logit_scale must be positive.')
 
 
-def candidates(max_disparity: int):
+def candidates(max_disparity: int, names: str = 'anaglyphs'):
   """(min_disparity, num_disparities) of the loss for warps of `max_disparity`
-  (`photo_warps.WarpConfig`): disparities lie in [1, 0.8 max] before window alignment,
-  which moves them down by at most 0.7 of that span, so [-5/8 max, 7/8 max) holds them."""
+  (`photo_warps.WarpConfig`) mixed by `names`: disparities lie in [1, 0.8 max] before window
+  alignment, which moves them down by at most 0.7 of that span, so [-5/8 max, 7/8 max) holds
+  them; double images are not window-aligned and search lags [1, max)."""
+  if mixtures.parse_names(names) == (DIPLOPIA,):
+    return 1, max_disparity - 1
   low = -(5 * max_disparity) // 8
   return low, (7 * max_disparity) // 8 - low
+
+
+def window_probability(names: str) -> float:
+  """The warps' chance of window alignment for `names`: none for double images, whose
+  disparities are positive by convention (docs/DESIGN.md), else the WarpConfig default."""
+  if mixtures.parse_names(names) == (DIPLOPIA,):
+    return 0.0
+  return photo_warps.WarpConfig.window_probability
 
 
 def textures(config: FeatureTrainConfig) -> synthetic.TextureAtlas:
@@ -100,25 +124,80 @@ def textures(config: FeatureTrainConfig) -> synthetic.TextureAtlas:
   return synthetic.load_textures('train')
 
 
-def _example(rng, config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas):
-  pair = photo_warps.warped_pair(int(rng.integers(2 ** 31)), warp, atlas)
+def _mix(rng, config: FeatureTrainConfig, pair) -> Tuple[np.ndarray, str]:
+  """A drawn encoding's mixture of the pair (diplopia: weight a from `weight_range`),
+  degraded with p = `degrade_probability`, 8-bit: float32 [H, W, 3] in [0, 1]; the name."""
   names = mixtures.parse_names(config.mixtures)
   name = names[rng.integers(len(names))]
-  mixed = image_range.signed_to_unit(mixtures.mix(
-      name, image_range.u8_to_signed(pair['left']), image_range.u8_to_signed(pair['right'])))
+  left, right = (image_range.u8_to_signed(pair[k]) for k in ('left', 'right'))
+  if name == DIPLOPIA:
+    weight = rng.uniform(*config.weight_range)
+    mixed = weight * np.asarray(left) + (1.0 - weight) * np.asarray(right)
+  else:
+    mixed = mixtures.mix(name, left, right)
+  mixed = image_range.signed_to_unit(mixed)
   if rng.uniform() < config.degrade_probability:
     mixed = degrade.degrade(mixed, tf.constant(rng.integers(2 ** 31, size=2), tf.int32))
-  mixture = image_range.unit_to_u8(np.asarray(mixed)).astype(np.float32) / 255.0
-  single, both, single_is_left = matching_features.eye_inputs(mixture, name)
+  return image_range.unit_to_u8(np.asarray(mixed)).astype(np.float32) / 255.0, name
+
+
+def _anaglyph_inputs(mixture: np.ndarray, name: str) -> Dict[str, np.ndarray]:
+  single, pair, single_is_left = matching_features.eye_inputs(mixture, name)
+  return {'single': single, 'pair': pair, 'single_is_left': single_is_left}
+
+
+def _anaglyph_descriptors(model, batch):
+  single, pair = model((batch['single'], batch['pair']), training=True)
+  is_left = batch['single_is_left'][:, None, None, None]
+  return tf.where(is_left, single, pair), tf.where(is_left, pair, single)
+
+
+def _echo_descriptors(model, batch):
+  return model(batch['mixture'], training=True)
+
+
+@dataclasses.dataclass(frozen=True)
+class Kind:
+  """How one kind of features is built and fed.
+
+  Attributes:
+    build: FeatureConfig -> the model with its variables.
+    inputs: (mixture float [H, W, 3], encoding name) -> the model inputs of one example.
+    descriptors: (model, batch) -> (left, right) unit descriptors [B, H, W, C].
+  """
+  build: Callable[[matching_features.FeatureConfig], tf.keras.Model]
+  inputs: Callable[[np.ndarray, str], Dict[str, np.ndarray]]
+  descriptors: Callable
+
+
+# The shipped model kinds (`artifacts/pretrained`) these features train.
+KINDS = {
+    'features': Kind(matching_features.build_features, _anaglyph_inputs,
+                     _anaglyph_descriptors),
+    'echo_features': Kind(matching_features.build_echo_features,
+                          lambda mixture, name: {'mixture': mixture}, _echo_descriptors),
+}
+
+
+def kind_name(config: FeatureTrainConfig) -> str:
+  """'echo_features' for double images, 'features' for anaglyphs."""
+  return 'echo_features' if mixtures.parse_names(config.mixtures) == (DIPLOPIA,) else 'features'
+
+
+def _example(rng, config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas):
+  pair = photo_warps.warped_pair(int(rng.integers(2 ** 31)), warp, atlas)
+  mixture, name = _mix(rng, config, pair)
+  example = KINDS[kind_name(config)].inputs(mixture, name)
+  example.update(disparity=pair['disparity_left'], valid=pair['nonocc_left'])
   flip = slice(None, None, -1) if rng.uniform() < 0.5 else slice(None)
-  return {'single': single[flip], 'pair': both[flip], 'single_is_left': single_is_left,
-          'disparity': pair['disparity_left'][flip], 'valid': pair['nonocc_left'][flip]}
+  return {k: v[flip] if np.ndim(v) >= 2 else v for k, v in example.items()}
 
 
 def draw_batch(config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas,
                step: int) -> Dict[str, np.ndarray]:
-  """Step `step`'s batch: single [B, H, W, 1], pair [B, H, W, 2], single_is_left [B],
-  disparity [B, H, W] (signed pixels), valid [B, H, W]."""
+  """Step `step`'s batch: the kind's inputs (anaglyphs: single [B, H, W, 1], pair
+  [B, H, W, 2], single_is_left [B]; diplopia: mixture [B, H, W, 3]), disparity [B, H, W]
+  (signed pixels), valid [B, H, W]."""
   rng = np.random.default_rng([config.seed, step])
   rows = [_example(rng, config, warp, atlas) for _ in range(config.batch_size)]
   return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
@@ -173,18 +252,17 @@ def train(config: FeatureTrainConfig, warp: photo_warps.WarpConfig,
                        features=feature_config.to_dict())
   atlas = textures(config)
   tf.keras.utils.set_random_seed(config.seed)
-  model = matching_features.build_features(feature_config)
+  kind = KINDS[kind_name(config)]
+  model = kind.build(feature_config)
   optimizer = tf.keras.optimizers.Adam(config.learning_rate)
   step, manager = resumable.checkpointed(model, optimizer, config.model_dir)
 
   @tf.function(reduce_retracing=True)
   def train_step(batch):
     with tf.GradientTape() as tape:
-      single, pair = model((batch['single'], batch['pair']), training=True)
-      is_left = batch['single_is_left'][:, None, None, None]
-      losses = matching_loss(tf.where(is_left, single, pair), tf.where(is_left, pair, single),
-                             batch['disparity'], batch['valid'], config.min_disparity,
-                             config.num_disparities, config.logit_scale)
+      left, right = kind.descriptors(model, batch)
+      losses = matching_loss(left, right, batch['disparity'], batch['valid'],
+                             config.min_disparity, config.num_disparities, config.logit_scale)
     grads = tape.gradient(losses['loss'], model.trainable_variables)
     optimizer.apply_gradients(zip(grads, model.trainable_variables))
     return losses

@@ -146,7 +146,7 @@ class Diplopia(Family):
   disparities (the average is symmetric in the views), layers by least squares."""
   names = ('diplopia',)
   has_classical = True
-  learned_stages = ('refiner',)
+  learned_stages = ('refiner', 'echo_features')
 
   def estimate_range(self, image, name, default, hint=None):
     """The double image's self-matching on a small copy (`diplopia.estimate_range`)."""

@@ -2,7 +2,9 @@
   * 'joint': the paper's network, run like a trained run (`unmixer.model_unmixer`);
   * 'refiner': the classical method, then the refiner on its result (`steps.refiner_unmix`);
   * 'features': the learned matching stage of anaglyphs (`learned_matching`): learned
-    descriptors of both eyes, cosine costs, SGM, views restored from the encoding.
+    descriptors of both eyes, cosine costs, SGM, views restored from the encoding;
+  * 'echo_features': the learned echo stage of double images (`learned_diplopia`): learned
+    self-similarity costs, SGM, mixing weight, layer separation.
 A model that knows several encodings detects each image's when no mixture is given.
 """
 
@@ -16,6 +18,7 @@ from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.models import refiner
 from mixstereo_tf.unmixing import families
+from mixstereo_tf.unmixing import learned_diplopia
 from mixstereo_tf.unmixing import learned_matching
 from mixstereo_tf.unmixing import steps
 from mixstereo_tf.unmixing import unmixer
@@ -39,10 +42,19 @@ def _features_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Sol
       descriptors, image, name, search, hint)
 
 
+def _echo_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
+  if base is not None:
+    raise ValueError('The learned echo stage replaces the classical self-matching; it '
+                     'cannot run on top of another stage.')
+  echo = learned_diplopia.echo_function(model)
+  return lambda image, name, search, hint: learned_diplopia.learned_unmix(
+      echo, image, name, search, hint)
+
+
 # kind -> the `steps.run` solver of a stage built on the classical method's range.
 # The optional second argument: the stage it runs on instead of the classical method.
 _SOLVERS: Dict[str, Callable[[tf.keras.Model, Optional[Solve]], Solve]] = {
-    'refiner': _refiner_solver, 'features': _features_solver}
+    'refiner': _refiner_solver, 'features': _features_solver, 'echo_features': _echo_solver}
 
 
 def pretrained_unmixer(entry: pretrained.Pretrained,
@@ -72,7 +84,8 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
 
   def solve(image, name, search, hint):
     outputs = stage(image, name, search, hint)
-    outputs['info'] = {'pretrained': entry.name + (f' on {base.name}' if base else '')}
+    outputs['info'] = dict(outputs.get('info', {}),
+                           pretrained=entry.name + (f' on {base.name}' if base else ''))
     return outputs
 
   return unmixer.image_unmixer('model', requested, trained, config, unmixer.classical_range,

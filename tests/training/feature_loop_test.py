@@ -68,8 +68,34 @@ def test_training_resumes_and_exports(tmp_path):
   assert os.path.exists(tmp_path / 'shipped' / 'weights.npz')
 
 
-@pytest.mark.parametrize('field, value', [('mixtures', 'diplopia'), ('num_steps', 0),
-                                          ('logit_scale', 0.0)])
+@pytest.mark.parametrize('field, value', [('mixtures', 'diplopia,anaglyph'),
+                                          ('mixtures', 'monocular'), ('num_steps', 0),
+                                          ('logit_scale', 0.0), ('weight_range', (0.5, 1.0))])
 def test_bad_config_is_refused(field, value):
   with pytest.raises(ValueError, match=field if field != 'mixtures' else 'anaglyph'):
     feature_loop.FeatureTrainConfig(model_dir='x', **{field: value})
+
+
+def test_double_image_batches_mix_with_a_weight_and_keep_disparities_positive(tmp_path):
+  config = feature_loop.FeatureTrainConfig(model_dir=str(tmp_path), mixtures='diplopia',
+                                           batch_size=2, degrade_probability=0.0,
+                                           weight_range=(0.3, 0.3))
+  assert feature_loop.kind_name(config) == 'echo_features'
+  assert feature_loop.candidates(16, 'diplopia') == (1, 15)
+  assert feature_loop.window_probability('diplopia') == 0.0
+  warp = photo_warps.WarpConfig(height=32, width=64, max_disparity=16, window_probability=0.0)
+  batch = feature_loop.draw_batch(config, warp, feature_loop.textures(config), 3)
+  assert set(batch) == {'mixture', 'disparity', 'valid'}
+  assert batch['mixture'].shape == (2, 32, 64, 3) and batch['disparity'].min() >= 1.0
+
+
+def test_echo_features_train_and_export_as_their_own_kind(tmp_path):
+  warp = photo_warps.WarpConfig(height=32, width=64, max_disparity=16, window_probability=0.0)
+  config = feature_loop.FeatureTrainConfig(model_dir=str(tmp_path / 'run'), mixtures='diplopia',
+                                           batch_size=1, num_steps=1, min_disparity=1,
+                                           num_disparities=15, checkpoint_every=1, log_every=1)
+  feature_loop.train(config, warp, matching_features.FeatureConfig(width=4, layers=2))
+  entry = pretrained.from_run(str(tmp_path / 'run'), str(tmp_path / 'shipped'), 'recipe', 'r')
+  assert entry.kind == 'echo_features' and entry.mixtures == ('diplopia',)
+  here, there = pretrained.load_model(entry)(tf.zeros([1, 8, 8, 3]))
+  assert here.shape == there.shape == (1, 8, 8, 4)

@@ -34,7 +34,7 @@ def test_what_each_family_says():
   assert (anaglyph.has_classical, double.has_classical, single.has_classical) == (
       True, True, False)
   assert anaglyph.learned_stages == ('refiner', 'features')
-  assert double.learned_stages == ('refiner',)
+  assert double.learned_stages == ('refiner', 'echo_features')
   assert single.learned_stages == () and single.input_is_left
   # The network plan shifts the right eye's channels of anaglyphs only.
   assert anaglyph.right_eye('anaglyph') == (1, 2)

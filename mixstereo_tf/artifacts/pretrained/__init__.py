@@ -7,7 +7,9 @@ disparity by far less than the metrics' 1-pixel thresholds). Kinds:
   * 'joint': the paper's network (`models.MixStereoNet`, config `models.ModelConfig`);
   * 'refiner': the hybrid that refines the classical result (`models.refiner`);
   * 'features': the learned matching features of anaglyphs' eyes
-    (`models.matching_features`), run by `unmixing/learned_matching.py`.
+    (`models.matching_features`), run by `unmixing/learned_matching.py`;
+  * 'echo_features': the learned echo features of double images
+    (`models.matching_features.EchoFeatures`), run by `unmixing/learned_diplopia.py`.
 `--pretrained=NAME` picks one (or a folder holding such files); `--pretrained=list` lists
 them; with no model flag at all, the tools take the first shipped model that unmixes the
 mixture asked for (`choose`).
@@ -38,9 +40,12 @@ _BUILDERS: Dict[str, Callable[[Mapping[str, Any]], tf.keras.Model]] = {
     'refiner': lambda config: refiner.build_refiner(refiner.RefinerConfig.from_dict(config)),
     'features': lambda config: matching_features.build_features(
         matching_features.FeatureConfig.from_dict(config)),
+    'echo_features': lambda config: matching_features.build_echo_features(
+        matching_features.FeatureConfig.from_dict(config)),
 }
 # kind -> the config.json section of a training run that holds its architecture.
-_SECTIONS = {'refiner': 'refiner', 'features': 'features', 'joint': 'model'}
+_SECTIONS = {'refiner': 'refiner', 'features': 'features', 'echo_features': 'features',
+             'joint': 'model'}
 KINDS = tuple(_BUILDERS)
 
 
@@ -184,7 +189,8 @@ def save(model: tf.keras.Model, folder: str, kind: str, mixture: str,
 def from_run(path: str, folder: str, recipe: str, results: str) -> Pretrained:
   """Writes the newest checkpoint of a training run (or a checkpoint prefix) as a
   pretrained folder: a joint run (`config.json` section 'model'), a refiner run (section
-  'refiner') or a matching-features run (section 'features').
+  'refiner') or a matching-features run (section 'features'; echo features when trained on
+  double images).
 
   Raises:
     ValueError: not a run, or weights that do not fit its architecture.
@@ -193,10 +199,13 @@ def from_run(path: str, folder: str, recipe: str, results: str) -> Pretrained:
   with open(os.path.join(model_dir, runs.CONFIG_FILE), encoding='utf-8') as f:
     sections = json.load(f)
   kind = next(k for k in ('refiner', 'features', 'joint') if _SECTIONS[k] in sections)
+  if kind == 'features' and not all(mixtures.get_mixture(n).is_anaglyph for n in
+                                    mixtures.parse_names(sections['train']['mixtures'])):
+    kind = 'echo_features'  # The features of double images (`feature_loop.kind_name`).
   config = sections[_SECTIONS[kind]]
   model = _BUILDERS[kind](config)
   runs.restore_model_weights(model, prefix)
-  if kind == 'features':  # Trained on whole warped pairs: no network crop to record.
+  if kind in ('features', 'echo_features'):  # Whole warped pairs: no network crop.
     return save(model, folder, kind, sections['train']['mixtures'], config, recipe, results)
   pipeline = sections['pipeline']
   return save(model, folder, kind, pipeline['mixture'], config, recipe, results,

@@ -1,0 +1,88 @@
+"""The learned echo stage of double images: learned self-similarity costs, SGM, layers.
+
+A double image I = a L + (1 - a) R shows every surface twice; its self-similarity between
+x and x - d peaks at the left disparity d_L(x) and at echoes of texture, and the classical
+method scores it by ZNCC of the high-passed mixture (`diplopia.self_matching_volume`).
+Here:
+  1. descriptors of the mixture (`matching_features.EchoFeatures`, trained on photographs
+     warped by drawn disparity fields with a random weight a; `training/feature_loop.py`);
+  2. cost volume over the positive lags: `zncc_weight` of the ZNCC cost plus the rest of
+     (1 - cosine(here(x), there(x - d))) x `cost_scale` (`feature_costs.cosine_costs`), uint8;
+  3. then as the classical method (`diplopia.unmix_diplopia` with these costs): SGM with
+     its left-right check and filling, the mixing weight (1/2, given, or estimated:
+     `diplopia_layers.resolve_weight`) and the regularised layer separation.
+Disparities are positive by convention (docs/DESIGN.md): the copy further right is the
+left eye's.
+"""
+
+import dataclasses
+from typing import Callable, Dict, Optional, Tuple
+
+import numpy as np
+import tensorflow as tf
+
+from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import feature_costs
+from mixstereo_tf.core import hints
+from mixstereo_tf.core import workers
+from mixstereo_tf.models import matching_features
+
+Echo = Callable[[tf.Tensor], tf.Tensor]
+_KEYS = ('left', 'right', 'disparity_left', 'disparity_right')
+
+
+@dataclasses.dataclass(frozen=True)
+class EchoConfig:
+  """Parameters of the learned echo stage.
+
+  Attributes:
+    cost_scale: uint8 cost units per unit of 1 - cosine.
+    zncc_weight: share of the classical ZNCC cost in the blended cost (0: learned only).
+  """
+  cost_scale: float = 32.0
+  zncc_weight: float = 0.5
+
+  def __post_init__(self):
+    if not 0 < self.cost_scale <= 127 or not 0 <= self.zncc_weight < 1:
+      raise ValueError(f'EchoConfig needs 0 < cost_scale <= 127 and zncc_weight in [0, 1); '
+                       f'got {self}.')
+
+
+def echo_function(model: matching_features.EchoFeatures) -> Echo:
+  """The model as a traced function of a mixture [1, H, W, 3] in [0, 1] -> (here, there)."""
+  signature = [tf.TensorSpec([1, None, None, 3], tf.float32)]
+  return tf.function(lambda mixture: model(mixture), input_signature=signature)
+
+
+def echo_costs(echo: Echo, config: EchoConfig = EchoConfig()) -> diplopia.Costs:
+  """The stage's cost function for `diplopia.unmix_diplopia` (steps 1-2)."""
+
+  def costs(mixture01: np.ndarray, diplopia_config: diplopia.DiplopiaConfig) -> np.ndarray:
+    matching = diplopia_config.matching
+    low = matching.min_disparity
+    high = min(matching.max_disparity, mixture01.shape[1] - 1)
+    here, there = echo(tf.constant(mixture01[None], tf.float32))
+    volume = feature_costs.cosine_costs(here[0].numpy(), there[0].numpy(), low,
+                                        high - low + 1, config.cost_scale,
+                                        threads=workers.usable_cpus())
+    if config.zncc_weight:
+      zncc = diplopia.zncc_costs(mixture01, diplopia_config)
+      volume = np.rint(config.zncc_weight * zncc.astype(np.float32) +
+                       (1 - config.zncc_weight) * volume).astype(np.uint8)
+    return volume
+
+  return costs
+
+
+def learned_unmix(echo: Echo, image: np.ndarray, name: str, search: Tuple[int, int],
+                  hint: Optional[hints.FrameHint] = None,
+                  config: EchoConfig = EchoConfig()) -> Dict[str, object]:
+  """The stage on a uint8 double image: the views, both disparities and, in 'info', the
+  mixing weight used (`hint.mixing_weight`: None 1/2, 'auto' estimated, or given)."""
+  del name  # One encoding: the double image.
+  hint = hint or hints.FrameHint()
+  out = diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
+                                costs=echo_costs(echo, config))
+  outputs = {key: out[key] for key in _KEYS}
+  outputs['info'] = {'mixing_weight': round(out['mixing_weight'], 3)}
+  return outputs
