@@ -194,9 +194,9 @@ def define_predictor() -> None:
       boolean=True))
   flags.DEFINE_string('mixing_weight', None,
                       'Double images I = a L + (1 - a) R (--mixture=diplopia): the left '
-                      "view's weight a; unset: 1/2 exactly; 'auto': estimated per image from "
-                      'the echoes of its edges; a number in (0, 1): that weight. The info '
-                      'JSON records the a used (mixing_weight).')
+                      "view's weight a; unset: 1/2 exactly; 'auto': estimated per image (a "
+                      "video: per shot) from the echoes of its edges; a number in (0, 1): that "
+                      'weight. The info JSON records the a used (mixing_weight).')
   define_pretrained()
 
 

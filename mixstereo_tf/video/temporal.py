@@ -5,6 +5,7 @@ change and consecutive disparities are close, so `VideoState` keeps, per shot:
   * the encoding and the eye order, resolved (detected for 'auto') once at the shot's first
     frame;
   * the disparity range, estimated once at the shot's first frame;
+  * a double image's mixing weight (`--mixing_weight=auto`: estimated at its first frame);
   * the previous frame's left disparity, handed to the solver as a prior (the classical
     matcher searches around it, `matcher.match(..., prior)`), except where that frame's
     match failed the left-right check (NaN: those pixels search the valid prior's range
@@ -156,11 +157,12 @@ class VideoState:
                      disparity_range=self._shot.get('disparity_range'),
                      swap_eyes=self._shot.get('swap_eyes'), prior=prior,
                      prior_window=(self.config.prior_radius, self.config.prior_spread),
-                     full_search_cells=self.config.first_frame_cells if starts else None)
+                     full_search_cells=self.config.first_frame_cells if starts else None,
+                     mixing_weight=self._shot.get('mixing_weight'))
 
   def end(self, outputs: Dict[str, object]) -> None:
-    """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range)
-    when it started the shot, and its 'disparity_left' as the next frame's prior, NaN where its
+    """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range,
+    mixing weight) when it started the shot, and its 'disparity_left' as the next frame's prior, NaN where its
     'consistent_left' (when given) says the match failed the left-right check: there the
     next frame searches the valid prior's range nearby (or everything), so a wrong
     disparity is not inherited."""
@@ -173,7 +175,8 @@ class VideoState:
       self._shot = {'mixture': info['mixture'],
                     'detection': {k: info[k] for k in kept if k in info},
                     'disparity_range': tuple(int(d) for d in search) if search else None,
-                    'swap_eyes': info['eye_order'] == 'swapped' if 'eye_order' in info else None}
+                    'swap_eyes': info['eye_order'] == 'swapped' if 'eye_order' in info else None,
+                    'mixing_weight': info.get('mixing_weight')}
     disparity = outputs.get('disparity_left')
     if disparity is None or not np.isfinite(disparity).all():
       self._prior = None

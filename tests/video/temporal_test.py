@@ -147,6 +147,18 @@ def test_a_frame_without_a_consistency_mask_hands_on_its_whole_disparity():
   np.testing.assert_array_equal(prior[consistent], disparity[consistent])
 
 
+def test_a_double_image_weight_is_estimated_once_per_shot():
+  """The first frame's mixing weight (info) is the rest of the shot's; a cut forgets it."""
+  state = temporal.VideoState()
+  frame = np.zeros((8, 8, 3), np.uint8)
+  assert state.begin(frame).mixing_weight is None
+  state.end({'info': {'mixture': 'diplopia', 'mixing_weight': 0.37}})
+  assert state.begin(frame).mixing_weight == 0.37
+  state.end({'info': {'mixture': 'diplopia', 'mixing_weight': 0.6}})  # Not a shot start.
+  assert state.begin(frame).mixing_weight == 0.37
+  assert state.begin(frame, cut=True).mixing_weight is None
+
+
 def test_prior_lowers_flicker_on_a_static_noisy_clip():
   frames = _shot(5, 8, pan=0, noise=3.0)
   flicker = {}
