@@ -77,3 +77,18 @@ def test_the_refiner_runs_on_the_learned_stage_when_given_it_as_base(scenes):
   assert 0.0 < np.median(change) < 2.0
   with pytest.raises(ValueError, match='cannot run on top of another stage'):
     shipped.pretrained_unmixer(pretrained.get(NAME), config, base=pretrained.get('anaglyph'))
+
+
+def test_the_shipped_echo_features_load_and_run_but_are_not_the_default():
+  entry = pretrained.get('diplopia_echo')
+  assert entry.kind == 'echo_features' and entry.mixtures == ('diplopia',)
+  assert 'learned_diplopia' in entry.results and entry.recipe
+  assert pretrained.choose(None, 'diplopia').name == 'diplopia'  # The refiner stays.
+  here, there = pretrained.load_model(entry)(tf.zeros([1, 16, 16, 3]))
+  assert here.shape[-1] == there.shape[-1] == entry.config['width']
+  unmix = predictors.build_unmixer(predictors.PredictorConfig(
+      mixture='diplopia', pretrained='diplopia_echo', mixing_weight=0.4))
+  image = np.random.default_rng(0).integers(0, 256, (24, 48, 3), dtype=np.uint8)
+  out = unmix(image)
+  assert out['info']['pretrained'] == 'diplopia_echo' and out['info']['mixing_weight'] == 0.4
+  assert out['left'].shape == image.shape

@@ -1,0 +1,135 @@
+"""Double-image video speed (issue "Learned diplopia"; BENCHMARKS.md section 19).
+
+    python -m experiments.benchmark_diplopia [--diplopia_frames=6]
+
+A procedural scene (held-out textures, disparities up to 51 px) rendered at 1280x720 and
+panned 4 px per frame, mixed as I = (L + R) / 2, written as an H.264 MP4 and unmixed by
+`unmix_files.unmix_inputs` as `mixstereo-unmix --mixture=diplopia --layout=sbs` does
+(decoding, unmixing, encoding), after one warm-up frame; per frame (double images have no
+temporal prior). Frames/s of the whole call and inside the unmixer, per method (`METHODS`);
+then one frame's stages timed apart (range, cost volume, SGM and post-processing, mixing
+weight, layers, seconds): classical with the range's density threshold before (1%) and
+after (2%) this issue's change, and the learned echo stage.
+"""
+
+import dataclasses
+import fractions
+import os
+import shutil
+import tempfile
+import time
+
+from absl import app
+from absl import flags
+import numpy as np
+
+from mixstereo_tf.cli import startup  # pylint: disable=unused-import
+from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.classical import parallel_sgm
+from mixstereo_tf.cli import media
+from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.data import synthetic
+from mixstereo_tf.unmixing import learned_diplopia
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import streams
+from mixstereo_tf.video import temporal
+
+flags.DEFINE_integer('diplopia_frames', 6, 'Frames of the clip.', lower_bound=1)
+FLAGS = flags.FLAGS
+
+WIDTH, HEIGHT, PAN = 1280, 720, 4
+STAGES = ('range', 'costs', 'sgm', 'weight', 'layers')
+# The classical method, the default (the refiner on the classical result, `--pretrained=
+# diplopia`) and the learned echo stage (`--pretrained=diplopia_echo`).
+METHODS = {'classical': dict(method='classical'),
+           'refiner (default)': dict(method='model', pretrained='diplopia'),
+           'learned echo': dict(method='model', pretrained='diplopia_echo')}
+
+
+def frames(count):
+  """uint8 [720, 1280, 3] double images of the panning scene."""
+  config = synthetic.SceneConfig(max_disparity=64, height=HEIGHT, width=WIDTH + PAN * count)
+  scene = synthetic.render_scene(3, config, synthetic.load_textures('heldout'))
+  both = (scene['left'].astype(np.float32) + scene['right']) / 2
+  return [np.rint(both[:, PAN * i:PAN * i + WIDTH]).astype(np.uint8) for i in range(count)]
+
+
+def video_fps(method, path, count):
+  """(frames/s, frames/s inside the unmixer) of `method` on the clip at `path`."""
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(mixture='diplopia',
+                                                                **METHODS[method]))
+  unmixer(frames(1)[0])  # Warm-up: numba's cache, tracing.
+  output_dir = tempfile.mkdtemp()
+  try:
+    report = unmix_files.unmix_inputs(unmixer, path, output_dir, media.OutputOptions(
+        layout='sbs', temporal_config=temporal.TemporalConfig(enabled=False)))
+  finally:
+    shutil.rmtree(output_dir, ignore_errors=True)
+  if report.failures or report.frames != count:
+    raise RuntimeError(f'unmix_inputs: {report}')
+  return report.frames_per_second, count / report.unmix_seconds
+
+
+def stage_seconds(image, costs, density):
+  """Seconds of each stage on one frame: range (at `density`), cost volume (`costs`), SGM
+  and post-processing, mixing weight, layers; and the range searched."""
+  image01 = image.astype(np.float32) / 255.0
+  times, start = {}, time.perf_counter()
+  search = diplopia.estimate_range(image, density=density)
+  times['range'] = time.perf_counter() - start
+  config = diplopia.DiplopiaConfig()
+  config = dataclasses.replace(config, matching=dataclasses.replace(
+      config.matching, min_disparity=search[0], max_disparity=search[1]))
+  costs(image01[:64, :128], config)  # Tracing.
+  start = time.perf_counter()
+  volume = costs(image01, config)
+  times['costs'] = time.perf_counter() - start
+  start = time.perf_counter()
+  matched = parallel_sgm.match_volume(volume, config.matching)
+  times['sgm'] = time.perf_counter() - start
+  start = time.perf_counter()
+  weight = diplopia_layers.estimate_weight(image01, matched['disparity_left'],
+                                           matched['consistent_left'])
+  times['weight'] = time.perf_counter() - start
+  start = time.perf_counter()
+  diplopia_layers.separate_layers(image01, matched['disparity_right'], weight=weight)
+  times['layers'] = time.perf_counter() - start
+  return search, times
+
+
+def main(argv):
+  del argv
+  count = FLAGS.diplopia_frames
+  root = tempfile.mkdtemp()
+  try:
+    path = os.path.join(root, 'clip.mp4')
+    writer = streams.VideoWriter(path, fractions.Fraction(25))
+    clip = frames(count)
+    for index, image in enumerate(clip):
+      writer.write(image, fractions.Fraction(index, 25))
+    writer.close()
+    print(f'| method | frames/s, {WIDTH}x{HEIGHT} | inside the unmixer |')
+    print('|---|---:|---:|')
+    for method in METHODS:
+      fps, unmix_fps = video_fps(method, path, count)
+      print(f'| {method} | {fps:.3f} | {unmix_fps:.3f} |', flush=True)
+    echo = learned_diplopia.echo_function(
+        pretrained.load_model(pretrained.get('diplopia_echo')))
+    print('\n| one frame | range searched | ' + ' | '.join(STAGES) + ' | total |')
+    print('|---|---|' + '---:|' * (len(STAGES) + 1))
+    for label, costs, density in (
+        ('classical, range density 1% (before)', diplopia.zncc_costs, 0.01),
+        ('classical, range density 2% (after)', diplopia.zncc_costs, 0.02),
+        ('learned echo, density 2%', learned_diplopia.echo_costs(echo), 0.02)):
+      search, times = stage_seconds(clip[0], costs, density)
+      print(f'| {label} | {list(search)} | ' +
+            ' | '.join(f'{times[k]:.2f}' for k in STAGES) + f' | {sum(times.values()):.2f} |',
+            flush=True)
+  finally:
+    shutil.rmtree(root, ignore_errors=True)
+
+
+if __name__ == '__main__':
+  app.run(main)
