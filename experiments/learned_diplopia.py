@@ -13,7 +13,8 @@ double image's disparities are positive by convention (docs/DESIGN.md).
      diplopia_echo`, the default); bad-1, bad-3, D1, views' RGB PSNR.
   2. I = a L + (1 - a) R for a in WEIGHTS, classical method with `--mixing_weight=auto`: the
      estimate's error, views with the estimated a against views with the true a and with
-     a = 1/2 (the separation before this issue: the ablation of the weight).
+     a = 1/2 (the separation before this issue: the ablation of the weight), and the views
+     of the default (the refiner on the classical result, trained on a = 1/2 only).
   3. Eye order: a run's eyes are in order when its left view is nearer (PSNR) to the true
      left view than to the true right one; the share over every run of 1 and 2.
   4. Ablation of the cost (I = (L + R) / 2): the ZNCC share of the blended cost
@@ -80,7 +81,7 @@ def evaluate(shared_dir):
   rows = []
   built = {m: unmixer(m) for m in METHODS}
   auto, given = unmixer('classical', 'auto'), {a: unmixer('classical', a) for a in WEIGHTS}
-  half = built['classical']
+  half, default = built['classical'], unmixer('refiner', 'auto')
   echo = learned_diplopia.echo_function(pretrained.load_model(pretrained.get('diplopia_echo')))
   for scene, data in same_channel.scenes(shared_dir):
     base = dict(scene=scene, group=same_channel.group(scene))
@@ -96,11 +97,11 @@ def evaluate(shared_dir):
     for weight in WEIGHTS:
       image = mix(data, weight)
       out = auto(image)
-      true, fixed = (score(data, run(image)) for run in (given[weight], half))
+      true, fixed, refined = (score(data, run(image)) for run in (given[weight], half, default))
+      views = {f'{name}_psnr_{eye}': got[f'psnr_{eye}'] for eye in ('left', 'right')
+               for name, got in (('true', true), ('half', fixed), ('default', refined))}
       rows.append(dict(base, part=2, method='classical auto', weight=weight,
-                       estimate=out['info']['mixing_weight'], true_psnr_left=true['psnr_left'],
-                       true_psnr_right=true['psnr_right'], half_psnr_left=fixed['psnr_left'],
-                       half_psnr_right=fixed['psnr_right'], **score(data, out)))
+                       estimate=out['info']['mixing_weight'], **views, **score(data, out)))
     rows += _cost_ablation(echo, data, base)
   return rows
 
@@ -146,7 +147,8 @@ def tables(rows):
   lines += ['', '## 2. The mixing weight: I = a L + (1 - a) R, classical method, '
             '`--mixing_weight=auto`', '',
             '| scenes | a | estimated a (mean) | mean abs error | views L / R, estimated a | '
-            'views L / R, true a | views L / R, a = 1/2 |', '| --- ' * 7 + '|']
+            'views L / R, true a | views L / R, a = 1/2 | default (refiner), estimated a |',
+            '| --- ' * 8 + '|']
   part2 = [r for r in rows if r['part'] == 2]
   for name in dict.fromkeys(r['group'] for r in part2):
     for weight in WEIGHTS:
@@ -155,7 +157,9 @@ def tables(rows):
       lines.append(f"| {name} | {weight} | {_mean(got, 'estimate'):.3f} | {error:.3f} | "
                    f"{_mean(got, 'psnr_left'):.2f} / {_mean(got, 'psnr_right'):.2f} | "
                    f"{_mean(got, 'true_psnr_left'):.2f} / {_mean(got, 'true_psnr_right'):.2f} | "
-                   f"{_mean(got, 'half_psnr_left'):.2f} / {_mean(got, 'half_psnr_right'):.2f} |")
+                   f"{_mean(got, 'half_psnr_left'):.2f} / {_mean(got, 'half_psnr_right'):.2f} | "
+                   f"{_mean(got, 'default_psnr_left'):.2f} / "
+                   f"{_mean(got, 'default_psnr_right'):.2f} |")
   lines += ['', '## 3. Eye order', '', 'Share of runs whose left view is nearer (RGB PSNR) '
             'to the true left view than to the true right one. For a != 1/2 the criterion '
             'also fails when a weak separation leaves the mixture, which then resembles the '
