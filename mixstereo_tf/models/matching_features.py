@@ -95,12 +95,26 @@ class _Branch(tf.keras.layers.Layer):
     return tf.math.l2_normalize(x, axis=-1)
 
 
-class MatchingFeatures(tf.keras.Model):
-  """The two descriptor branches (module docstring)."""
+class _Features(tf.keras.Model):
+  """A model of `FeatureConfig`-sized branches: the config and its (de)serialisation."""
 
   def __init__(self, feature_config: FeatureConfig = FeatureConfig(), **kwargs):
     super().__init__(**kwargs)
     self.feature_config = feature_config
+
+  def get_config(self):
+    return {'feature_config': self.feature_config.to_dict()}
+
+  @classmethod
+  def from_config(cls, config):
+    return cls(FeatureConfig.from_dict(config['feature_config']))
+
+
+class MatchingFeatures(_Features):
+  """The two descriptor branches (module docstring)."""
+
+  def __init__(self, feature_config: FeatureConfig = FeatureConfig(), **kwargs):
+    super().__init__(feature_config, **kwargs)
     self.single = _Branch(feature_config.width, feature_config.layers, name='single')
     self.pair = _Branch(feature_config.width, feature_config.layers, name='pair')
 
@@ -111,20 +125,12 @@ class MatchingFeatures(tf.keras.Model):
     single, pair = inputs
     return self.single(single), self.pair(pair)
 
-  def get_config(self):
-    return {'feature_config': self.feature_config.to_dict()}
 
-  @classmethod
-  def from_config(cls, config):
-    return cls(FeatureConfig.from_dict(config['feature_config']))
-
-
-class EchoFeatures(tf.keras.Model):
+class EchoFeatures(_Features):
   """Two branches over a double image's three channels (module docstring)."""
 
   def __init__(self, feature_config: FeatureConfig = FeatureConfig(), **kwargs):
-    super().__init__(**kwargs)
-    self.feature_config = feature_config
+    super().__init__(feature_config, **kwargs)
     self.here = _Branch(feature_config.width, feature_config.layers, name='here')
     self.there = _Branch(feature_config.width, feature_config.layers, name='there')
 
@@ -132,13 +138,6 @@ class EchoFeatures(tf.keras.Model):
     """mixture [B, H, W, 3] -> unit descriptors (here, there), each [B, H, W, width]."""
     del training  # No dropout or batch statistics.
     return self.here(mixture), self.there(mixture)
-
-  def get_config(self):
-    return {'feature_config': self.feature_config.to_dict()}
-
-  @classmethod
-  def from_config(cls, config):
-    return cls(FeatureConfig.from_dict(config['feature_config']))
 
 
 def build_features(feature_config: FeatureConfig = FeatureConfig()) -> MatchingFeatures:

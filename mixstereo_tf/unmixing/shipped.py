@@ -33,28 +33,28 @@ def _refiner_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Solv
       network, model.size_multiple, image, name, search, hint, base)
 
 
-def _features_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
-  if base is not None:
-    raise ValueError('The learned matching stage replaces the classical matching; it '
-                     'cannot run on top of another stage.')
-  descriptors = learned_matching.descriptor_function(model)
-  return lambda image, name, search, hint: learned_matching.learned_unmix(
-      descriptors, image, name, search, hint)
+def _replacing_solver(function_of: Callable, unmix: Callable, stage: str):
+  """The solver builder of a stage that replaces the classical matching: `function_of`
+  traces the model, `unmix(function, image, name, search, hint)` runs the stage."""
 
+  def build(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
+    if base is not None:
+      raise ValueError(f'The {stage} replaces the classical matching; it cannot run on top '
+                       'of another stage.')
+    function = function_of(model)
+    return lambda image, name, search, hint: unmix(function, image, name, search, hint)
 
-def _echo_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
-  if base is not None:
-    raise ValueError('The learned echo stage replaces the classical self-matching; it '
-                     'cannot run on top of another stage.')
-  echo = learned_diplopia.echo_function(model)
-  return lambda image, name, search, hint: learned_diplopia.learned_unmix(
-      echo, image, name, search, hint)
+  return build
 
 
 # kind -> the `steps.run` solver of a stage built on the classical method's range.
 # The optional second argument: the stage it runs on instead of the classical method.
 _SOLVERS: Dict[str, Callable[[tf.keras.Model, Optional[Solve]], Solve]] = {
-    'refiner': _refiner_solver, 'features': _features_solver, 'echo_features': _echo_solver}
+    'refiner': _refiner_solver,
+    'features': _replacing_solver(learned_matching.descriptor_function,
+                                  learned_matching.learned_unmix, 'learned matching stage'),
+    'echo_features': _replacing_solver(learned_diplopia.echo_function,
+                                       learned_diplopia.learned_unmix, 'learned echo stage')}
 
 
 def pretrained_unmixer(entry: pretrained.Pretrained,
