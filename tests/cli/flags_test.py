@@ -1,5 +1,6 @@
 """Tests for mixstereo_tf.cli.flags: flags declared once, parsing and error translation."""
 
+import contextlib
 import copy
 import re
 
@@ -51,25 +52,33 @@ def test_defaults_come_from_the_config_dataclass():
   assert cli_flags.defaults(predictors.PredictorConfig) == {
       'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,
       'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000,
-          'pretrained': None, 'swap_eyes': False, 'mixing_weight': None}
+      'pretrained': None, 'swap_eyes': False, 'mixing_weight': None}
+
+
+@contextlib.contextmanager
+def _parsing(name):
+  """FLAGS marked parsed (the other flags keep their defaults) while the test sets --name;
+  afterwards --name and, if they were not parsed before, all flags are unparsed."""
+  was_parsed = flags.FLAGS.is_parsed()
+  flags.FLAGS.mark_as_parsed()
+  try:
+    yield flags.FLAGS[name]
+  finally:
+    flags.FLAGS[name].unparse()
+    if not was_parsed:
+      flags.FLAGS.unparse_flags()
 
 
 def test_output_format_is_repeatable_and_reaches_output_options():
   cli_flags.define_output_options()
-  was_parsed = flags.FLAGS.is_parsed()
-  flags.FLAGS.mark_as_parsed()  # The other output flags keep their defaults.
-  try:
-    flags.FLAGS['output_format'].parse('mpo')
-    flags.FLAGS['output_format'].parse('anaglyph_dubois')
+  with _parsing('output_format') as output_format:
+    output_format.parse('mpo')
+    output_format.parse('anaglyph_dubois')
     assert cli_flags.output_options().formats == ('mpo', 'anaglyph_dubois')
     with pytest.raises(flags.IllegalFlagValueError, match='wiggle'):
-      flags.FLAGS['output_format'].parse('gif')
+      output_format.parse('gif')
     error = cli_flags.usage_error(ValueError("OutputOptions.formats: 'jps' twice"))
     assert str(error) == "--output_format: 'jps' twice"
-  finally:
-    flags.FLAGS['output_format'].unparse()
-    if not was_parsed:
-      flags.FLAGS.unparse_flags()
 
 
 def test_swap_eyes_is_a_boolean_flag_that_also_takes_auto():
@@ -85,27 +94,15 @@ def test_swap_eyes_is_a_boolean_flag_that_also_takes_auto():
   values.unparse_flags()
   with pytest.raises(flags.IllegalFlagValueError, match="true, false or 'auto'"):
     values(['prog', '--swap_eyes=maybe'])
-  was_parsed = flags.FLAGS.is_parsed()
-  flags.FLAGS.mark_as_parsed()
-  try:
-    flags.FLAGS['swap_eyes'].parse('auto')
+  with _parsing('swap_eyes') as swap_eyes:
+    swap_eyes.parse('auto')
     assert cli_flags.predictor_config().swap_eyes == 'auto'
-  finally:
-    flags.FLAGS['swap_eyes'].unparse()
-    if not was_parsed:
-      flags.FLAGS.unparse_flags()
 
 
 def test_unmix_predictor_config_refuses_the_oracle():
   cli_flags.define_predictor()
-  was_parsed = flags.FLAGS.is_parsed()
-  flags.FLAGS.mark_as_parsed()
-  try:
+  with _parsing('method') as method:
     assert cli_flags.unmix_predictor_config().method == flags.FLAGS.method
-    flags.FLAGS['method'].parse('oracle')
+    method.parse('oracle')
     with pytest.raises(ValueError, match='--method=oracle needs the clean stereo pair'):
       cli_flags.unmix_predictor_config()
-  finally:
-    flags.FLAGS['method'].unparse()
-    if not was_parsed:
-      flags.FLAGS.unparse_flags()
