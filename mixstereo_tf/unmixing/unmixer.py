@@ -68,10 +68,15 @@ class PredictorConfig:
 
   def __post_init__(self):
     weight = self.mixing_weight
-    if weight is not None and weight != diplopia_layers.AUTO and (
-        isinstance(weight, (bool, str)) or not 0.0 < float(weight) < 1.0):
+    if weight is None or weight == diplopia_layers.AUTO:
+      return
+    try:
+      if isinstance(weight, (bool, str)):  # Not a number ('auto' returned above).
+        raise TypeError(weight)
+      diplopia_layers.check_weight(weight)
+    except (TypeError, ValueError):
       raise ValueError(f"PredictorConfig.mixing_weight must be None, 'auto' or a number in "
-                       f'(0, 1), got {weight!r}.')
+                       f'(0, 1), got {weight!r}.') from None
 
 
 @dataclasses.dataclass(frozen=True)
