@@ -1,8 +1,9 @@
 """Training of the learned matching features (`models/matching_features.py`) on
 photographs warped by drawn disparity fields (`data/photo_warps.py`), for anaglyphs (two
 branches, one per eye) or for double images (`EchoFeatures`: the 'here' descriptor of the
-mixture at x against the 'there' descriptor at x - d; the mixing weight a of I = a L + (1 - a) R is
-drawn from `weight_range`, the warps keep positive disparities: no window alignment).
+mixture at x against the 'there' descriptor at x - d; the mixing weight a of
+I = a L + (1 - a) R is drawn from `weight_range`, the warps keep positive disparities: no
+window alignment).
 
 Example (`draw_batch`): a warped pair, one encoding of `mixtures` drawn uniformly, mixed,
 degraded like a real file with p = `degrade_probability` (`data/degrade.py`), quantised to
@@ -36,6 +37,11 @@ from mixstereo_tf.models import matching_features
 from mixstereo_tf.training import resumable
 
 DIPLOPIA = 'diplopia'  # The double-image encoding (`mixtures`), trained alone.
+
+
+def is_double(names: str) -> bool:
+  """Whether `names` (`mixtures.parse_names` text) asks for the double-image features."""
+  return mixtures.parse_names(names) == (DIPLOPIA,)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -77,7 +83,7 @@ class FeatureTrainConfig:
       raise ValueError('FeatureTrainConfig.model_dir is required.')
     names = mixtures.parse_names(self.mixtures)
     bad = [n for n in names if not mixtures.get_mixture(n).is_anaglyph]
-    if bad and names != (DIPLOPIA,):
+    if bad and not is_double(self.mixtures):
       raise ValueError(f'FeatureTrainConfig.mixtures must be anaglyph encodings or '
                        f'{DIPLOPIA!r} alone; got {bad}.')
     low, high = self.weight_range
@@ -98,7 +104,7 @@ def candidates(max_disparity: int, names: str = 'anaglyphs'):
   (`photo_warps.WarpConfig`) mixed by `names`: disparities lie in [1, 0.8 max] before window
   alignment, which moves them down by at most 0.7 of that span, so [-5/8 max, 7/8 max) holds
   them; double images are not window-aligned and search lags [1, max)."""
-  if mixtures.parse_names(names) == (DIPLOPIA,):
+  if is_double(names):
     return 1, max_disparity - 1
   low = -(5 * max_disparity) // 8
   return low, (7 * max_disparity) // 8 - low
@@ -107,7 +113,7 @@ def candidates(max_disparity: int, names: str = 'anaglyphs'):
 def window_probability(names: str) -> float:
   """The warps' chance of window alignment for `names`: none for double images, whose
   disparities are positive by convention (docs/DESIGN.md), else the WarpConfig default."""
-  if mixtures.parse_names(names) == (DIPLOPIA,):
+  if is_double(names):
     return 0.0
   return photo_warps.WarpConfig.window_probability
 
@@ -181,7 +187,7 @@ KINDS = {
 
 def kind_name(config: FeatureTrainConfig) -> str:
   """'echo_features' for double images, 'features' for anaglyphs."""
-  return 'echo_features' if mixtures.parse_names(config.mixtures) == (DIPLOPIA,) else 'features'
+  return 'echo_features' if is_double(config.mixtures) else 'features'
 
 
 def _example(rng, config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas):
