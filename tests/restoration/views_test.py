@@ -6,10 +6,10 @@ import pytest
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.restoration import views
 
-# A 1 % pull towards the prior (w_prior / w_match), to see how exact the views are when the
-# match is perfect; the default pulls 10 %, which real matches need
-# (`experiments/restoration_weight.py`).
-SLIGHT_PULL = views.RestoreConfig(prior_weight=0.01)
+# A 1 % pull towards the prior (w_prior / w_match) and no colour-line pass (tested on its
+# own below), to see how exact the views are when the match is perfect; the default pulls
+# 10 % and adds the pass, which real matches need (`experiments/restoration_weight.py`).
+SLIGHT_PULL = views.RestoreConfig(prior_weight=0.01, colour_line_weight=0.0)
 
 
 def _pair(shift=3, height=24, width=40, seed=0):
@@ -154,3 +154,52 @@ def test_only_anaglyphs_are_restored():
   left, right, d, _ = _pair()
   with pytest.raises(ValueError, match='anaglyph encoding'):
     views.restore_views(_mix('diplopia', left, right), 'diplopia', d, d)
+
+
+def _colour_line_pair(tile, shift=3, height=48, width=96):
+  """A pair whose colours lie on one line per `tile`-px tile (G and B proportional to R,
+  the slopes drawn per tile) with constant disparity `shift`."""
+  rng = np.random.default_rng(5)
+  red = rng.uniform(0.1, 0.9, (height, width + shift)).astype(np.float32)
+  slope = np.kron(rng.uniform(0.3, 1.0, (height // tile + 1, (width + shift) // tile + 1, 2)),
+                  np.ones((tile, tile, 1)))[:height, :width + shift]
+  texture = np.concatenate([red[..., None], slope * red[..., None]], -1).astype(np.float32)
+  d = np.full((height, width), float(shift), np.float32)
+  return texture[:, :width], texture[:, shift:], d
+
+
+def test_the_colour_line_pass_repairs_colours_a_wrong_disparity_warped_in():
+  left, right, d = _colour_line_pair(tile=24)
+  mixture = _mix('anaglyph', left, right)
+  # 2 px off in a 3-px band every 16 px, taken as matched in both views.
+  band = np.broadcast_to(np.arange(d.shape[1]) % 16 < 3, d.shape) & (
+      np.arange(d.shape[1]) >= 8)
+  wrong = np.where(band, d + 2.0, d).astype(np.float32)
+  matched = (np.ones(d.shape, bool),) * 2
+  errors = {}
+  for weight in (0.0, 1.0, 4.0):
+    out = views.restore_views(mixture, 'anaglyph', wrong, wrong, consistent=matched,
+                              config=views.RestoreConfig(colour_line_weight=weight))
+    # The channels the mixture copies stay exact.
+    np.testing.assert_array_equal(out['left'][..., 0], left[..., 0])
+    np.testing.assert_array_equal(out['right'][..., 1:], right[..., 1:])
+    errors[weight] = np.abs(out['left'][band][:, 1:] - left[band][:, 1:]).mean()
+  # In the band the warped colours are off by about the texture's contrast; the fit,
+  # from windows mostly outside it, knows the colour line. At w_line = w_match the solve
+  # lands about halfway between the warp and the fit, at 4 w_match near the fit.
+  assert errors[0.0] > 0.1
+  assert errors[1.0] < 0.7 * errors[0.0] and errors[4.0] < 0.45 * errors[0.0]
+
+
+def test_the_colour_line_pass_keeps_a_right_match_and_skips_network_priors():
+  left, right, d = _colour_line_pair(tile=128)  # One colour line: the fit is exact.
+  mixture = _mix('anaglyph', left, right)
+  inner = (slice(None), slice(8, -8))
+  with_pass = views.restore_views(mixture, 'anaglyph', d, d,
+                                  config=views.RestoreConfig(colour_line_weight=1.0))
+  assert np.abs(with_pass['left'][inner] - left[inner]).mean() < 0.01
+  prior = np.full_like(left, 0.5)
+  outs = [views.restore_views(mixture, 'anaglyph', d, d, prior, prior,
+                              config=views.RestoreConfig(colour_line_weight=weight))
+          for weight in (0.0, 1.0)]
+  np.testing.assert_array_equal(outs[0]['left'], outs[1]['left'])

@@ -82,8 +82,10 @@ def test_swap_eyes_gives_the_views_in_order_and_the_left_disparity():
   assert _psnr(as_given['left'], right) > _psnr(as_given['left'], left) + 10
   assert np.median(as_given['disparity_left']) == pytest.approx(-4, abs=0.5)
   assert as_given['info']['eye_order'] == 'as_given'
-  # Swapped: the views in order, the left view's disparity, positive for near.
-  assert _psnr(swapped['left'], left) > 30 and _psnr(swapped['right'], right) > 30
+  # Swapped: the views in order (exchanged they score ~18 dB; the colour-line pass costs
+  # these flat-coloured boxes 2-4 dB of the 33-35 dB an exact match restores without
+  # it), the left view's disparity, positive for near.
+  assert _psnr(swapped['left'], left) > 28 and _psnr(swapped['right'], right) > 28
   assert np.mean(np.abs(swapped['disparity_left'] - disparity) > 1) < 0.05
   assert swapped['info']['eye_order'] == 'swapped'
   assert swapped['consistent_left'].mean() > 0.8
