@@ -4,7 +4,11 @@ method, in one run (BENCHMARKS.md section 18): a 1280x720 anaglyph video end to 
 and a 4000x3000 photo (`photo_12mp.py`: wall seconds, CPU seconds, peak resident memory),
 each measurement in its own process.
 
-    python -m experiments.benchmark_learned
+    python -m experiments.benchmark_learned [--before_checkout=DIR]
+
+With --before_checkout (a checkout of an earlier commit, e.g. `git worktree add DIR REV`)
+each row's video is also run on that checkout's package (PYTHONPATH=DIR) in the same run:
+the "before" of a change.
 """
 
 import json
@@ -12,7 +16,14 @@ import os
 import subprocess
 import sys
 
+from absl import app
+from absl import flags
+
 from experiments import benchmark_video
+
+flags.DEFINE_string('before_checkout', '', 'A checkout of an earlier commit whose package '
+                    'gives each video row\'s "before" (empty: none).')
+FLAGS = flags.FLAGS
 
 ROWS = ('classical', 'refiner', 'model')
 PHOTO = {'classical': ['--photo_method=classical'],
@@ -20,12 +31,18 @@ PHOTO = {'classical': ['--photo_method=classical'],
          'model': ['--photo_method=model']}
 
 
-def _video(method):
+def _video(method, checkout=''):
+  """`benchmark_video.video_speed` of `method` in its own process, on `checkout`'s package
+  when given."""
   code = ('import json, mixstereo_tf; from experiments import benchmark_video as b; '
           f'print("RESULT", json.dumps(b.video_speed({method!r}, 1280, 720)))')
+  env = dict(os.environ, PYTHONPATH=os.path.abspath(checkout)) if checkout else None
   out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
-                       check=True).stdout
-  return json.loads(out.split('RESULT ', 1)[1])
+                       check=True, env=env).stdout
+  result = json.loads(out.split('RESULT ', 1)[1])
+  if checkout and not result['package'].startswith(os.path.abspath(checkout)):
+    raise RuntimeError(f'--before_checkout: the package came from {result["package"]}.')
+  return result
 
 
 def _photo(method):
@@ -34,18 +51,26 @@ def _photo(method):
   return out.strip().splitlines()[-1]
 
 
-def main():
+def _cells(video):
+  """The video columns: frames/s of the whole call (inside the unmixer), per variant."""
+  return [f"{video[v]['fps']:.2f} ({video[v]['unmix_fps']:.2f})"
+          for v, _ in benchmark_video.QUALITY_VARIANTS]
+
+
+def main(argv):
+  del argv
   load = os.getloadavg()
   lines = ['| method | 1280x720 video, per frame: frames/s (unmix only) | per shot + prior | '
            '4000x3000 photo |', '| --- | --- | --- | --- |']
   for method in ROWS:
-    video = _video(method)
-    cells = [f"{video[v]['fps']:.2f} ({video[v]['unmix_fps']:.2f})"
-             for v, _ in benchmark_video.QUALITY_VARIANTS]
-    lines.append(f'| {method} | ' + ' | '.join(cells) + f' | {_photo(method)} |')
+    if FLAGS.before_checkout:
+      lines.append(f'| {method}, before | ' + ' | '.join(
+          _cells(_video(method, FLAGS.before_checkout))) + ' | |')
+    lines.append(f'| {method} | ' + ' | '.join(_cells(_video(method))) +
+                 f' | {_photo(method)} |')
   print(f'load average at start {load[0]:.2f}, at end {os.getloadavg()[0]:.2f}')
   print('\n'.join(lines))
 
 
 if __name__ == '__main__':
-  main()
+  app.run(main)
