@@ -32,7 +32,9 @@ import numpy as np
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.classical import sgm
+from mixstereo_tf.classical import zncc_kernel
 from mixstereo_tf.core import image_range
+from mixstereo_tf.core import workers
 
 Costs = Callable[[np.ndarray, 'DiplopiaConfig'], np.ndarray]
 
@@ -100,6 +102,7 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
   would favour the smallest lags: the expected cost of lag d without an echo is estimated
   by the upper envelope (running maximum over lags) of the image-mean cost per lag, which
   an echo only lowers, and each lag gets the penalty (envelope maximum - envelope(d)).
+  The window sums run in `zncc_kernel` (row blocks in threads).
 
   Args:
     gray: float [H, W] mixture intensities.
@@ -114,20 +117,21 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
   high = (gray - cv2.GaussianBlur(gray, (0, 0), config.highpass_sigma)).astype(np.float32)
   window = (2 * config.window_radius + 1,) * 2
   energy = cv2.boxFilter(high * high, -1, window)
-  lags = range(matching.min_disparity, max_disparity + 1)
-  volume = np.full((len(lags), height, width), config.cost_scale, np.float32)
-  for i, d in enumerate(lags):
-    product = np.zeros_like(high)
-    product[:, d:] = high[:, d:] * high[:, :width - d]
-    shifted_energy = np.zeros_like(energy)
-    shifted_energy[:, d:] = energy[:, :width - d]
-    zncc = cv2.boxFilter(product, -1, window) / np.sqrt(energy * shifted_energy + 1e-6)
-    volume[i, :, d:] = (1.0 - zncc[:, d:]) * config.cost_scale
-  mean_cost = np.array([volume[i, :, d:].mean() for i, d in enumerate(lags)])
+  lags = np.arange(matching.min_disparity, max_disparity + 1, dtype=np.int64)
+  costs = np.empty((height, width, lags.size), np.float32)
+  threads = workers.usable_cpus(0)
+  blocks = parallel_sgm.row_blocks(height, 4 * threads)
+  sums = np.zeros((len(blocks), lags.size))
+  parallel_sgm.run_tasks(lambda k: zncc_kernel.zncc_rows(
+      *blocks[k], high, energy, lags, config.window_radius, np.float32(config.cost_scale),
+      costs, sums[k]), list(range(len(blocks))), threads)
+  mean_cost = sums.sum(axis=0) / (height * (width - lags))
   envelope = np.maximum.accumulate(mean_cost)
-  volume += (envelope.max() - envelope)[:, None, None]
-  return np.ascontiguousarray(np.clip(np.rint(volume), 0, 255).astype(np.uint8)
-                              .transpose(1, 2, 0))
+  penalty = (envelope.max() - envelope).astype(np.float32)
+  volume = np.empty(costs.shape, np.uint8)
+  parallel_sgm.run_tasks(lambda block: zncc_kernel.quantize_rows(*block, costs, penalty,
+                                                                 volume), blocks, threads)
+  return volume
 
 
 def zncc_costs(mixture01: np.ndarray, config: DiplopiaConfig) -> np.ndarray:

@@ -1,0 +1,82 @@
+"""The numba kernel of `diplopia.self_matching_volume`: ZNCC of an image against itself
+shifted, every lag, row block by row block.
+
+For lag d, the cost of pixel (y, x) is (1 - zncc) * scale with
+
+    zncc = box(h(.) h(. - d))(y, x) / sqrt(box(h^2)(y, x) box(h^2)(y, x - d) + 1e-6),
+
+box the (2r + 1)^2 mean with OpenCV's default border (reflect-101: row -1 is row 1) over
+the product taken as zero at columns x < d (what OpenCV's box filter of that zero-padded
+product gives; tests/classical/zncc_kernel_test.py transcribes it so); columns x < d get
+the cost `scale`. Rows are independent given their window,
+so row blocks run in Python threads (the kernel releases the GIL) and stay in cache.
+Values float32; lags and radii in pixels.
+"""
+
+import numba
+import numpy as np
+
+
+@numba.njit(error_model='numpy')
+def _reflect(index, size):
+  """OpenCV's BORDER_REFLECT_101 index of `index` in [0, size)."""
+  if size == 1:
+    return 0
+  while index < 0 or index >= size:
+    index = -index if index < 0 else 2 * size - 2 - index
+  return index
+
+
+@numba.njit(nogil=True, cache=True, error_model='numpy')
+def zncc_rows(y0, y1, high, energy, lags, radius, scale, out, sums):
+  """Costs of rows [y0, y1) for every lag, into out[y, x, i] (float32 [H, W, D]).
+
+  Args:
+    y0, y1: the row block.
+    high: float32 [H, W], the high-passed image.
+    energy: float32 [H, W], box(high^2) (OpenCV's boxFilter, normalised).
+    lags: int64 [D], the lags d_i >= 1.
+    radius: window radius r.
+    scale: cost units per unit of (1 - zncc).
+    out: float32 [H, W, D], written for rows [y0, y1): `scale` at columns x < d_i.
+    sums: float64 [D], each lag's cost summed over the block's columns x >= d_i
+      (accumulated: the caller's per-lag means).
+  """
+  height, width = high.shape
+  size = 2 * radius + 1
+  norm = np.float32(1.0 / (size * size))
+  column = np.empty(width, np.float32)
+  for y in range(y0, y1):
+    for i in range(lags.shape[0]):
+      d = min(lags[i], width)
+      for x in range(d):
+        out[y, x, i] = scale
+      # Vertical sums of the zero-padded product over the window's rows.
+      column[:] = 0.0
+      for dy in range(-radius, radius + 1):
+        row = _reflect(y + dy, height)
+        for x in range(d, width):
+          column[x] += high[row, x] * high[row, x - d]
+      # Horizontal window sums (reflect-101 at both ends), normalised.
+      total = np.float32(0.0)
+      for dx in range(-radius, radius + 1):
+        total += column[_reflect(dx, width)]
+      for x in range(width):
+        if x >= d:
+          denominator = np.sqrt(energy[y, x] * energy[y, x - d] + np.float32(1e-6))
+          cost = (np.float32(1.0) - total * norm / denominator) * scale
+          out[y, x, i] = cost
+          sums[i] += cost
+        total += column[_reflect(x + radius + 1, width)] - column[_reflect(x - radius,
+                                                                            width)]
+
+
+@numba.njit(nogil=True, cache=True, error_model='numpy')
+def quantize_rows(y0, y1, costs, penalty, out):
+  """out[y, x, i] = clip(rint(costs[y, x, i] + penalty[i]), 0, 255) for rows [y0, y1)
+  (uint8 [H, W, D] from float32 [H, W, D] and float32 [D])."""
+  for y in range(y0, y1):
+    for x in range(costs.shape[1]):
+      for i in range(costs.shape[2]):
+        value = np.rint(costs[y, x, i] + penalty[i])
+        out[y, x, i] = np.uint8(min(max(value, np.float32(0.0)), np.float32(255.0)))

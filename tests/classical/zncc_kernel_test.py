@@ -1,0 +1,41 @@
+"""The numba self-matching volume against the NumPy transcription of its definition."""
+
+import cv2
+import numpy as np
+
+from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import sgm
+
+
+def _reference(gray, config):
+  """`diplopia.self_matching_volume` written with OpenCV box filters, lag by lag."""
+  matching = config.matching
+  height, width = gray.shape
+  high = (gray - cv2.GaussianBlur(gray, (0, 0), config.highpass_sigma)).astype(np.float32)
+  window = (2 * config.window_radius + 1,) * 2
+  energy = cv2.boxFilter(high * high, -1, window)
+  lags = range(matching.min_disparity, min(matching.max_disparity, width - 1) + 1)
+  volume = np.full((len(lags), height, width), config.cost_scale, np.float32)
+  for i, d in enumerate(lags):
+    product = np.zeros_like(high)
+    product[:, d:] = high[:, d:] * high[:, :width - d]
+    shifted = np.zeros_like(energy)
+    shifted[:, d:] = energy[:, :width - d]
+    zncc = cv2.boxFilter(product, -1, window) / np.sqrt(energy * shifted + 1e-6)
+    volume[i, :, d:] = (1.0 - zncc[:, d:]) * config.cost_scale
+  envelope = np.maximum.accumulate([volume[i, :, d:].mean() for i, d in enumerate(lags)])
+  volume += (envelope.max() - envelope)[:, None, None]
+  return np.clip(np.rint(volume), 0, 255).astype(np.uint8).transpose(1, 2, 0)
+
+
+def test_the_kernel_equals_the_definition():
+  rng = np.random.default_rng(0)
+  texture = cv2.GaussianBlur(rng.uniform(0, 255, (48, 90)).astype(np.float32), (0, 0), 1.5)
+  gray = (texture + np.roll(texture, 7, axis=1)) / 2  # An echo at lag 7.
+  config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=2, max_disparity=30))
+  got, want = diplopia.self_matching_volume(gray, config), _reference(gray, config)
+  assert got.shape == want.shape == (48, 90, 29)
+  difference = np.abs(got.astype(int) - want)
+  # float32 sums in another order: a rounding tie may go the other way.
+  assert difference.max() <= 1 and np.mean(difference > 0) < 1e-3
+  assert np.argmin(got[:, 40:].astype(int).sum(axis=(0, 1))) == 7 - 2
