@@ -12,7 +12,8 @@ view never shows inside the image) minimises
     sum_x (a L(x) + (1 - a) L(x + d_R(x)) - I(x))^2 + smoothness * |grad L|^2
       + fidelity * |L - I|^2   (I edge-extended to the extra columns)
 (sub-pixel shifts by linear interpolation; horizontal and vertical first differences),
-solved by Jacobi-preconditioned conjugate gradients for all channels at once; then R = L
+solved by Jacobi-preconditioned conjugate gradients for all channels at once, the normal
+matrix applied without being built (`layers_kernel`, row blocks in threads); then R = L
 sampled at x + d_R. The 2-tap filter a + (1 - a) e^{i w d} is zero only for a = 1/2 (at
 w = pi (2k + 1) / d): there those frequencies are unobservable and the prior sets them.
 
@@ -30,7 +31,10 @@ from typing import Dict
 
 import cv2
 import numpy as np
-import scipy.sparse
+
+from mixstereo_tf.classical import layers_kernel
+from mixstereo_tf.classical import parallel_sgm
+from mixstereo_tf.core import workers
 
 
 @dataclasses.dataclass(frozen=True)
@@ -63,50 +67,58 @@ def check_weight(weight: float) -> float:
   return float(weight)
 
 
-def _system(d_right: np.ndarray, extra: int, smoothness: float, weight: float):
-  """The normal-equation matrix and data operator of the layer least squares."""
-  h, w = d_right.shape
-  wide = w + extra
-  index = np.arange(h * wide).reshape(h, wide)
-  rows = np.arange(h * w)
-  own = index[:, :w].ravel()
-  position = np.clip(np.arange(w)[None, :] + d_right, 0, wide - 1.001)
+def _taps(d_right: np.ndarray, wide: int):
+  """(x0 int64, frac float64) [H, W]: right pixel x reads the left layer at x0 + frac =
+  clip(x + d_R, 0, wide - 1.001) (`layers_kernel`'s data operator)."""
+  position = np.clip(np.arange(d_right.shape[1])[None, :] + d_right.astype(np.float64), 0,
+                     wide - 1.001)
   x0 = np.floor(position).astype(np.int64)
-  frac = (position - x0).ravel()
-  shifted0 = np.take_along_axis(index, x0, axis=1).ravel()
-  other = 1.0 - weight
-  data = scipy.sparse.csr_matrix(
-      (np.concatenate([np.full(h * w, weight), other * (1 - frac), other * frac]),
-       (np.tile(rows, 3), np.concatenate([own, shifted0, shifted0 + 1]))),
-      shape=(h * w, h * wide))
-  diff_x = scipy.sparse.diags([-1.0, 1.0], [0, 1], shape=(wide - 1, wide))
-  diff_y = scipy.sparse.diags([-1.0, 1.0], [0, 1], shape=(h - 1, h))
-  grad = scipy.sparse.vstack([scipy.sparse.kron(scipy.sparse.identity(h), diff_x),
-                              scipy.sparse.kron(diff_y, scipy.sparse.identity(wide))])
-  normal = (data.T @ data + smoothness * (grad.T @ grad)).tocsr()
-  return normal, data
+  return x0, position - x0
 
 
-def _conjugate_gradient(matrix, rhs: np.ndarray, start: np.ndarray, iterations: int,
-                        tolerance: float) -> np.ndarray:
-  """Jacobi-preconditioned CG on every column of `rhs` [N, C] at once (SPD `matrix`)."""
-  inverse_diagonal = 1.0 / matrix.diagonal()[:, None]
-  solution = start.copy()
-  residual = rhs - matrix @ solution
-  z = inverse_diagonal * residual
-  direction = z.copy()
-  rz = np.sum(residual * z, axis=0)
-  target = tolerance * np.linalg.norm(rhs, axis=0)
-  for _ in range(iterations):
-    if np.all(np.linalg.norm(residual, axis=0) <= target):
+def _blockwise(kernel, blocks, threads, *arguments, partial=0):
+  """kernel(y0, y1, *arguments[, sums]) on every row block, in threads; with `partial`
+  C > 0 each block gets its own float64 [C] sums, returned added up."""
+  sums = np.zeros((len(blocks), partial))
+  call = ((lambda k: kernel(*blocks[k], *arguments, sums[k])) if partial else
+          (lambda k: kernel(*blocks[k], *arguments)))
+  parallel_sgm.run_tasks(call, list(range(len(blocks))), threads)
+  return sums.sum(axis=0)
+
+
+def _conjugate_gradient(taps, weight: float, config: LayerConfig, rhs: np.ndarray,
+                        start: np.ndarray) -> np.ndarray:
+  """Jacobi-preconditioned CG for A u = rhs ([H, E, C] float64; A of `layers_kernel`,
+  every channel with its own step sizes), from `start`, until each channel's residual is
+  below config.cg_tolerance |rhs| or config.cg_iterations steps."""
+  threads = workers.usable_cpus(0)
+  blocks = parallel_sgm.row_blocks(rhs.shape[0], 4 * threads)
+  channels = rhs.shape[2]
+  operator = (*taps, weight, config.smoothness, config.fidelity)
+  inverse_diagonal = np.empty(rhs.shape[:2])
+  _blockwise(layers_kernel.diagonal_rows, blocks, threads, *operator, inverse_diagonal)
+  inverse_diagonal = 1.0 / inverse_diagonal
+  solution, product = start.copy(), np.empty_like(rhs)
+  _blockwise(layers_kernel.normal_rows, blocks, threads, solution, *operator, product,
+             partial=channels)
+  residual = rhs - product
+  direction = inverse_diagonal[..., None] * residual
+  rz = np.einsum('ijk,ijk->k', residual, direction)
+  norms = np.sqrt(np.einsum('ijk,ijk->k', residual, residual))
+  target = config.cg_tolerance * np.sqrt(np.einsum('ijk,ijk->k', rhs, rhs))
+  preconditioned = np.empty_like(rhs)
+  for _ in range(config.cg_iterations):
+    if np.all(norms <= target):
       break
-    product = matrix @ direction
-    alpha = rz / np.maximum(np.sum(direction * product, axis=0), 1e-30)
-    solution += alpha * direction
-    residual -= alpha * product
-    z = inverse_diagonal * residual
-    rz_new = np.sum(residual * z, axis=0)
-    direction = z + (rz_new / np.maximum(rz, 1e-30)) * direction
+    curvature = _blockwise(layers_kernel.normal_rows, blocks, threads, direction,
+                           *operator, product, partial=channels)
+    alpha = rz / np.maximum(curvature, 1e-30)
+    rz_new, squares = (lambda sums: (sums[:channels], sums[channels:]))(_blockwise(
+        layers_kernel.step_rows, blocks, threads, alpha, solution, residual, direction, product,
+        inverse_diagonal, preconditioned, partial=2 * channels))
+    norms = np.sqrt(squares)
+    _blockwise(layers_kernel.direction_rows, blocks, threads,
+               rz_new / np.maximum(rz, 1e-30), preconditioned, direction)
     rz = rz_new
   return solution
 
@@ -128,19 +140,17 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
   weight = check_weight(weight)
   h, w, channels = mixture01.shape
   extra = int(np.ceil(max(float(d_right.max()), 0.0))) + 2
-  normal, data = _system(d_right, extra, config.smoothness, weight)
+  x0, frac = _taps(d_right, w + extra)
   # The mixture itself, edge-extended: CG's start and the target of the fidelity prior.
-  start = np.pad(mixture01, ((0, 0), (0, extra), (0, 0)), mode='edge')
-  start = start.reshape(-1, channels).astype(np.float64)
-  normal = normal + config.fidelity * scipy.sparse.identity(normal.shape[0], format='csr')
-  rhs = data.T @ mixture01.reshape(h * w, channels).astype(np.float64) + config.fidelity * start
-  wide = _conjugate_gradient(normal, rhs, start, config.cg_iterations, config.cg_tolerance)
-  wide = wide.reshape(h, w + extra, channels)
-  position = np.clip(np.arange(w)[None, :] + d_right, 0, w + extra - 1.001)
-  x0 = np.floor(position).astype(np.int64)
-  frac = (position - x0)[..., None]
+  start = np.pad(mixture01, ((0, 0), (0, extra), (0, 0)), mode='edge').astype(np.float64)
+  rhs = np.empty_like(start)
+  threads = workers.usable_cpus(0)
+  _blockwise(layers_kernel.transpose_rows, parallel_sgm.row_blocks(h, 4 * threads), threads,
+             np.asarray(mixture01, np.float64), x0, frac, weight, rhs)
+  rhs += config.fidelity * start
+  wide = _conjugate_gradient((x0, frac), weight, config, rhs, start)
   gather = lambda cols: np.take_along_axis(wide, cols[..., None], axis=1)
-  right = (1 - frac) * gather(x0) + frac * gather(x0 + 1)
+  right = (1 - frac[..., None]) * gather(x0) + frac[..., None] * gather(x0 + 1)
   return {'left': np.clip(wide[:, :w], 0, 1).astype(np.float32),
           'right': np.clip(right, 0, 1).astype(np.float32)}
 
