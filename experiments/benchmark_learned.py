@@ -7,8 +7,8 @@ each measurement in its own process.
     python -m experiments.benchmark_learned [--before_checkout=DIR]
 
 With --before_checkout (a checkout of an earlier commit, e.g. `git worktree add DIR REV`)
-each row's video is also run on that checkout's package (PYTHONPATH=DIR) in the same run:
-the "before" of a change.
+each row's video is also run in that checkout (its package and experiments) in the same
+run: the "before" of a change.
 """
 
 import json
@@ -32,13 +32,13 @@ PHOTO = {'classical': ['--photo_method=classical'],
 
 
 def _video(method, checkout=''):
-  """`benchmark_video.video_speed` of `method` in its own process, on `checkout`'s package
-  when given."""
+  """`benchmark_video.video_speed` of `method` in its own process; given a `checkout`, run
+  there (its own experiments and package)."""
   code = ('import json, mixstereo_tf; from experiments import benchmark_video as b; '
           f'print("RESULT", json.dumps(b.video_speed({method!r}, 1280, 720)))')
   env = dict(os.environ, PYTHONPATH=os.path.abspath(checkout)) if checkout else None
   out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
-                       check=True, env=env).stdout
+                       check=True, env=env, cwd=checkout or None).stdout
   result = json.loads(out.split('RESULT ', 1)[1])
   if checkout and not result['package'].startswith(os.path.abspath(checkout)):
     raise RuntimeError(f'--before_checkout: the package came from {result["package"]}.')
