@@ -215,20 +215,23 @@ def sgm_strip(cl, cr, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
 
 
 @numba.njit(**_JIT)
-def volume_sgm(volume, min_disparity, p1, p2, dl, dr):
-  """SGM of a stored cost volume over the whole image (one strip): the winners of
-  `sgm.aggregate` and `sgm.select_disparities`, bit for bit.
+def volume_sgm(volume, min_disparity, p1, p2, dl, dr, rows=None):
+  """SGM of a stored cost volume over rows [y0, y1), winners of rows [w0, w1) written
+  (`rows` = (y0, y1, w0, w1); None: the whole image, one strip: the winners of
+  `sgm.aggregate` and `sgm.select_disparities`, bit for bit).
 
   Args:
     volume: uint8 [H, W, D] C-contiguous; volume[y, x, i] scores the left pixel x against
       the right pixel x - d_i, d_i = min_disparity + i (diplopia's self-matching costs).
     min_disparity: pixels; p1, p2: SGM penalties.
     dl, dr: float32 [H, W] outputs, as `sgm_strip`'s.
+    rows: the strip, as `sgm_strip`'s y0, y1, w0, w1.
   """
   h, w, depth = volume.shape
+  y0, y1, w0, w1 = rows or (0, h, 0, h)
   codes = np.empty((0, h, w), np.uint64)
   _strip(codes, codes, volume, np.full((h, w), min_disparity, np.int32),
-         np.full((h, w), depth, np.int32), 0, h, 0, h, p1, p2, np.uint8(0), dl, dr)
+         np.full((h, w), depth, np.int32), y0, y1, w0, w1, p1, p2, np.uint8(0), dl, dr)
 
 
 @numba.njit(**_JIT)

@@ -14,7 +14,8 @@ one linear equation per pixel in the unknown left view. Steps:
      volume of the mixture against itself (`self_matching_volume`, lags from
      `min_disparity` >= 1 up, the trivial lag 0 excluded) gives d_L, and the volume's
      diagonal search gives d_R; then the left-right check and filling of `sgm` (run by
-     the anaglyph matcher's numba kernels, `parallel_sgm.match_volume`: the same bits).
+     the anaglyph matcher's numba kernels, `parallel_sgm.match_volume`, one strip per
+     core).
   3. Layers: a regularised least squares for L given d_R, then R = L sampled at x + d_R
      (`diplopia_layers.separate_layers`, weight a = 1/2).
 
@@ -211,7 +212,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
   image = image_range.as_unit_float(mixture, 'mixture')
   gray = image.mean(axis=-1) * 255.0
   volume = (costs or zncc_costs)(image, config)
-  matched = parallel_sgm.match_volume(volume, config.matching)
+  matched = parallel_sgm.match_volume(volume, config.matching,
+                                     threads=workers.usable_cpus(0))
   weight = diplopia_layers.resolve_weight(weight, image, matched['disparity_left'],
                                           matched['consistent_left'])
   layers = diplopia_layers.separate_layers(image, matched['disparity_right'], config.layers,

@@ -10,8 +10,9 @@ row; at most `threads` strips run at a time. `strip_bounds` cuts the strips so t
 hold equal numbers of cells (equal work too), at least one per thread and more where one
 would pass `max_strip_bytes`. Each strip aggregates `overlap` extra rows above and below,
 where its vertical paths start; one strip (no overlap) reproduces `sgm.match` exactly.
-A stored cost volume (`match_volume`) runs in one strip, so it reproduces
-`sgm.match_volume` exactly.
+A stored cost volume (`match_volume`) runs in one strip by default, so it reproduces
+`sgm.match_volume` exactly; asked for `threads` > 1 it runs as many strips with the same
+overlap rule.
 """
 
 import concurrent.futures
@@ -135,27 +136,32 @@ def disparities(codes_left: np.ndarray, codes_right: np.ndarray, lo: np.ndarray,
   return dl, dr
 
 
-def match_volume(volume: np.ndarray, config: sgm.SgmConfig) -> dict:
+def match_volume(volume: np.ndarray, config: sgm.SgmConfig, threads: int = 1,
+                 overlap: int = 32) -> dict:
   """`sgm.match_volume` by the numba kernels: SGM, winners and post-processing of a
-  left-referenced cost volume, the same outputs bit for bit, in one strip.
+  left-referenced cost volume, the same outputs bit for bit in one strip (threads = 1).
 
   Args:
     volume: uint8 [H, W, D]; volume[y, x, i] scores the left pixel x against the right
       pixel x - d_i, d_i = config.min_disparity + i.
     config: penalties and left-right threshold (the census fields are unused).
+    threads, overlap: as `match_cost_volume`'s.
 
   Returns:
     As `sgm.match`.
   """
   # A right pixel no left pixel reaches: `sgm.select_disparities` gives it d_0.
   return match_cost_volume(volume, config.min_disparity, config.p1, config.p2,
-                           config.lr_threshold, unreached=float(config.min_disparity))
+                           config.lr_threshold, unreached=float(config.min_disparity),
+                           threads=threads, overlap=overlap)
 
 
 def match_cost_volume(volume: np.ndarray, min_disparity: int, p1: int, p2: int,
-                      lr_threshold: float, unreached: float = None) -> dict:
+                      lr_threshold: float, unreached: float = None, threads: int = 1,
+                      overlap: int = 32) -> dict:
   """SGM, winners and post-processing (`fast_postprocess`) of a left-referenced uint8
-  cost volume over a signed range, in one strip.
+  cost volume over a signed range, in `threads` strips of equal rows (1: one strip,
+  exact) aggregating `overlap` extra rows above and below (the matcher's rule).
 
   Args:
     volume: uint8 [H, W, D]; volume[y, x, i] scores the left pixel x against the right
@@ -171,8 +177,11 @@ def match_cost_volume(volume: np.ndarray, min_disparity: int, p1: int, p2: int,
   h, w, _ = volume.shape
   d_left = np.empty((h, w), np.float32)
   d_right = np.empty((h, w), np.float32)
-  census_sgm.volume_sgm(np.ascontiguousarray(volume, np.uint8), int(min_disparity),
-                        int(p1), int(p2), d_left, d_right)
+  volume = np.ascontiguousarray(volume, np.uint8)
+  run_tasks(lambda block: census_sgm.volume_sgm(
+      volume, int(min_disparity), int(p1), int(p2), d_left, d_right,
+      (max(0, block[0] - overlap), min(h, block[1] + overlap), *block)),
+            row_blocks(h, threads), threads)
   d_right[np.isnan(d_right)] = np.float32(
       min_disparity - 1e4 if unreached is None else unreached)
   return fast_postprocess.postprocess(d_left, d_right, lr_threshold)

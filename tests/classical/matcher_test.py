@@ -198,3 +198,17 @@ def test_bad_ranges_and_configs_raise():
   with pytest.raises(ValueError, match='MatcherConfig.range_width'):
     matcher.estimate_range(np.zeros((8, 400)), np.zeros((8, 400)),
                            matcher.MatcherConfig(range_width=40))
+
+
+def test_a_stored_volume_in_strips_changes_almost_nothing():
+  left, right, _, _ = _layered(3, 8, height=60, width=64, seed=2)
+  gray = (left[..., 0] + right.mean(-1)) / 2
+  config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=1, max_disparity=20,
+                                                          p1=8, p2=64))
+  volume = diplopia.self_matching_volume(gray, config)
+  one = parallel_sgm.match_volume(volume, config.matching)
+  # Three 20-row strips, each aggregating up to 32 rows beyond its own, in three threads:
+  # vertical paths that start there move a few winners (with 8 rows, 6% of them here).
+  three = parallel_sgm.match_volume(volume, config.matching, threads=3)
+  assert np.mean(np.abs(one['disparity_left'] - three['disparity_left']) < 0.25) > 0.99
+  assert not np.array_equal(one['disparity_left'], three['disparity_left'])
