@@ -1,6 +1,6 @@
 """Double-image video speed (issue "Learned diplopia"; BENCHMARKS.md section 19).
 
-    python -m experiments.benchmark_diplopia [--diplopia_frames=6]
+    python -m experiments.benchmark_diplopia [--diplopia_frames=6] [--before_checkout=DIR]
 
 A procedural scene (held-out textures, disparities up to 51 px) rendered at 1280x720 and
 panned 4 px per frame, mixed as I = (L + R) / 2, written as an H.264 MP4 and unmixed by
@@ -8,14 +8,19 @@ panned 4 px per frame, mixed as I = (L + R) / 2, written as an H.264 MP4 and unm
 (decoding, unmixing, encoding), after one warm-up frame; per frame (double images have no
 temporal prior). Frames/s of the whole call and inside the unmixer, per method (`METHODS`);
 then one frame's stages timed apart (range, cost volume, SGM and post-processing, mixing
-weight, layers, seconds): classical with the range's density threshold before (1%) and
-after (2%) this issue's change, and the learned echo stage.
+weight, layers, seconds) for the classical method and the learned echo stage. Each
+measurement runs in its own process; with --before_checkout (a checkout of an earlier
+commit, e.g. `git worktree add DIR REV`) each is also run there, on the same clip: the
+"before" of a change.
 """
 
 import dataclasses
 import fractions
+import json
 import os
 import shutil
+import subprocess
+import sys
 import tempfile
 import time
 
@@ -30,6 +35,7 @@ from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.core import workers
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.unmixing import learned_diplopia
 from mixstereo_tf.unmixing import predictors
@@ -37,6 +43,8 @@ from mixstereo_tf.video import streams
 from mixstereo_tf.video import temporal
 
 flags.DEFINE_integer('diplopia_frames', 6, 'Frames of the clip.', lower_bound=1)
+flags.DEFINE_string('before_checkout', '', 'A checkout of an earlier commit whose package '
+                    'gives each row\'s "before" (empty: none).')
 FLAGS = flags.FLAGS
 
 WIDTH, HEIGHT, PAN = 1280, 720, 4
@@ -87,7 +95,8 @@ def stage_seconds(image, costs, density):
   volume = costs(image01, config)
   times['costs'] = time.perf_counter() - start
   start = time.perf_counter()
-  matched = parallel_sgm.match_volume(volume, config.matching)
+  matched = parallel_sgm.match_volume(volume, config.matching,
+                                     threads=workers.usable_cpus(0))
   times['sgm'] = time.perf_counter() - start
   start = time.perf_counter()
   weight = diplopia_layers.estimate_weight(image01, matched['disparity_left'],
@@ -99,34 +108,52 @@ def stage_seconds(image, costs, density):
   return search, times
 
 
+# One frame's stage timings: label -> the expression of its costs function (`b`: this
+# module, in the process that measures).
+STAGE_ROWS = {
+    'classical': 'b.diplopia.zncc_costs',
+    'learned echo': ('b.learned_diplopia.echo_costs(b.learned_diplopia.echo_function('
+                     'b.pretrained.load_model(b.pretrained.get("diplopia_echo"))))')}
+
+
+def measure(expression: str, checkout: str = ''):
+  """The JSON value of Python `expression` (`b`: this module) in a fresh process; run in
+  `checkout` (its package and experiments) when given."""
+  code = ('import json, mixstereo_tf; from experiments import benchmark_diplopia as b; '
+          f'print("RESULT", json.dumps({expression}))')
+  env = dict(os.environ, PYTHONPATH=os.path.abspath(checkout)) if checkout else None
+  out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                       check=True, env=env, cwd=checkout or None).stdout
+  return json.loads(out.split('RESULT ', 1)[1])
+
+
 def main(argv):
   del argv
   count = FLAGS.diplopia_frames
+  runs = [('', '')] + ([(' (before)', FLAGS.before_checkout)] if FLAGS.before_checkout
+                       else [])
   root = tempfile.mkdtemp()
   try:
     path = os.path.join(root, 'clip.mp4')
     writer = streams.VideoWriter(path, fractions.Fraction(25))
-    clip = frames(count)
-    for index, image in enumerate(clip):
+    for index, image in enumerate(frames(count)):
       writer.write(image, fractions.Fraction(index, 25))
     writer.close()
     print(f'| method | frames/s, {WIDTH}x{HEIGHT} | inside the unmixer |')
     print('|---|---:|---:|')
     for method in METHODS:
-      fps, unmix_fps = video_fps(method, path, count)
-      print(f'| {method} | {fps:.3f} | {unmix_fps:.3f} |', flush=True)
-    echo = learned_diplopia.echo_function(
-        pretrained.load_model(pretrained.get('diplopia_echo')))
+      for suffix, checkout in runs:
+        fps, unmix_fps = measure(f'b.video_fps({method!r}, {path!r}, {count})', checkout)
+        print(f'| {method}{suffix} | {fps:.3f} | {unmix_fps:.3f} |', flush=True)
     print('\n| one frame | range searched | ' + ' | '.join(STAGES) + ' | total |')
     print('|---|---|' + '---:|' * (len(STAGES) + 1))
-    for label, costs, density in (
-        ('classical, range density 1% (before)', diplopia.zncc_costs, 0.01),
-        ('classical, range density 2% (after)', diplopia.zncc_costs, 0.02),
-        ('learned echo, density 2%', learned_diplopia.echo_costs(echo), 0.02)):
-      search, times = stage_seconds(clip[0], costs, density)
-      print(f'| {label} | {list(search)} | ' +
-            ' | '.join(f'{times[k]:.2f}' for k in STAGES) + f' | {sum(times.values()):.2f} |',
-            flush=True)
+    for label, costs in STAGE_ROWS.items():
+      for suffix, checkout in runs:
+        search, times = measure(f'b.stage_seconds(b.frames({count})[0], {costs}, 0.02)',
+                                checkout)
+        print(f'| {label}{suffix} | {list(search)} | ' +
+              ' | '.join(f'{times[k]:.2f}' for k in STAGES) +
+              f' | {sum(times.values()):.2f} |', flush=True)
   finally:
     shutil.rmtree(root, ignore_errors=True)
 
