@@ -14,8 +14,7 @@ double image's disparities are positive by convention (docs/DESIGN.md).
   2. I = a L + (1 - a) R for a in WEIGHTS, classical method with `--mixing_weight=auto`: the
      estimate's error, views with the estimated a against views with the true a and with
      a = 1/2 (the separation before this issue: the ablation of the weight), and the views
-     of the default (the refiner on the classical result, trained on a = 1/2 only: it
-     keeps the classical result where the estimated a lies outside its [0.45, 0.55]).
+     of the default (the refiner on the classical result, trained on a = 1/2 only).
   3. Eye order: a run's eyes are in order when its left view is nearer (PSNR) to the true
      left view than to the true right one; the share over every run of 1 and 2.
   4. Ablation of the cost (I = (L + R) / 2): the ZNCC share of the blended cost

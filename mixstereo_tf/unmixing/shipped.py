@@ -26,22 +26,18 @@ from mixstereo_tf.unmixing import unmixer
 Solve = Callable[..., Dict[str, object]]
 
 
-def _refiner_solver(model: tf.keras.Model, base: Optional[Solve],
-                    entry: pretrained.Pretrained) -> Solve:
+def _refiner_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
   signature = [tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)]
   network = tf.function(lambda x: model(x, training=False), input_signature=signature)
   return lambda image, name, search, hint: steps.refiner_unmix(
-      network, model.size_multiple, image, name, search, hint, base,
-      entry.mixing_weights)
+      network, model.size_multiple, image, name, search, hint, base)
 
 
 def _replacing_solver(function_of: Callable, unmix: Callable, stage: str):
   """The solver builder of a stage that replaces the classical matching: `function_of`
   traces the model, `unmix(function, image, name, search, hint)` runs the stage."""
 
-  def build(model: tf.keras.Model, base: Optional[Solve],
-            entry: pretrained.Pretrained) -> Solve:
-    del entry  # The stage separates with the weight it is given or estimates.
+  def build(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
     if base is not None:
       raise ValueError(f'The {stage} replaces the classical matching; it cannot run on top '
                        'of another stage.')
@@ -51,10 +47,9 @@ def _replacing_solver(function_of: Callable, unmix: Callable, stage: str):
   return build
 
 
-# kind -> the `steps.run` solver of a stage built on the classical method's range, from
-# the model, the stage it runs on instead of the classical method (or None) and its entry.
-_SOLVERS: Dict[str, Callable[[tf.keras.Model, Optional[Solve], pretrained.Pretrained],
-                             Solve]] = {
+# kind -> the `steps.run` solver of a stage built on the classical method's range.
+# The optional second argument: the stage it runs on instead of the classical method.
+_SOLVERS: Dict[str, Callable[[tf.keras.Model, Optional[Solve]], Solve]] = {
     'refiner': _refiner_solver,
     'features': _replacing_solver(learned_matching.descriptor_function,
                                   learned_matching.learned_unmix, 'learned matching stage'),
@@ -84,8 +79,8 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
   if config.mixture is None and len(trained) > 1:  # Several encodings: detect each image's.
     config = dataclasses.replace(config, mixture=steps.AUTO)
   requested = unmixer.check_mixture(config, trained)
-  base_stage = base and _SOLVERS[base.kind](pretrained.load_model(base), None, base)
-  stage = _SOLVERS[entry.kind](model, base_stage, entry)
+  base_stage = base and _SOLVERS[base.kind](pretrained.load_model(base), None)
+  stage = _SOLVERS[entry.kind](model, base_stage)
 
   def solve(image, name, search, hint):
     outputs = stage(image, name, search, hint)

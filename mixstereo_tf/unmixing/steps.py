@@ -132,22 +132,15 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
 
 def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, name: str,
                   search: Range, hint: Optional[hints.FrameHint] = None,
-                  base_stage: Optional[Callable[..., Dict[str, object]]] = None,
-                  mixing_weights: Tuple[float, float] = (0.0, 1.0)) -> Dict[str, object]:
+                  base_stage: Optional[Callable[..., Dict[str, object]]] = None
+                  ) -> Dict[str, object]:
   """The hybrid (`models/refiner.py`): the base stage (`classical_unmix`, or another with
   its signature and outputs, e.g. the learned matching stage), the refiner on its result
   (in tiles), then, for anaglyphs, both views restored from the refined disparities with,
   as the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
   the rest of the classical colour transfer (each alone was worse on some encodings);
-  'consistent_left' is that restoration's left-right check of the refined disparities.
-  A double image whose base separated it with a weight a outside `mixing_weights` (the
-  refiner's, `Pretrained.mixing_weights`) keeps the base result, info 'refiner': why."""
+  'consistent_left' is that restoration's left-right check of the refined disparities."""
   base = (base_stage or classical_unmix)(image, name, search, hint)
-  mixing = base.get('info', {}).get('mixing_weight')
-  if mixing is not None and not mixing_weights[0] <= mixing <= mixing_weights[1]:
-    base['info'] = dict(base['info'], refiner=(
-        f'skipped: mixing weight {mixing} outside its range {list(mixing_weights)}'))
-    return base
   refined = tiling.apply(network, refiner.network_input(
       image, base['left'], base['right'], base['disparity_left'],
       base['disparity_right']), multiple)

@@ -64,10 +64,6 @@ class Pretrained:
     crop: its training crop (height, width).
     default: the tools' model for the mixtures it unmixes (`choose`; chosen by the
       evaluation of its `results`).
-    mixing_weights: (low, high), the double images' left-view weights a it is used for;
-      a refiner outside them keeps its base stage's result (the diplopia refiner, trained
-      on a = 1/2 only: [0.45, 0.55], wider than the weight estimator's errors on real
-      frames, 0.005-0.035).
   """
   name: str
   folder: str
@@ -78,7 +74,6 @@ class Pretrained:
   results: str = ''
   crop: Tuple[int, int] = (0, 0)
   default: bool = False
-  mixing_weights: Tuple[float, float] = (0.0, 1.0)
 
   @property
   def mixtures(self) -> Tuple[str, ...]:
@@ -101,9 +96,7 @@ def read(folder: str) -> Pretrained:
                        kind=info['kind'], mixture=info['mixture'], config=info['config'],
                        recipe=info.get('recipe', ''), results=info.get('results', ''),
                        crop=tuple(info.get('crop', (0, 0))),
-                       default=bool(info.get('default', False)),
-                       mixing_weights=tuple(float(a) for a in
-                                            info.get('mixing_weights', (0.0, 1.0))))
+                       default=bool(info.get('default', False)))
   except (json.JSONDecodeError, KeyError, TypeError) as e:
     raise ValueError(f'{path} is not a valid pretrained model description: {e!r}') from None
   if entry.kind not in _BUILDERS:
