@@ -16,11 +16,8 @@ commit, e.g. `git worktree add DIR REV`) each is also run there, on the same cli
 
 import dataclasses
 import fractions
-import json
 import os
 import shutil
-import subprocess
-import sys
 import tempfile
 import time
 
@@ -41,10 +38,9 @@ from mixstereo_tf.unmixing import learned_diplopia
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import streams
 from mixstereo_tf.video import temporal
+from experiments import checkouts  # Defines --before_checkout.
 
 flags.DEFINE_integer('diplopia_frames', 6, 'Frames of the clip.', lower_bound=1)
-flags.DEFINE_string('before_checkout', '', 'A checkout of an earlier commit whose package '
-                    'gives each row\'s "before" (empty: none).')
 FLAGS = flags.FLAGS
 
 WIDTH, HEIGHT, PAN = 1280, 720, 4
@@ -116,17 +112,6 @@ STAGE_ROWS = {
                      'b.pretrained.load_model(b.pretrained.get("diplopia_echo"))))')}
 
 
-def measure(expression: str, checkout: str = ''):
-  """The JSON value of Python `expression` (`b`: this module) in a fresh process; run in
-  `checkout` (its package and experiments) when given."""
-  code = ('import json, mixstereo_tf; from experiments import benchmark_diplopia as b; '
-          f'print("RESULT", json.dumps({expression}))')
-  env = dict(os.environ, PYTHONPATH=os.path.abspath(checkout)) if checkout else None
-  out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
-                       check=True, env=env, cwd=checkout or None).stdout
-  return json.loads(out.split('RESULT ', 1)[1])
-
-
 def main(argv):
   del argv
   count = FLAGS.diplopia_frames
@@ -143,14 +128,16 @@ def main(argv):
     print('|---|---:|---:|')
     for method in METHODS:
       for suffix, checkout in runs:
-        fps, unmix_fps = measure(f'b.video_fps({method!r}, {path!r}, {count})', checkout)
+        fps, unmix_fps = checkouts.measure(
+            'benchmark_diplopia', f'b.video_fps({method!r}, {path!r}, {count})', checkout)
         print(f'| {method}{suffix} | {fps:.3f} | {unmix_fps:.3f} |', flush=True)
     print('\n| one frame | range searched | ' + ' | '.join(STAGES) + ' | total |')
     print('|---|---|' + '---:|' * (len(STAGES) + 1))
     for label, costs in STAGE_ROWS.items():
       for suffix, checkout in runs:
-        search, times = measure(f'b.stage_seconds(b.frames({count})[0], {costs}, 0.02)',
-                                checkout)
+        search, times = checkouts.measure(
+            'benchmark_diplopia', f'b.stage_seconds(b.frames({count})[0], {costs}, 0.02)',
+            checkout)
         print(f'| {label}{suffix} | {list(search)} | ' +
               ' | '.join(f'{times[k]:.2f}' for k in STAGES) +
               f' | {sum(times.values()):.2f} |', flush=True)

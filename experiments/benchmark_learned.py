@@ -11,7 +11,6 @@ each row's video is also run in that checkout (its package and experiments) in t
 run: the "before" of a change.
 """
 
-import json
 import os
 import subprocess
 import sys
@@ -20,9 +19,8 @@ from absl import app
 from absl import flags
 
 from experiments import benchmark_video
+from experiments import checkouts  # Defines --before_checkout.
 
-flags.DEFINE_string('before_checkout', '', 'A checkout of an earlier commit whose package '
-                    'gives each video row\'s "before" (empty: none).')
 FLAGS = flags.FLAGS
 
 ROWS = ('classical', 'refiner', 'model')
@@ -32,17 +30,10 @@ PHOTO = {'classical': ['--photo_method=classical'],
 
 
 def _video(method, checkout=''):
-  """`benchmark_video.video_speed` of `method` in its own process; given a `checkout`, run
-  there (its own experiments and package)."""
-  code = ('import json, mixstereo_tf; from experiments import benchmark_video as b; '
-          f'print("RESULT", json.dumps(b.video_speed({method!r}, 1280, 720)))')
-  env = dict(os.environ, PYTHONPATH=os.path.abspath(checkout)) if checkout else None
-  out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
-                       check=True, env=env, cwd=checkout or None).stdout
-  result = json.loads(out.split('RESULT ', 1)[1])
-  if checkout and not result['package'].startswith(os.path.abspath(checkout)):
-    raise RuntimeError(f'--before_checkout: the package came from {result["package"]}.')
-  return result
+  """`benchmark_video.video_speed` of `method` in its own process (in `checkout` when
+  given)."""
+  return checkouts.measure('benchmark_video', f'b.video_speed({method!r}, 1280, 720)',
+                           checkout)
 
 
 def _photo(method):
