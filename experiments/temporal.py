@@ -7,9 +7,10 @@ The clip: two procedural scenes of `data/synthetic.py` (held-out textures), each
 camera panning right (2 px per frame over scene A, 1 px over scene B, integer shifts so the
 ground truth moves exactly), with a cut between them; each frame is a red-cyan anaglyph with
 Gaussian noise (sigma 2 levels, new every frame, as a camera's). Every variant unmixes the
-frames in order with `--mixture=auto`, by the classical method and by the shipped model
-(`mixstereo_tf/artifacts/pretrained`, the refiner on the classical result, so the prior reaches it
-through its classical stage; per frame and per shot + prior only):
+frames in order with `--mixture=auto`, by the classical method and by the shipped default
+model (`mixstereo_tf/artifacts/pretrained`: since 2026-11-25 the learned matching stage,
+which matches a shot's first frame and leaves the others to the census matcher around the
+prior; per frame and per shot + prior only):
   * per frame: today's behaviour (encoding, range and disparity of each frame alone);
   * per shot: encoding and range once per shot (`temporal.VideoState`), no prior;
   * per shot + prior: also the previous frame's disparity as the matcher's prior, with
