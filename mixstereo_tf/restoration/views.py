@@ -212,8 +212,8 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
                   d_right: np.ndarray, fallback_left: Optional[np.ndarray] = None,
                   fallback_right: Optional[np.ndarray] = None,
                   config: RestoreConfig = RestoreConfig(),
-                  consistent: Optional[Tuple[np.ndarray, np.ndarray]] = None
-                  ) -> Dict[str, np.ndarray]:
+                  consistent: Optional[Tuple[np.ndarray, np.ndarray]] = None,
+                  colour_line: Optional[bool] = None) -> Dict[str, np.ndarray]:
   """Restores both views of an anaglyph (module docstring).
 
   Args:
@@ -225,6 +225,8 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
     config: weights.
     consistent: (left, right) bool [H, W], `lr_consistency` of these disparities at
       config.lr_threshold when already computed (an earlier restoration's); None: computed.
+    colour_line: run the colour-line pass (at config.colour_line_weight); None: only
+      without fallback priors (a network's views skip it: the paper's path).
 
   Returns:
     'left', 'right': float32 [H, W, 3] in [0, 1]; 'consistent_left', 'consistent_right':
@@ -237,14 +239,16 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
   d_left, d_right = np.asarray(d_left, np.float32), np.asarray(d_right, np.float32)
   if consistent is None:
     consistent = lr_consistency(d_left, d_right, config.lr_threshold)
-  if fallback_left is not None and fallback_right is not None:
+  given = fallback_left is not None and fallback_right is not None
+  if given:
     priors = (np.asarray(fallback_left, np.float32), np.asarray(fallback_right, np.float32))
     left, right = _solve(mixture, spec, d_left, d_right, consistent, priors, config, priors)
   else:
     left, right = _classical_solve(mixture, spec, d_left, d_right, consistent, config)
-    if config.colour_line_weight > 0 and spec.transmits_colour:
-      left, right = _colour_line_pass(mixture, spec, d_left, d_right, consistent,
-                                      (left, right), config)
+  if (not given if colour_line is None else colour_line) and (
+      config.colour_line_weight > 0 and spec.transmits_colour):
+    left, right = _colour_line_pass(mixture, spec, d_left, d_right, consistent,
+                                    (left, right), config)
   if not spec.transmits_colour:  # Gray encodings: only brightness exists to restore.
     left, right = (np.repeat(view @ np.asarray(mixtures.LUMA, np.float32)[:, None], 3, -1)
                    for view in (left, right))

@@ -87,11 +87,11 @@ class Family:
   def restore(self, mixture01: np.ndarray, name: str, d_left: np.ndarray,
               d_right: np.ndarray, prior_left: Optional[np.ndarray] = None,
               prior_right: Optional[np.ndarray] = None,
-              consistent: Optional[Tuple[np.ndarray, np.ndarray]] = None
-              ) -> Dict[str, np.ndarray]:
+              consistent: Optional[Tuple[np.ndarray, np.ndarray]] = None,
+              colour_line: Optional[bool] = None) -> Dict[str, np.ndarray]:
     """Both views from the mixture and disparities (`views.restore_views`'s arguments and
     outputs); only for families that restore views."""
-    del mixture01, d_left, d_right, prior_left, prior_right, consistent
+    del mixture01, d_left, d_right, prior_left, prior_right, consistent, colour_line
     raise ValueError(f'Mixture {name!r} has no view restoration.')
 
 
@@ -135,10 +135,10 @@ class Anaglyph(Family):
     return mixtures.get_mixture(name).eye_channels[1]
 
   def restore(self, mixture01, name, d_left, d_right, prior_left=None, prior_right=None,
-              consistent=None):
+              consistent=None, colour_line=None):
     """`views.restore_views`."""
     return views.restore_views(mixture01, name, d_left, d_right, prior_left, prior_right,
-                               consistent=consistent)
+                               consistent=consistent, colour_line=colour_line)
 
 
 class Diplopia(Family):

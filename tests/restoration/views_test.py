@@ -191,7 +191,7 @@ def test_the_colour_line_pass_repairs_colours_a_wrong_disparity_warped_in():
   assert errors[1.0] < 0.7 * errors[0.0] and errors[4.0] < 0.45 * errors[0.0]
 
 
-def test_the_colour_line_pass_keeps_a_right_match_and_skips_network_priors():
+def test_the_colour_line_pass_keeps_a_right_match_and_skips_network_priors_unless_asked():
   left, right, d = _colour_line_pair(tile=128)  # One colour line: the fit is exact.
   mixture = _mix('anaglyph', left, right)
   inner = (slice(None), slice(8, -8))
@@ -203,3 +203,8 @@ def test_the_colour_line_pass_keeps_a_right_match_and_skips_network_priors():
                               config=views.RestoreConfig(colour_line_weight=weight))
           for weight in (0.0, 1.0)]
   np.testing.assert_array_equal(outs[0]['left'], outs[1]['left'])
+  # Asked for (the refiner's restoration), the pass also runs over a network's priors.
+  asked = views.restore_views(mixture, 'anaglyph', d, d, prior, prior, colour_line=True)
+  assert not np.array_equal(asked['left'], outs[0]['left'])
+  error = lambda out: np.abs(out['left'][inner] - left[inner]).mean()
+  assert error(asked) < error(outs[0]) + 0.01
