@@ -16,12 +16,12 @@ view's channels are warped in wherever they match, and what neither fixes comes 
 prior: for the classical method a local linear colour transfer from the view's own
 mixture channels, fitted where the views match (`colour_transfer`; standing in for Joulin
 & Kang's occlusion handling, which the paper adopts); for the model, the separation
-network's views. Without a network, a last solve (the colour-line pass) takes as its
-prior the colour transfer refitted on the restored views: colours a wrong but consistent
-disparity warped in are pulled towards what each view's own channels explain locally.
-Encodings that transmit no colour (`MixtureSpec.transmits_colour`: the
-gray ones) give gray views, their luminance. Clipped channels of the Dubois encodings
-(0 or 255) are not used as observations.
+network's views. Without a network's priors (or when asked: the refiner's), a last
+solve (the colour-line pass) takes as its prior the colour transfer refitted on the
+restored views: colours a wrong but consistent disparity warped in are pulled towards
+what each view's own channels explain locally. Encodings that transmit no colour
+(`MixtureSpec.transmits_colour`: the gray ones) give gray views, their luminance.
+Clipped channels of the Dubois encodings (0 or 255) are not used as observations.
 
 Images are float32 [H, W, 3] in [0, 1]; disparities float32 [H, W] in pixels, signed (the
 left pixel x matches the right pixel x - d_L, the right pixel x matches the left x + d_R).
@@ -60,7 +60,8 @@ class RestoreConfig:
       reduced this many times (`colour_transfer.apply_reduced_fit`; 1: full size, exact).
     colour_line_weight: w_line, the prior weight of a last solve whose prior is the colour
       transfer refitted on the restored views (the colour-line pass, `_colour_line_pass`);
-      0: no such pass (the restoration before it). Only without a network's priors.
+      0: no such pass (the restoration before it). By default only without fallback
+      priors (`restore_views`' colour_line).
       2 (not the paper's): best mean and smallest largest regret over every encoding on
       validation examples, procedural and photo warps
       (`experiments/results/colour_line_weight.md`).
