@@ -122,16 +122,13 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
   costs = np.empty((height, width, lags.size), np.float32)
   threads = workers.usable_cpus(0)
   blocks = parallel_sgm.row_blocks(height, 4 * threads)
-  sums = np.zeros((len(blocks), lags.size))
-  parallel_sgm.run_tasks(lambda k: zncc_kernel.zncc_rows(
-      *blocks[k], high, energy, lags, config.window_radius, np.float32(config.cost_scale),
-      costs, sums[k]), list(range(len(blocks))), threads)
-  mean_cost = sums.sum(axis=0) / (height * (width - lags))
-  envelope = np.maximum.accumulate(mean_cost)
+  sums = parallel_sgm.run_blocks(zncc_kernel.zncc_rows, blocks, threads, high, energy, lags,
+                                 config.window_radius, np.float32(config.cost_scale), costs,
+                                 partial=lags.size)
+  envelope = np.maximum.accumulate(sums / (height * (width - lags)))  # Mean cost per lag.
   penalty = (envelope.max() - envelope).astype(np.float32)
   volume = np.empty(costs.shape, np.uint8)
-  parallel_sgm.run_tasks(lambda block: zncc_kernel.quantize_rows(*block, costs, penalty,
-                                                                 volume), blocks, threads)
+  parallel_sgm.run_blocks(zncc_kernel.quantize_rows, blocks, threads, costs, penalty, volume)
   return volume
 
 

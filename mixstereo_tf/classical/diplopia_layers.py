@@ -76,31 +76,21 @@ def _taps(d_right: np.ndarray, wide: int):
   return x0, position - x0
 
 
-def _blockwise(kernel, blocks, threads, *arguments, partial=0):
-  """kernel(y0, y1, *arguments[, sums]) on every row block, in threads; with `partial`
-  C > 0 each block gets its own float64 [C] sums, returned added up."""
-  sums = np.zeros((len(blocks), partial))
-  call = ((lambda k: kernel(*blocks[k], *arguments, sums[k])) if partial else
-          (lambda k: kernel(*blocks[k], *arguments)))
-  parallel_sgm.run_tasks(call, list(range(len(blocks))), threads)
-  return sums.sum(axis=0)
-
-
 def _conjugate_gradient(taps, weight: float, config: LayerConfig, rhs: np.ndarray,
-                        start: np.ndarray) -> np.ndarray:
+                        start: np.ndarray, blocks, threads: int) -> np.ndarray:
   """Jacobi-preconditioned CG for A u = rhs ([H, E, C] float64; A of `layers_kernel`,
   every channel with its own step sizes), from `start`, until each channel's residual is
-  below config.cg_tolerance |rhs| or config.cg_iterations steps."""
-  threads = workers.usable_cpus(0)
-  blocks = parallel_sgm.row_blocks(rhs.shape[0], 4 * threads)
+  below config.cg_tolerance |rhs| or config.cg_iterations steps; the kernels run on the
+  row `blocks` in `threads` threads (`parallel_sgm.run_blocks`)."""
+  run = lambda kernel, *arguments, partial=0: parallel_sgm.run_blocks(
+      kernel, blocks, threads, *arguments, partial=partial)
   channels = rhs.shape[2]
   operator = (*taps, weight, config.smoothness, config.fidelity)
   inverse_diagonal = np.empty(rhs.shape[:2])
-  _blockwise(layers_kernel.diagonal_rows, blocks, threads, *operator, inverse_diagonal)
+  run(layers_kernel.diagonal_rows, *operator, inverse_diagonal)
   inverse_diagonal = 1.0 / inverse_diagonal
   solution, product = start.copy(), np.empty_like(rhs)
-  _blockwise(layers_kernel.normal_rows, blocks, threads, solution, *operator, product,
-             partial=channels)
+  run(layers_kernel.normal_rows, solution, *operator, product, partial=channels)
   residual = rhs - product
   direction = inverse_diagonal[..., None] * residual
   rz = np.einsum('ijk,ijk->k', residual, direction)
@@ -110,15 +100,14 @@ def _conjugate_gradient(taps, weight: float, config: LayerConfig, rhs: np.ndarra
   for _ in range(config.cg_iterations):
     if np.all(norms <= target):
       break
-    curvature = _blockwise(layers_kernel.normal_rows, blocks, threads, direction,
-                           *operator, product, partial=channels)
+    curvature = run(layers_kernel.normal_rows, direction, *operator, product,
+                    partial=channels)
     alpha = rz / np.maximum(curvature, 1e-30)
-    rz_new, squares = (lambda sums: (sums[:channels], sums[channels:]))(_blockwise(
-        layers_kernel.step_rows, blocks, threads, alpha, solution, residual, direction, product,
-        inverse_diagonal, preconditioned, partial=2 * channels))
-    norms = np.sqrt(squares)
-    _blockwise(layers_kernel.direction_rows, blocks, threads,
-               rz_new / np.maximum(rz, 1e-30), preconditioned, direction)
+    sums = run(layers_kernel.step_rows, alpha, solution, residual, direction, product,
+               inverse_diagonal, preconditioned, partial=2 * channels)
+    rz_new, norms = sums[:channels], np.sqrt(sums[channels:])
+    run(layers_kernel.direction_rows, rz_new / np.maximum(rz, 1e-30), preconditioned,
+        direction)
     rz = rz_new
   return solution
 
@@ -145,10 +134,11 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
   start = np.pad(mixture01, ((0, 0), (0, extra), (0, 0)), mode='edge').astype(np.float64)
   rhs = np.empty_like(start)
   threads = workers.usable_cpus(0)
-  _blockwise(layers_kernel.transpose_rows, parallel_sgm.row_blocks(h, 4 * threads), threads,
-             np.asarray(mixture01, np.float64), x0, frac, weight, rhs)
+  blocks = parallel_sgm.row_blocks(h, 4 * threads)
+  parallel_sgm.run_blocks(layers_kernel.transpose_rows, blocks, threads,
+                          np.asarray(mixture01, np.float64), x0, frac, weight, rhs)
   rhs += config.fidelity * start
-  wide = _conjugate_gradient((x0, frac), weight, config, rhs, start)
+  wide = _conjugate_gradient((x0, frac), weight, config, rhs, start, blocks, threads)
   gather = lambda cols: np.take_along_axis(wide, cols[..., None], axis=1)
   right = (1 - frac[..., None]) * gather(x0) + frac[..., None] * gather(x0 + 1)
   return {'left': np.clip(wide[:, :w], 0, 1).astype(np.float32),

@@ -43,6 +43,17 @@ def row_blocks(height: int, threads: int):
   return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
+def run_blocks(kernel, blocks, threads: int, *arguments, partial: int = 0) -> np.ndarray:
+  """kernel(y0, y1, *arguments[, sums]) on every row block of `blocks` (`row_blocks`), on
+  `threads` threads; with `partial` C > 0 each block gets its own float64 [C] sums (the
+  kernel's last argument), returned added up."""
+  sums = np.zeros((len(blocks), partial))
+  call = ((lambda k: kernel(*blocks[k], *arguments, sums[k])) if partial else
+          (lambda k: kernel(*blocks[k], *arguments)))
+  run_tasks(call, list(range(len(blocks))), threads)
+  return sums.sum(axis=0)
+
+
 def census_codes(channels: np.ndarray, height: int, width: int,
                  threads: int) -> np.ndarray:
   """Census codes of every channel, as `sgm.census_transform` (reflected borders).
