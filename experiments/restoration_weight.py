@@ -16,8 +16,8 @@ in the refiner's examples, the classical matcher's for the warps) are restored w
 candidate weight; the score of a weight is the mean RGB PSNR of both views, per encoding
 and scale weighted 0.3 clean / 0.7 degraded. Reported: each weight's mean over encodings
 and scales (the other fields at their defaults) and its largest and mean regret (the dB
-it loses to the best weight of an encoding and scale). The default is the weight of the smallest largest regret
-when its mean is within 0.05 dB of the best.
+it loses to the best weight of an encoding and scale). The default is the weight of the
+smallest largest regret when its mean is within 0.05 dB of the best.
 """
 
 import collections
@@ -57,6 +57,20 @@ CLEAN_SHARE = 0.3
 SCALES = (('160x320', 0.0, 1.0), ('320x640', 1.0, 0.5))  # (name, large_probability, share)
 
 
+def _candidate_psnrs(image: np.ndarray, name: str, d_left: np.ndarray, d_right: np.ndarray,
+                     truth, field: str) -> np.ndarray:
+  """Per candidate of `field`, the mean RGB PSNR of both views of uint8 anaglyph `image`
+  restored from these disparities against truth['left'], truth['right']."""
+  mixture = image.astype(np.float32) / 255.0
+  row = []
+  for weight in CANDIDATES[field]:
+    restored = views.restore_views(mixture, name, d_left, d_right,
+                                   config=views.RestoreConfig(**{field: weight}))
+    row.append(np.mean([metrics.psnr(restored[key] * 255.0, truth[key].astype(np.float64))
+                        for key in ('left', 'right')]))
+  return np.array(row)
+
+
 def _scores(name: str, large: float, count: int, field: str
             ) -> Dict[bool, List[np.ndarray]]:
   """{clean: [per example, the mean view PSNR of every candidate of `field`]} for one
@@ -67,16 +81,9 @@ def _scores(name: str, large: float, count: int, field: str
   out = collections.defaultdict(list)
   for index in range(FIRST_INDEX, FIRST_INDEX + count):
     example = refiner_data.make_example(index, config, textures)
-    mixture = example['mixture'].astype(np.float32) / 255.0
-    row = []
-    for weight in CANDIDATES[field]:
-      restored = views.restore_views(
-          mixture, name, example['classical_disparity_left'],
-          example['classical_disparity_right'],
-          config=views.RestoreConfig(**{field: weight}))
-      row.append(np.mean([metrics.psnr(restored[key] * 255.0, example[key].astype(np.float64))
-                          for key in ('left', 'right')]))
-    out[example['clean']].append(np.array(row))
+    out[example['clean']].append(_candidate_psnrs(
+        example['mixture'], name, example['classical_disparity_left'],
+        example['classical_disparity_right'], example, field))
   return out
 
 
@@ -91,16 +98,9 @@ def _photo_scores(name: str, count: int, field: str, atlas) -> Dict[bool, List[n
   for seed in range(PHOTO_SEED, PHOTO_SEED + count):
     pair = photo_warps.warped_pair(seed, PHOTO_WARP, atlas)
     image = realworld.make_anaglyph(pair, name, 'ours')
-    mixture = image.astype(np.float32) / 255.0
     matched = anaglyph.unmix_anaglyph(image, name)
-    row = []
-    for weight in CANDIDATES[field]:
-      restored = views.restore_views(
-          mixture, name, matched['disparity_left'], matched['disparity_right'],
-          config=views.RestoreConfig(**{field: weight}))
-      row.append(np.mean([metrics.psnr(restored[key] * 255.0, pair[key].astype(np.float64))
-                          for key in ('left', 'right')]))
-    rows.append(np.array(row))
+    rows.append(_candidate_psnrs(image, name, matched['disparity_left'],
+                                 matched['disparity_right'], pair, field))
   return {True: rows, False: []}
 
 

@@ -8,9 +8,9 @@ For lag d, the cost of pixel (y, x) is (1 - zncc) * scale with
 box the (2r + 1)^2 mean with OpenCV's default border (reflect-101: row -1 is row 1) over
 the product taken as zero at columns x < d (what OpenCV's box filter of that zero-padded
 product gives; tests/classical/zncc_kernel_test.py transcribes it so); columns x < d get
-the cost `scale`. Rows are independent given their window,
-so row blocks run in Python threads (the kernel releases the GIL) and stay in cache.
-Values float32; lags and radii in pixels.
+the cost `scale`. Rows are independent given their window, so row blocks run in Python
+threads (the kernel releases the GIL) and stay in cache. Values float32; lags and radii in
+pixels.
 """
 
 import numba

@@ -246,8 +246,9 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
     left, right = _solve(mixture, spec, d_left, d_right, consistent, priors, config, priors)
   else:
     left, right = _classical_solve(mixture, spec, d_left, d_right, consistent, config)
-  if (not given if colour_line is None else colour_line) and (
-      config.colour_line_weight > 0 and spec.transmits_colour):
+  if colour_line is None:
+    colour_line = not given
+  if colour_line and config.colour_line_weight > 0 and spec.transmits_colour:
     left, right = _colour_line_pass(mixture, spec, d_left, d_right, consistent,
                                     (left, right), config)
   if not spec.transmits_colour:  # Gray encodings: only brightness exists to restore.
