@@ -4,9 +4,12 @@
     python -m mixstereo_tf.train $common --model_dir=runs/abl_w32
     python -m mixstereo_tf.train $common --feature_width=16 --model_dir=runs/abl_w16
     python -m mixstereo_tf.train $common --nophoto_warps --model_dir=runs/abl_nowarp
+    python -m mixstereo_tf.train $common --feature_layers=6 \
+        --feature_dilations=1,1,2,4,1,1 --model_dir=runs/abl_dil
     python -m experiments.matching_ablations --shared_dir=../shared/stereo_samples \
         --ablation_runs="recipe (width 32, photo warps)=runs/abl_w32,width 16=runs/abl_w16,\
-no photo warps (procedural scenes)=runs/abl_nowarp"
+no photo warps (procedural scenes)=runs/abl_nowarp,6 layers dilated 1-1-2-4-1-1 \
+(receptive field 21)=runs/abl_dil"
 
 Every run is cut to the same number of steps (the shipped recipe trains 3000), so the rows
 compare the choices, not the training time. Each run's newest checkpoint is scored as the

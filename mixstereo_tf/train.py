@@ -143,7 +143,8 @@ flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner', 'features'), "jo
                   '--mixture=diplopia the echo features of double images '
                   '(models/matching_features.py; trained on photographs of --texture_dir warped '
                   'by drawn disparity fields, --crop_height x --crop_width, --max_disparity, '
-                  '--mixture, --degrade, --feature_width, --feature_layers; not in the paper).')
+                  '--mixture, --degrade, --feature_width, --feature_layers, --feature_dilations; '
+                  'not in the paper).')
 flags.DEFINE_integer('feature_width', matching_features.FeatureConfig.width,
                      '--architecture=features: descriptor length (channels per convolution).')
 flags.DEFINE_boolean('photo_warps', photo_warps.WarpConfig.photo_warps,
@@ -152,6 +153,9 @@ flags.DEFINE_boolean('photo_warps', photo_warps.WarpConfig.photo_warps,
                      'scenes textured from the same photographs (the ablation).')
 flags.DEFINE_integer('feature_layers', matching_features.FeatureConfig.layers,
                      '--architecture=features: 3x3 convolutions per eye branch.')
+flags.DEFINE_list('feature_dilations', list(matching_features.FeatureConfig.dilations),
+                  '--architecture=features: the dilation of each of the --feature_layers '
+                  'convolutions (comma-separated); empty: all 1.')
 
 _RENAMED = {'DataConfig.split_list': 'train_list'}
 
@@ -246,7 +250,9 @@ def _train_features() -> None:
         learning_rate=FLAGS.learning_rate, num_steps=FLAGS.num_steps, min_disparity=low,
         num_disparities=count, degrade_probability=0.7 if FLAGS.degrade else 0.0,
         checkpoint_every=FLAGS.checkpoint_every, log_every=FLAGS.log_every, seed=FLAGS.seed)
-    features = matching_features.FeatureConfig(FLAGS.feature_width, FLAGS.feature_layers)
+    features = matching_features.FeatureConfig(
+        FLAGS.feature_width, FLAGS.feature_layers,
+        _ints(FLAGS.feature_dilations, 'feature_dilations'))
   except ValueError as e:
     raise cli_flags.usage_error(e) from None
   logging.info('Training the matching features for %d steps.', config.num_steps)

@@ -9,6 +9,7 @@ import sys
 
 import cv2
 import numpy as np
+import pytest
 import tensorflow as tf
 
 from mixstereo_tf import models
@@ -145,3 +146,18 @@ def test_the_matching_features_flagfile_runs_on_a_tiny_photo_folder(tmp_path):
   result = subprocess.run(command, cwd=REPO, env=env, capture_output=True, text=True,
                           timeout=300, check=False)
   assert result.returncode != 0 and 'teddy.png looks like an evaluation image' in result.stderr
+
+
+def test_matching_validation_variants_parse_and_bad_ones_name_the_flag():
+  from experiments import matching_validation  # pylint: disable=import-outside-toplevel
+  label, model, config = matching_validation.parse_variant(
+      'census 0.3=runs/x@census_weight=0.3@p2=64')
+  assert (label, model, config.census_weight, config.p2, config.p1) == (
+      'census 0.3', 'runs/x', 0.3, 64, 12)
+  assert isinstance(config.p2, int)
+  _, model, config = matching_validation.parse_variant('c=census@p1=20@census_width=7')
+  assert (model, type(config).__name__, config.p1, config.census_width) == (
+      'census', 'MatcherConfig', 20, 7)
+  for bad in ('noequals', '=runs/x', 'a=runs/x@nofield=1', 'a=runs/x@p1='):
+    with pytest.raises(ValueError, match='--variants'):
+      matching_validation.parse_variant(bad)

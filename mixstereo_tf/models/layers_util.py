@@ -4,9 +4,10 @@ import tensorflow as tf
 
 
 def conv2d(filters: int, kernel: int, strides: int = 1, activation='relu', use_bias=True,
-           name=None) -> tf.keras.layers.Layer:
+           name=None, dilation: int = 1) -> tf.keras.layers.Layer:
   return tf.keras.layers.Conv2D(filters, kernel, strides=strides, padding='same',
-                                activation=activation, use_bias=use_bias, name=name)
+                                activation=activation, use_bias=use_bias, name=name,
+                                dilation_rate=dilation)
 
 
 def conv2d_transpose(filters: int, kernel: int, name=None) -> tf.keras.layers.Layer:

@@ -10,7 +10,8 @@ of an anaglyph live in different channels:
   * the 'pair' branch sees the eye carried by two channels (green and blue of red-cyan ...).
 Each branch: per-channel standardisation over the image (zero mean, unit deviation: the
 channels' different gains and offsets go), `layers` 3x3 convolutions of `width` channels
-with ReLU between them (receptive field 2 * layers + 1 pixels), and L2 normalisation, so a
+with ReLU between them (optionally dilated: receptive field 1 + 2 * sum(dilations)
+pixels, 2 * layers + 1 undilated), and L2 normalisation, so a
 descriptor is a unit vector and cost = 1 - cosine lies in [0, 2].
 
 Input: single [B, H, W, 1], pair [B, H, W, 2], intensities in any linear unit. Output: two
@@ -40,14 +41,31 @@ class FeatureConfig:
   Attributes:
     width: channels of every convolution (descriptor length).
     layers: 3x3 convolutions per branch.
+    dilations: each convolution's dilation, `layers` entries (a wider context at the same
+      cost; not MC-CNN's); empty: all 1 (the shipped features).
   """
   width: int = 32
   layers: int = 4
+  dilations: Tuple[int, ...] = ()
 
   def __post_init__(self):
+    object.__setattr__(self, 'dilations', tuple(int(d) for d in self.dilations))
     if self.width <= 0 or self.layers <= 0:
       raise ValueError(f'FeatureConfig.width and layers must be positive, got {self.width} '
                        f'and {self.layers}.')
+    if self.dilations and (len(self.dilations) != self.layers or min(self.dilations) < 1):
+      raise ValueError(f'FeatureConfig.dilations needs {self.layers} entries >= 1 (one per '
+                       f'layer) or none, got {self.dilations}.')
+
+  @property
+  def layer_dilations(self) -> Tuple[int, ...]:
+    """The dilation of each convolution (`dilations`, or all 1)."""
+    return self.dilations or (1,) * self.layers
+
+  @property
+  def receptive_field(self) -> int:
+    """Pixels across the window one descriptor sees."""
+    return 1 + 2 * sum(self.layer_dilations)
 
   def to_dict(self) -> Dict[str, Any]:
     """JSON-ready fields."""
@@ -82,11 +100,13 @@ def standardise(image: tf.Tensor) -> tf.Tensor:
 class _Branch(tf.keras.layers.Layer):
   """standardise -> (conv 3x3, ReLU) x (layers - 1) -> conv 3x3 -> L2 normalise."""
 
-  def __init__(self, width: int, layers: int, **kwargs):
+  def __init__(self, config: FeatureConfig, **kwargs):
     super().__init__(**kwargs)
+    last = config.layers - 1
     self.convs = layers_util.tracked(self, 'conv', [
-        layers_util.conv2d(width, 3, activation='relu' if i < layers - 1 else None,
-                           name=f'conv{i}') for i in range(layers)])
+        layers_util.conv2d(config.width, 3, activation='relu' if i < last else None,
+                           dilation=dilation, name=f'conv{i}')
+        for i, dilation in enumerate(config.layer_dilations)])
 
   def call(self, image):
     x = standardise(image)
@@ -115,8 +135,8 @@ class MatchingFeatures(_Features):
 
   def __init__(self, feature_config: FeatureConfig = FeatureConfig(), **kwargs):
     super().__init__(feature_config, **kwargs)
-    self.single = _Branch(feature_config.width, feature_config.layers, name='single')
-    self.pair = _Branch(feature_config.width, feature_config.layers, name='pair')
+    self.single = _Branch(feature_config, name='single')
+    self.pair = _Branch(feature_config, name='pair')
 
   def call(self, inputs: Tuple[tf.Tensor, tf.Tensor],
            training: bool = False) -> Tuple[tf.Tensor, tf.Tensor]:
@@ -131,8 +151,8 @@ class EchoFeatures(_Features):
 
   def __init__(self, feature_config: FeatureConfig = FeatureConfig(), **kwargs):
     super().__init__(feature_config, **kwargs)
-    self.here = _Branch(feature_config.width, feature_config.layers, name='here')
-    self.there = _Branch(feature_config.width, feature_config.layers, name='there')
+    self.here = _Branch(feature_config, name='here')
+    self.there = _Branch(feature_config, name='there')
 
   def call(self, mixture: tf.Tensor, training: bool = False) -> Tuple[tf.Tensor, tf.Tensor]:
     """mixture [B, H, W, 3] -> unit descriptors (here, there), each [B, H, W, width]."""

@@ -57,3 +57,36 @@ def test_eye_inputs_refuse_a_double_image():
 def test_bad_config_is_refused():
   with pytest.raises(ValueError, match='width'):
     matching_features.FeatureConfig(width=0)
+
+
+def _changed_columns(config, column):
+  """Columns left of 40 of the single branch's descriptors that change when input
+  `column` of row 2 trades its value with column 55 (the image's moments, and so its
+  standardisation, stay the same)."""
+  model = matching_features.build_features(config)
+  image = np.random.default_rng(3).uniform(size=(1, 5, 64, 1)).astype(np.float32)
+  image[0, 2, column], image[0, 2, 55] = 0.9, 0.1
+  poked = image.copy()
+  poked[0, 2, column], poked[0, 2, 55] = 0.1, 0.9
+  zeros = tf.zeros([1, 5, 64, 2])
+  moved = tf.reduce_max(tf.abs(model((poked, zeros))[0] - model((image, zeros))[0]), [0, 1, 3])
+  return np.flatnonzero(moved.numpy()[:40] > 1e-6)
+
+
+def test_dilations_widen_the_receptive_field_to_its_stated_size():
+  plain = matching_features.FeatureConfig(width=8, layers=3)
+  dilated = matching_features.FeatureConfig(width=8, layers=3, dilations=[1, 2, 4])
+  assert (plain.receptive_field, dilated.receptive_field) == (7, 15)
+  np.testing.assert_array_equal(_changed_columns(plain, 20), np.arange(17, 24))
+  changed = _changed_columns(dilated, 20)
+  assert changed.min() >= 13 and changed.max() <= 27 and {13, 27} <= set(changed)
+  clone = matching_features.MatchingFeatures.from_config(
+      matching_features.build_features(dilated).get_config())
+  assert clone.feature_config.dilations == (1, 2, 4)
+
+
+def test_dilations_need_one_entry_per_layer():
+  with pytest.raises(ValueError, match='dilations'):
+    matching_features.FeatureConfig(layers=3, dilations=(1, 2))
+  with pytest.raises(ValueError, match='dilations'):
+    matching_features.FeatureConfig(layers=2, dilations=(1, 0))
