@@ -9,7 +9,9 @@ box the (2r + 1)^2 mean with OpenCV's default border (reflect-101: row -1 is row
 the product taken as zero at columns x < d (what OpenCV's box filter of that zero-padded
 product gives; tests/classical/zncc_kernel_test.py transcribes it so); columns x < d get
 the cost `scale`. Rows are independent given their window, so row blocks run in Python
-threads (the kernel releases the GIL) and stay in cache. Values float32; lags and radii in
+threads (the kernel releases the GIL) and stay in cache. Within a block the window's
+vertical sums roll from row to row (one row in, one out: 2 products per pixel and lag
+instead of 2r + 1), in float64 so that the rolling adds no drift. Values float32; lags and radii in
 pixels.
 """
 
@@ -44,31 +46,41 @@ def zncc_rows(y0, y1, high, energy, lags, radius, scale, out, sums):
   """
   height, width = high.shape
   size = 2 * radius + 1
-  norm = np.float32(1.0 / (size * size))
-  column = np.empty(width, np.float32)
-  for y in range(y0, y1):
-    for i in range(lags.shape[0]):
-      d = min(lags[i], width)
+  norm = 1.0 / (size * size)
+  column = np.empty(width, np.float64)
+  for i in range(lags.shape[0]):
+    d = min(lags[i], width)
+    # Vertical sums of the zero-padded product over the first row's window, then rolled
+    # down the block: the next window drops row reflect(y - r) and adds reflect(y + r + 1)
+    # (as multisets of rows, reflect-101 included).
+    column[:] = 0.0
+    for dy in range(-radius, radius + 1):
+      _add_product(column, high, _reflect(y0 + dy, height), d, 1.0)
+    for y in range(y0, y1):
       for x in range(d):
         out[y, x, i] = scale
-      # Vertical sums of the zero-padded product over the window's rows.
-      column[:] = 0.0
-      for dy in range(-radius, radius + 1):
-        row = _reflect(y + dy, height)
-        for x in range(d, width):
-          column[x] += high[row, x] * high[row, x - d]
       # Horizontal window sums (reflect-101 at both ends), normalised.
-      total = np.float32(0.0)
+      total = 0.0
       for dx in range(-radius, radius + 1):
         total += column[_reflect(dx, width)]
       for x in range(width):
         if x >= d:
           denominator = np.sqrt(energy[y, x] * energy[y, x - d] + np.float32(1e-6))
-          cost = (np.float32(1.0) - total * norm / denominator) * scale
+          cost = np.float32((1.0 - total * norm / denominator) * scale)
           out[y, x, i] = cost
           sums[i] += cost
         total += column[_reflect(x + radius + 1, width)] - column[_reflect(x - radius,
                                                                             width)]
+      if y + 1 < y1:
+        _add_product(column, high, _reflect(y - radius, height), d, -1.0)
+        _add_product(column, high, _reflect(y + radius + 1, height), d, 1.0)
+
+
+@numba.njit(nogil=True, cache=True, error_model='numpy')
+def _add_product(column, high, row, d, sign):
+  """column[x] += sign * high[row, x] * high[row, x - d] for x >= d (float64 sums)."""
+  for x in range(d, high.shape[1]):
+    column[x] += sign * (np.float64(high[row, x]) * np.float64(high[row, x - d]))
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
