@@ -161,3 +161,14 @@ def test_matching_validation_variants_parse_and_bad_ones_name_the_flag():
   for bad in ('noequals', '=runs/x', 'a=runs/x@nofield=1', 'a=runs/x@p1='):
     with pytest.raises(ValueError, match='--variants'):
       matching_validation.parse_variant(bad)
+
+
+def test_diplopia_validation_variants_parse_and_bad_ones_name_the_flag():
+  from experiments import diplopia_validation  # pylint: disable=import-outside-toplevel
+  label, config = diplopia_validation.parse_variant('wide=window_radius=9@p1=12@p2=120')
+  assert (label, config.window_radius, config.matching.p1, config.matching.p2) == (
+      'wide', 9, 12, 120)
+  assert config.matching.min_disparity == 1  # The rest is the shipped config's.
+  for bad in ('nolabel', 'a=', 'a=matching=3', 'a=window_radius=x', 'a=p1'):
+    with pytest.raises(ValueError, match='--diplopia_variants'):
+      diplopia_validation.parse_variant(bad)

@@ -47,13 +47,17 @@ class DiplopiaConfig:
   Attributes:
     matching: SGM parameters of the self-matching (min_disparity >= 1; the census
       fields are unused).
-    window_radius: ZNCC window radius, pixels.
+    window_radius: ZNCC window radius, pixels: 7 (a 15 x 15 window; 3 before), chosen on
+      validation double images (`experiments/results/diplopia_validation.md`: bad-1
+      47.8% at 3, 41.4% at 5, 38.7% at 7, 38.2% at 9, the views 0.4-0.5 dB higher): the
+      echo shares only half of each window's signal, so it needs a larger window than a
+      stereo pair. The rolled sums of `zncc_kernel` cost the same at any radius.
     highpass_sigma: Gaussian sigma of the high-pass applied before ZNCC, pixels.
     cost_scale: cost units per unit of (1 - zncc).
     layers: prior weights and solver of the layer separation.
   """
   matching: sgm.SgmConfig = sgm.SgmConfig(min_disparity=1, p1=8, p2=64)
-  window_radius: int = 3
+  window_radius: int = 7
   highpass_sigma: float = 1.0
   cost_scale: float = 32.0
   layers: diplopia_layers.LayerConfig = diplopia_layers.LayerConfig()

@@ -204,8 +204,8 @@ def test_a_stored_volume_in_strips_changes_almost_nothing():
   left, right, _, _ = _layered(3, 8, height=60, width=64, seed=2)
   gray = (left[..., 0] + right.mean(-1)) / 2
   config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=1, max_disparity=20,
-                                                          p1=8, p2=64))
-  volume = diplopia.self_matching_volume(gray, config)
+                                                          p1=8, p2=64), window_radius=3)
+  volume = diplopia.self_matching_volume(gray, config)  # Any volume: a 7 x 7 ZNCC one.
   one = parallel_sgm.match_volume(volume, config.matching)
   # Three 20-row strips, each aggregating up to 32 rows beyond its own, in three threads:
   # vertical paths that start there move a few winners (with 8 rows, 6% of them here).

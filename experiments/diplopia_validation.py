@@ -1,0 +1,123 @@
+"""Choices of the classical de-diplopia judged on validation pairs, not evaluation scenes.
+
+    python -m experiments.diplopia_validation --photo_dir=photos/warps \
+        --diplopia_variants="r5=window_radius=5,P 12/120=p1=12@p2=120"
+
+Validation pairs: the photographs of `--photo_dir` (experiments/get_photos.sh; those the
+learned stages train on, never an evaluation scene) under drawn disparity fields
+(`photo_warps.warped_pair`, seeds 10^9 on, which training never draws; 256 x 512, depth
+range 96, positive disparities as double images are ordered), mixed as I = (L + R) / 2
+and rounded to 8 bits. Each variant is the shipped `DiplopiaConfig` with some fields
+replaced (`field=value`, joined by `@`; `p1` and `p2` are those of its SGM), run by
+`diplopia.unmix_diplopia` over [1, true maximum + 3]. Scores: bad-1 over the visible
+pixels with a true disparity of at least 1 px, and both views' RGB PSNR.
+"""
+
+import dataclasses
+import os
+import sys
+import time
+from typing import Dict, List, Tuple
+
+from absl import app
+from absl import flags
+import numpy as np
+
+from mixstereo_tf.cli import startup  # pylint: disable=unused-import
+from mixstereo_tf.classical import diplopia
+from mixstereo_tf.data import photo_warps
+from mixstereo_tf.data import synthetic
+from mixstereo_tf.evaluation import metrics
+
+from experiments import restoration_weight  # --photo_dir, PHOTO_SEED.
+
+flags.DEFINE_list('diplopia_variants', [], 'label=field=value[@field=value...]: fields of '
+                  'DiplopiaConfig (p1, p2: its SGM penalties); the shipped config comes '
+                  'first.')
+flags.DEFINE_integer('diplopia_pairs', 16, 'Warped photo pairs.')
+flags.DEFINE_string('diplopia_validation_output',
+                    'experiments/results/diplopia_validation.md', 'Markdown report.')
+FLAGS = flags.FLAGS
+
+WARP = photo_warps.WarpConfig(height=256, width=512, max_disparity=96, window_probability=0.0)
+MATCHING_FIELDS = ('p1', 'p2')
+
+
+def parse_variant(item: str) -> Tuple[str, diplopia.DiplopiaConfig]:
+  """(label, config) of 'label=field=value[@field=value...]'.
+
+  Raises:
+    ValueError: naming --diplopia_variants and the item at fault.
+  """
+  label, sep, rest = item.partition('=')
+  if not sep or not label or not rest:
+    raise ValueError(f'--diplopia_variants: {item!r} is not label=field=value[@...].')
+  base = diplopia.DiplopiaConfig()
+  own = {f.name: f.type for f in dataclasses.fields(base)
+         if f.type in (int, float, 'int', 'float')}
+  values, matching = {}, {}
+  for part in rest.split('@'):
+    field, _, value = part.partition('=')
+    try:
+      if field in MATCHING_FIELDS:
+        matching[field] = int(value)
+      elif field in own:
+        values[field] = (int if own[field] in (int, 'int') else float)(value)
+      else:
+        raise ValueError
+    except ValueError:
+      raise ValueError(f'--diplopia_variants: {item!r}: {part!r} is not field=value of '
+                       f'{", ".join(list(own) + list(MATCHING_FIELDS))}.') from None
+  return label, dataclasses.replace(
+      base, matching=dataclasses.replace(base.matching, **matching), **values)
+
+
+def evaluate(variants, atlas, count: int) -> Dict[str, List[Dict[str, float]]]:
+  """{label: per pair scores} of each (label, config)."""
+  rows = {label: [] for label, _ in variants}
+  first = restoration_weight.PHOTO_SEED
+  for seed in range(first, first + count):
+    pair = photo_warps.warped_pair(seed, WARP, atlas)
+    truth = pair['disparity_left']
+    scored = pair['nonocc_left'] & (truth >= 1)
+    image = np.round((pair['left'].astype(np.float32) + pair['right']) / 2).astype(np.uint8)
+    for label, config in variants:
+      out = diplopia.unmix_diplopia(image, (1, int(np.ceil(truth.max())) + 3), config)
+      error = np.abs(out['disparity_left'] - truth)[scored]
+      rows[label].append({'bad1': float(np.mean(error > 1.0)), **{
+          f'psnr_{eye}': metrics.psnr(out[eye].astype(np.float64),
+                                      pair[eye].astype(np.float64))
+          for eye in ('left', 'right')}})
+    print(f'pair {seed - first + 1}/{count}', file=sys.stderr, flush=True)
+  return rows
+
+
+def main(argv):
+  del argv
+  start = time.perf_counter()
+  if not FLAGS.photo_dir:
+    raise app.UsageError('--photo_dir is required (experiments/get_photos.sh).')
+  try:
+    variants = [('shipped', diplopia.DiplopiaConfig())] + [
+        parse_variant(item) for item in FLAGS.diplopia_variants]
+  except ValueError as e:
+    raise app.UsageError(str(e)) from None
+  rows = evaluate(variants, synthetic.load_texture_dir(FLAGS.photo_dir), FLAGS.diplopia_pairs)
+  lines = ['| variant | bad-1 | views L / R (dB) |', '| --- | --- | --- |']
+  for label, _ in variants:
+    mean = lambda key: np.mean([r[key] for r in rows[label]])  # pylint: disable=cell-var-from-loop
+    lines.append(f"| {label} | {100 * mean('bad1'):.1f}% | "
+                 f"{mean('psnr_left'):.2f} / {mean('psnr_right'):.2f} |")
+  text = ['# Classical de-diplopia: choices on validation pairs', '',
+          f'Written by `python -m experiments.diplopia_validation` in '
+          f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores, '
+          f'{FLAGS.diplopia_pairs} photo-warp double images (seeds 10^9 on, 256 x 512, '
+          'range 96; module docstring). Variants: '
+          + ', '.join(f'`{v}`' for v in FLAGS.diplopia_variants) + '.', '', *lines, '']
+  with open(FLAGS.diplopia_validation_output, 'w') as handle:
+    handle.write('\n'.join(text))
+  print('\n'.join(text))
+
+
+if __name__ == '__main__':
+  app.run(main)
