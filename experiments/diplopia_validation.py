@@ -26,10 +26,8 @@ import numpy as np
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.classical import diplopia
 from mixstereo_tf.data import photo_warps
-from mixstereo_tf.data import synthetic
-from mixstereo_tf.evaluation import metrics
 
-from experiments import restoration_weight  # --photo_dir, PHOTO_SEED.
+from experiments import validation  # --photo_dir, the pairs, their scores.
 
 flags.DEFINE_list('diplopia_variants', [], 'label=field=value[@field=value...]: fields of '
                   'DiplopiaConfig (p1, p2: its SGM penalties); the shipped config comes '
@@ -75,34 +73,24 @@ def parse_variant(item: str) -> Tuple[str, diplopia.DiplopiaConfig]:
 def evaluate(variants, atlas, count: int) -> Dict[str, List[Dict[str, float]]]:
   """{label: per pair scores} of each (label, config)."""
   rows = {label: [] for label, _ in variants}
-  first = restoration_weight.PHOTO_SEED
-  for seed in range(first, first + count):
-    pair = photo_warps.warped_pair(seed, WARP, atlas)
+  for number, pair in enumerate(validation.photo_pairs(WARP, count, atlas)):
     truth = pair['disparity_left']
     scored = pair['nonocc_left'] & (truth >= 1)
     image = np.round((pair['left'].astype(np.float32) + pair['right']) / 2).astype(np.uint8)
     for label, config in variants:
       out = diplopia.unmix_diplopia(image, (1, int(np.ceil(truth.max())) + 3), config)
-      error = np.abs(out['disparity_left'] - truth)[scored]
-      rows[label].append({'bad1': float(np.mean(error > 1.0)), **{
-          f'psnr_{eye}': metrics.psnr(out[eye].astype(np.float64),
-                                      pair[eye].astype(np.float64))
-          for eye in ('left', 'right')}})
-    print(f'pair {seed - first + 1}/{count}', file=sys.stderr, flush=True)
+      rows[label].append(validation.scores(out['disparity_left'], pair, scored,
+                                           out['left'], out['right']))
+    print(f'pair {number + 1}/{count}', file=sys.stderr, flush=True)
   return rows
 
 
 def main(argv):
   del argv
   start = time.perf_counter()
-  if not FLAGS.photo_dir:
-    raise app.UsageError('--photo_dir is required (experiments/get_photos.sh).')
-  try:
-    variants = [('shipped', diplopia.DiplopiaConfig())] + [
-        parse_variant(item) for item in FLAGS.diplopia_variants]
-  except ValueError as e:
-    raise app.UsageError(str(e)) from None
-  rows = evaluate(variants, synthetic.load_texture_dir(FLAGS.photo_dir), FLAGS.diplopia_pairs)
+  variants = [('shipped', diplopia.DiplopiaConfig())] + validation.parse_all(
+      FLAGS.diplopia_variants, parse_variant)
+  rows = evaluate(variants, validation.required_atlas(), FLAGS.diplopia_pairs)
   lines = ['| variant | bad-1 | views L / R (dB) |', '| --- | --- | --- |']
   for label, _ in variants:
     mean = lambda key: np.mean([r[key] for r in rows[label]])  # pylint: disable=cell-var-from-loop

@@ -37,13 +37,11 @@ from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.data import photo_warps
-from mixstereo_tf.data import synthetic
-from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import learned_matching
 
-from experiments import restoration_weight  # --photo_dir, PHOTO_SEED.
+from experiments import validation  # --photo_dir, the pairs, their scores.
 
 flags.DEFINE_list('variants', ['shipped=shipped'], 'label=MODEL[@field=value...]: MODEL '
                   "'shipped' or a features run folder, fields of LearnedMatchConfig; or "
@@ -94,15 +92,12 @@ def _descriptors(model: str, folder: str):
 
 
 def _score(pair, image, name, disparities) -> Dict[str, float]:
-  """bad-1 over the visible left pixels and both views' RGB PSNR."""
+  """`validation.scores` of the disparities and the views restored from them."""
   restored = families.of(name).restore(image.astype(np.float32) / 255.0, name,
                                        disparities['disparity_left'],
                                        disparities['disparity_right'])
-  error = np.abs(disparities['disparity_left'] - pair['disparity_left'])[pair['nonocc_left']]
-  return {'bad1': float(np.mean(error > 1.0)),
-          **{f'psnr_{eye}': metrics.psnr(restored[eye] * 255.0,
-                                         pair[eye].astype(np.float64))
-             for eye in ('left', 'right')}}
+  return validation.scores(disparities['disparity_left'], pair, pair['nonocc_left'],
+                           restored['left'] * 255.0, restored['right'] * 255.0)
 
 
 def evaluate(variants, atlas, count: int) -> Dict[Tuple[str, str], List[Dict[str, float]]]:
@@ -113,8 +108,7 @@ def evaluate(variants, atlas, count: int) -> Dict[Tuple[str, str], List[Dict[str
     for label, model, config in variants:
       if model not in models and model != CENSUS:
         models[model] = _descriptors(model, folder)
-    for seed in range(restoration_weight.PHOTO_SEED, restoration_weight.PHOTO_SEED + count):
-      pair = photo_warps.warped_pair(seed, WARP, atlas)
+    for number, pair in enumerate(validation.photo_pairs(WARP, count, atlas)):
       low = int(np.floor(pair['disparity_left'].min())) - MARGIN
       high = int(np.ceil(pair['disparity_left'].max())) + MARGIN
       for name in ENCODINGS:
@@ -128,8 +122,7 @@ def evaluate(variants, atlas, count: int) -> Dict[Tuple[str, str], List[Dict[str
           else:
             out = learned_matching.match(models[model], mixture, name, low, high, config)
           rows.setdefault((label, name), []).append(_score(pair, image, name, out))
-      print(f'pair {seed - restoration_weight.PHOTO_SEED + 1}/{count}', file=sys.stderr,
-            flush=True)
+      print(f'pair {number + 1}/{count}', file=sys.stderr, flush=True)
   return rows
 
 
@@ -151,14 +144,8 @@ def table(rows, labels) -> List[str]:
 def main(argv):
   del argv
   start = time.perf_counter()
-  if not FLAGS.photo_dir:
-    raise app.UsageError('--photo_dir is required (experiments/get_photos.sh).')
-  try:
-    variants = [parse_variant(item) for item in FLAGS.variants]
-  except ValueError as e:
-    raise app.UsageError(str(e)) from None
-  rows = evaluate(variants, synthetic.load_texture_dir(FLAGS.photo_dir),
-                  FLAGS.validation_pairs)
+  variants = validation.parse_all(FLAGS.variants, parse_variant)
+  rows = evaluate(variants, validation.required_atlas(), FLAGS.validation_pairs)
   text = ['# Learned matching stage: choices on validation pairs', '',
           f'Written by `python -m experiments.matching_validation` in '
           f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores, '

@@ -39,14 +39,14 @@ from mixstereo_tf.training import refiner_data
 
 import numpy as np
 
+from experiments import validation  # --photo_dir (empty here: procedural examples only).
+
 flags.DEFINE_string('restoration_weight_output', 'experiments/results/restoration_weight.md',
                     'Markdown report.')
 flags.DEFINE_integer('examples', 12, 'Examples per encoding at the small scale (half as many '
                      'at the large one).')
 flags.DEFINE_enum('restoration_field', 'prior_weight', ['prior_weight', 'colour_line_weight'],
                   'The `RestoreConfig` field swept.')
-flags.DEFINE_string('photo_dir', '', 'Photographs of the warped validation pairs '
-                    '(experiments/get_photos.sh); empty: procedural examples only.')
 FLAGS = flags.FLAGS
 
 # Candidate values of each swept field.
@@ -87,7 +87,6 @@ def _scores(name: str, large: float, count: int, field: str
   return out
 
 
-PHOTO_SEED = 10 ** 9
 PHOTO_WARP = photo_warps.WarpConfig(height=192, width=384, max_disparity=64)
 
 
@@ -95,8 +94,7 @@ def _photo_scores(name: str, count: int, field: str, atlas) -> Dict[bool, List[n
   """{True: [per warped pair, the mean view PSNR of every candidate of `field`]}: clean
   anaglyphs of `count` photo warps, restored from the classical matcher's disparities."""
   rows = []
-  for seed in range(PHOTO_SEED, PHOTO_SEED + count):
-    pair = photo_warps.warped_pair(seed, PHOTO_WARP, atlas)
+  for pair in validation.photo_pairs(PHOTO_WARP, count, atlas):
     image = realworld.make_anaglyph(pair, name, 'ours')
     matched = anaglyph.unmix_anaglyph(image, name)
     rows.append(_candidate_psnrs(image, name, matched['disparity_left'],

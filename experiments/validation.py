@@ -1,0 +1,58 @@
+"""Validation pairs shared by the experiments that choose parameters: photographs warped by
+drawn disparity fields with seeds training never draws (`photo_warps.warped_pair`, seeds
+10^9 on). Never an evaluation scene: the photographs are the training ones
+(experiments/get_photos.sh), the fields new.
+
+The flag is declared here once for every experiment that takes it.
+"""
+
+from typing import Callable, Dict, Iterator, List, Sequence, TypeVar
+
+from absl import app
+from absl import flags
+import numpy as np
+
+from mixstereo_tf.data import photo_warps
+from mixstereo_tf.data import synthetic
+from mixstereo_tf.evaluation import metrics
+
+flags.DEFINE_string('photo_dir', '', 'Photographs of the warped validation pairs '
+                    '(experiments/get_photos.sh).')
+FLAGS = flags.FLAGS
+
+PHOTO_SEED = 10 ** 9
+Parsed = TypeVar('Parsed')
+
+
+def photo_pairs(config: photo_warps.WarpConfig, count: int,
+                atlas: synthetic.TextureAtlas) -> Iterator[Dict[str, np.ndarray]]:
+  """The first `count` validation pairs of `config` (`photo_warps.warped_pair`'s dicts)."""
+  for seed in range(PHOTO_SEED, PHOTO_SEED + count):
+    yield photo_warps.warped_pair(seed, config, atlas)
+
+
+def required_atlas() -> synthetic.TextureAtlas:
+  """The photographs of --photo_dir; a usage error naming the flag when it is empty."""
+  if not FLAGS.photo_dir:
+    raise app.UsageError('--photo_dir is required (experiments/get_photos.sh).')
+  return synthetic.load_texture_dir(FLAGS.photo_dir)
+
+
+def parse_all(items: Sequence[str], parse: Callable[[str], Parsed]) -> List[Parsed]:
+  """[parse(item)] of a list flag's items; a usage error with parse's message."""
+  try:
+    return [parse(item) for item in items]
+  except ValueError as e:
+    raise app.UsageError(str(e)) from None
+
+
+def scores(disparity: np.ndarray, pair: Dict[str, np.ndarray], scored: np.ndarray,
+           left: np.ndarray, right: np.ndarray) -> Dict[str, float]:
+  """bad1: share of `scored` pixels whose left disparity is off by more than 1 px;
+  psnr_left, psnr_right: RGB PSNR of the views (0..255 floats or uint8) against pair's."""
+  error = np.abs(disparity - pair['disparity_left'])[scored]
+  return {'bad1': float(np.mean(error > 1.0)),
+          'psnr_left': metrics.psnr(np.asarray(left, np.float64),
+                                    pair['left'].astype(np.float64)),
+          'psnr_right': metrics.psnr(np.asarray(right, np.float64),
+                                     pair['right'].astype(np.float64))}
