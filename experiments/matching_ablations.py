@@ -11,6 +11,15 @@
 no photo warps (procedural scenes)=runs/abl_nowarp,6 layers dilated 1-1-2-4-1-1 \
 (receptive field 21)=runs/abl_dil"
 
+The photo-warp ablation at the recipe's full length (experiments/results/
+matching_ablations_3000.md; runs/pretrained_features is the shipped model's run):
+    python -m mixstereo_tf.train --flagfile=experiments/pretrained_features.flags \
+        --nophoto_warps --model_dir=runs/nowarp_3000
+    python -m experiments.matching_ablations --shared_dir=../shared/stereo_samples \
+        --ablation_runs="recipe at 3000 steps (shipped; photo warps)=runs/pretrained_features,\
+no photo warps (procedural scenes) at 3000 steps=runs/nowarp_3000" \
+        --ablation_output=experiments/results/matching_ablations_3000.md
+
 Every run is cut to the same number of steps (the shipped recipe trains 3000), so the rows
 compare the choices, not the training time. Each run's newest checkpoint is scored as the
 learned stage of the tools (`shipped.pretrained_unmixer`) on the colour anaglyphs of
