@@ -102,6 +102,26 @@ def test_diplopia_constant_shift_and_layers():
     assert gain >= 1.0, (view, gain)
 
 
+def test_a_noisy_echo_is_found_by_the_shipped_window_and_missed_by_7x7():
+  """The echo shares half of each window's signal: with noise the 7 x 7 ZNCC (the window
+  before 2026-11-26) loses the lag where the shipped 15 x 15 one keeps it."""
+  rng = np.random.default_rng(0)
+  lag, height, width = 12, 48, 160
+  texture = cv2.GaussianBlur(rng.uniform(0, 255, (height, width + lag)).astype(np.float32),
+                             (0, 0), 1.0)  # Standard deviation about 21 levels.
+  double = (texture[:, lag:] + texture[:, :width]) / 2  # Left x matches right x - 12.
+  noisy = np.clip(double + rng.normal(0, 10, double.shape), 0, 255).astype(np.uint8)
+  image = np.repeat(noisy[..., None], 3, axis=-1)
+
+  def found(config):
+    out = diplopia.unmix_diplopia(image, (1, 30), config)
+    return np.mean(np.abs(out['disparity_left'][:, 30:] - lag) <= 1)
+
+  assert diplopia.DiplopiaConfig().window_radius == 7
+  assert found(diplopia.DiplopiaConfig()) > 0.95  # 0.976 on 2 cores.
+  assert found(diplopia.DiplopiaConfig(window_radius=3)) < 0.9  # 0.827.
+
+
 def test_diplopia_layers_with_true_shift_beat_the_mixture():
   left, right, _, _ = _scene(d_bg=5, d_fg=5)
   mixture01 = _mix('diplopia', left, right) / 255.0
