@@ -51,21 +51,10 @@ def parse_variant(item: str) -> Tuple[str, diplopia.DiplopiaConfig]:
   if not sep or not label or not rest:
     raise ValueError(f'--diplopia_variants: {item!r} is not label=field=value[@...].')
   base = diplopia.DiplopiaConfig()
-  own = {f.name: f.type for f in dataclasses.fields(base)
-         if f.type in (int, float, 'int', 'float')}
-  values, matching = {}, {}
-  for part in rest.split('@'):
-    field, _, value = part.partition('=')
-    try:
-      if field in MATCHING_FIELDS:
-        matching[field] = int(value)
-      elif field in own:
-        values[field] = (int if own[field] in (int, 'int') else float)(value)
-      else:
-        raise ValueError
-    except ValueError:
-      raise ValueError(f'--diplopia_variants: {item!r}: {part!r} is not field=value of '
-                       f'{", ".join(list(own) + list(MATCHING_FIELDS))}.') from None
+  types = dict(validation.numeric_fields(diplopia.DiplopiaConfig),
+               **{field: int for field in MATCHING_FIELDS})
+  values = validation.field_values('--diplopia_variants', item, rest.split('@'), types)
+  matching = {field: values.pop(field) for field in MATCHING_FIELDS if field in values}
   return label, dataclasses.replace(
       base, matching=dataclasses.replace(base.matching, **matching), **values)
 

@@ -36,13 +36,12 @@ from absl import app
 from absl import flags
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
-from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import shipped
 
-
 from experiments import same_channel
+from experiments import validation
 
 flags.DEFINE_list('ablation_runs', None, 'label=run folder, comma-separated.')
 flags.DEFINE_string('ablation_output', 'experiments/results/matching_ablations.md',
@@ -61,7 +60,7 @@ def _unmixers(runs_spec, folder):
     label, _, path = item.rpartition('=')
     if not label or not os.path.isdir(path):
       raise ValueError(f'--ablation_runs: {item!r} is not label=run folder.')
-    entry = pretrained.from_run(path, os.path.join(folder, f'run{index}'), '', '')
+    entry = validation.model_entry(path, os.path.join(folder, f'run{index}'))
     built[label] = shipped.pretrained_unmixer(entry, config)
   return built
 

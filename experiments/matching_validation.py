@@ -21,7 +21,6 @@ fields; all over the true range +- 3 px. The census matcher as shipped is the fi
 restoration (`Family.restore`, as the tools run it).
 """
 
-import dataclasses
 import os
 import sys
 import tempfile
@@ -59,7 +58,7 @@ CENSUS = 'census'
 
 def parse_variant(item: str) -> Tuple[str, str, object]:
   """(label, model, config) of 'label=MODEL[@field=value...]': a LearnedMatchConfig, or
-  for MODEL 'census' a MatcherConfig.
+  for MODEL 'census' a MatcherConfig (int and float fields).
 
   Raises:
     ValueError: naming --variants and the item at fault.
@@ -70,14 +69,8 @@ def parse_variant(item: str) -> Tuple[str, str, object]:
     raise ValueError(f'--variants: {item!r} is not label=MODEL[@field=value...].')
   kind = (matcher.MatcherConfig if parts[0] == CENSUS else
           learned_matching.LearnedMatchConfig)
-  fields = {f.name: f.type for f in dataclasses.fields(kind)}
-  values = {}
-  for part in parts[1:]:
-    field, _, value = part.partition('=')
-    if field not in fields or not value:
-      raise ValueError(f'--variants: {item!r}: {part!r} is not field=value of '
-                       f'{kind.__name__} ({", ".join(fields)}).')
-    values[field] = (int if fields[field] in (int, 'int') else float)(value)
+  values = validation.field_values('--variants', item, parts[1:],
+                                   validation.numeric_fields(kind))
   return label, parts[0], kind(**values)
 
 
@@ -85,7 +78,7 @@ def _descriptors(model: str, folder: str):
   if model == 'shipped':
     entry = pretrained.get('anaglyph_matching')
   elif os.path.isdir(model):
-    entry = pretrained.from_run(model, os.path.join(folder, str(abs(hash(model)))), '', '')
+    entry = validation.model_entry(model, folder)
   else:
     raise ValueError(f"--variants: model {model!r} is neither 'shipped' nor a folder.")
   return learned_matching.descriptor_function(pretrained.load_model(entry))
@@ -107,7 +100,7 @@ def evaluate(variants, atlas, count: int) -> Dict[Tuple[str, str], List[Dict[str
     models = {}
     for label, model, config in variants:
       if model not in models and model != CENSUS:
-        models[model] = _descriptors(model, folder)
+        models[model] = _descriptors(model, os.path.join(folder, f'model{len(models)}'))
     for number, pair in enumerate(validation.photo_pairs(WARP, count, atlas)):
       low = int(np.floor(pair['disparity_left'].min())) - MARGIN
       high = int(np.ceil(pair['disparity_left'].max())) + MARGIN

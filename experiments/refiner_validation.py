@@ -53,8 +53,7 @@ def _unmixers(name, runs, folder):
   for index, run in enumerate(runs):
     if not os.path.isdir(run):
       raise app.UsageError(f'--refiner_runs: {run!r} is not a folder.')
-    entry = (pretrained.read(run) if os.path.exists(os.path.join(run, 'info.json')) else
-             pretrained.from_run(run, os.path.join(folder, f'run{index}'), '', ''))
+    entry = validation.model_entry(run, os.path.join(folder, f'run{index}'))
     out[run] = shipped.pretrained_unmixer(entry, config)
   return out
 

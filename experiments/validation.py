@@ -6,12 +6,15 @@ drawn disparity fields with seeds training never draws (`photo_warps.warped_pair
 The flag is declared here once for every experiment that takes it.
 """
 
+import dataclasses
+import os
 from typing import Callable, Dict, Iterator, List, Sequence, TypeVar
 
 from absl import app
 from absl import flags
 import numpy as np
 
+from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.data import photo_warps
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.evaluation import metrics
@@ -56,3 +59,36 @@ def scores(disparity: np.ndarray, pair: Dict[str, np.ndarray], scored: np.ndarra
                                     pair['left'].astype(np.float64)),
           'psnr_right': metrics.psnr(np.asarray(right, np.float64),
                                      pair['right'].astype(np.float64))}
+
+
+def numeric_fields(config_class) -> Dict[str, type]:
+  """{name: int or float} of a dataclass's int and float fields."""
+  kinds = {int: int, 'int': int, float: float, 'float': float}
+  return {f.name: kinds[f.type] for f in dataclasses.fields(config_class)
+          if f.type in kinds}
+
+
+def field_values(flag: str, item: str, parts: Sequence[str],
+                 types: Dict[str, type]) -> Dict[str, object]:
+  """{field: typed value} of `parts` 'field=value' (types: `numeric_fields`).
+
+  Raises:
+    ValueError: naming `flag`, the item and the part at fault and the valid fields.
+  """
+  values = {}
+  for part in parts:
+    field, _, value = part.partition('=')
+    try:
+      values[field] = types[field](value)
+    except (KeyError, ValueError):
+      raise ValueError(f'{flag}: {item!r}: {part!r} is not field=value of '
+                       f'{", ".join(types)}.') from None
+  return values
+
+
+def model_entry(path: str, folder: str) -> pretrained.Pretrained:
+  """The model of `path`: a pretrained folder (holding info.json) as it is, or a training
+  run's newest checkpoint written to `folder` in the pretrained format."""
+  if os.path.exists(os.path.join(path, 'info.json')):
+    return pretrained.read(path)
+  return pretrained.from_run(path, folder, '', '')
