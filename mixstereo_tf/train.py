@@ -133,12 +133,17 @@ flags.DEFINE_float('clean_probability', refiner_data.ExampleConfig.clean_probabi
 flags.DEFINE_float('large_probability', refiner_data.ExampleConfig.large_probability,
                    'The share of refiner examples cut from a scene twice as large and deep '
                    '(photo-sized disparities and occlusions; not in the paper).')
+flags.DEFINE_float('weighted_probability', refiner_data.ExampleConfig.weighted_probability,
+                   'The share of double-image refiner examples mixed as a L + (1 - a) R with '
+                   'a drawn from [0.3, 0.7] and estimated by their classical stage '
+                   '(--mixing_weight=auto; not in the paper).')
 
 flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner', 'features'), "joint: the "
                   "paper's network; refiner: the hybrid that refines the classical result "
                   '(models/refiner.py; trained on cached `sample` examples with ground truth, '
                   'from --sample_scenes, --sample_height/width, --max_disparity, --mixture, '
-                  '--texture_dir, --degrade, --clean_probability, --large_probability; not in the '
+                  '--texture_dir, --degrade, --clean_probability, --large_probability, '
+                  '--weighted_probability; not in the '
                   'paper); features: the learned matching features of anaglyphs, or with '
                   '--mixture=diplopia the echo features of double images '
                   '(models/matching_features.py; trained on photographs of --texture_dir warped '
@@ -220,7 +225,8 @@ def _train_refiner() -> None:
         mixtures=FLAGS.mixture or 'anaglyphs', height=FLAGS.sample_height or FLAGS.crop_height,
         width=FLAGS.sample_width or FLAGS.crop_width, max_disparity=FLAGS.max_disparity,
         degrade=FLAGS.degrade, clean_probability=FLAGS.clean_probability,
-        large_probability=FLAGS.large_probability, texture_dir=FLAGS.texture_dir)
+        large_probability=FLAGS.large_probability,
+        weighted_probability=FLAGS.weighted_probability, texture_dir=FLAGS.texture_dir)
     config = refiner_loop.RefinerTrainConfig(
         model_dir=FLAGS.model_dir, num_shards=-(-FLAGS.sample_scenes // shard_size),
         crop_height=FLAGS.crop_height, crop_width=FLAGS.crop_width,

@@ -15,18 +15,22 @@ One example (`make_example`):
   5. the classical stage on it by inference's own route (`classical_stage`: the range
      planned by `steps.estimate_range`, then `steps.classical_unmix`), with the matcher
      pinned to one SGM strip (`ONE_STRIP`);
-  6. with probability `large_probability`, steps 1-5 happen on a scene `large_factor`
+  6. for encodings that may mix the eyes unequally (`families.Family.weighted`: double
+     images), with probability `weighted_probability` the mixture is a L + (1 - a) R
+     with a drawn uniformly from `weight_range` (else a = 1/2), and the classical stage
+     estimates a itself, as `--mixing_weight=auto` does at inference;
+  7. with probability `large_probability`, steps 1-6 happen on a scene `large_factor`
      times as high, wide and deep, and a random height x width window of everything is
      kept: the network sees disparities, occlusions and classical errors of photo-sized
      images (as it does in a tile of one at inference) in an example of the usual size.
-Seeds: example i draws everything from seed i (scenes: the `sample` training seeds; the
+Seeds: example i draws everything from seed i, its weight from seed (i, 1) (scenes: the `sample` training seeds; the
 held-out scenes use other textures and seeds 2^31 + i). Shards `shard_<k>.npz` of
 `shard_size` examples each are written atomically, so an interrupted build resumes.
 """
 
 import dataclasses
 import os
-from typing import Dict, Optional
+from typing import Dict, Optional, Tuple, Union
 
 import numpy as np
 import tensorflow as tf
@@ -60,6 +64,8 @@ class ExampleConfig:
     texture_dir: a folder of photographs for the scenes (None: scikit-image's).
     large_probability: chance of an example cut from a larger scene (step 6) ...
     large_factor: ... this many times the size and disparity range.
+    weighted_probability: chance that a double image mixes its eyes with a != 1/2 ...
+    weight_range: ... drawn uniformly from this (low, high), 0 < low <= high < 1.
   """
   mixtures: str = 'anaglyphs'
   height: int = 160
@@ -71,13 +77,20 @@ class ExampleConfig:
   texture_dir: Optional[str] = None
   large_probability: float = 0.0
   large_factor: int = 2
+  weighted_probability: float = 0.0
+  weight_range: Tuple[float, float] = (0.3, 0.7)
 
   def __post_init__(self):
     mixtures.parse_names(self.mixtures)  # ValueError naming an unknown encoding.
     synthetic.SceneConfig(self.max_disparity, self.height, self.width + self.max_disparity)
     if self.large_factor < 1:
       raise ValueError(f'ExampleConfig.large_factor must be >= 1, got {self.large_factor}.')
-    for field in ('window_probability', 'clean_probability', 'large_probability'):
+    low, high = self.weight_range
+    if not 0.0 < low <= high < 1.0:
+      raise ValueError(f'ExampleConfig.weight_range needs 0 < low <= high < 1, got '
+                       f'{self.weight_range}.')
+    for field in ('window_probability', 'clean_probability', 'large_probability',
+                  'weighted_probability'):
       if not 0.0 <= getattr(self, field) <= 1.0:
         raise ValueError(f'ExampleConfig.{field} must be in [0, 1], got '
                          f'{getattr(self, field)}.')
@@ -96,6 +109,29 @@ def _window_aligned(scene: Dict[str, np.ndarray], shift: int, width: int):
           'right': scene['right'][:, :width],
           'disparity_left': scene['disparity_left'][:, shift:shift + width] - shift,
           'disparity_right': scene['disparity_right'][:, :width] - shift}
+
+
+def mixing_weight(index: int, name: str, config: ExampleConfig) -> Optional[float]:
+  """Example `index`'s left-eye weight a (step 6), or None for the exact a = 1/2 route:
+  drawn from its own seed (index, 1), so the other draws, and with
+  `weighted_probability` = 0 every example, stay those of earlier recipes."""
+  if not families.of(name).weighted:
+    return None
+  rng = np.random.default_rng([index, 1])
+  if rng.uniform() >= config.weighted_probability:
+    return None
+  return float(rng.uniform(*config.weight_range))
+
+
+def _mix(name: str, left: np.ndarray, right: np.ndarray, weight: Optional[float]):
+  """uint8 views -> the mixture in [0, 1]: encoding `name`, or a L + (1 - a) R."""
+  left, right = image_range.u8_to_signed(left), image_range.u8_to_signed(right)
+  if weight is None:
+    mixed = mixtures.mix(name, left, right)
+  else:
+    mixed = weight * np.asarray(left, np.float32) + (1.0 - weight) * np.asarray(right,
+                                                                               np.float32)
+  return image_range.signed_to_unit(mixed)
 
 
 def make_example(index: int, config: ExampleConfig,
@@ -119,7 +155,7 @@ def make_example(index: int, config: ExampleConfig,
 
 
 def _whole_example(index, name, window, fraction, clean, factor, config, textures):
-  """Steps 1-5 on a scene `factor` times the configured size (all of KEYS)."""
+  """Steps 1-6 on a scene `factor` times the configured size (all of KEYS)."""
   max_disparity = factor * config.max_disparity
   width = factor * config.width
   scene_config = synthetic.SceneConfig(max_disparity, factor * config.height,
@@ -130,13 +166,12 @@ def _whole_example(index, name, window, fraction, clean, factor, config, texture
     low, high = np.percentile(scene['disparity_left'], [1.0, 99.0])
     shift = int(round(low + fraction * (high - low)))
   pair = _window_aligned(scene, shift, width)
-  mixed = mixtures.mix(name, image_range.u8_to_signed(pair['left']),
-                       image_range.u8_to_signed(pair['right']))
-  mixed = image_range.signed_to_unit(mixed)
+  weight = mixing_weight(index, name, config)
+  mixed = _mix(name, pair['left'], pair['right'], weight)
   if config.degrade and not clean:
     mixed = degrade.degrade(mixed, tf.constant([index, 7], tf.int32))
   mixture = image_range.unit_to_u8(np.asarray(mixed))
-  base = classical_stage(mixture, name)
+  base = classical_stage(mixture, name, None if weight is None else 'auto')
   return {'mixture': mixture,
           'classical_left': base['left'], 'classical_right': base['right'],
           'classical_disparity_left': base['disparity_left'].astype(np.float32),
@@ -146,13 +181,16 @@ def _whole_example(index, name, window, fraction, clean, factor, config, texture
           'disparity_right': pair['disparity_right'].astype(np.float32)}
 
 
-def classical_stage(mixture: np.ndarray, name: str) -> Dict[str, np.ndarray]:
+def classical_stage(mixture: np.ndarray, name: str,
+                    weight: Union[None, float, str] = None) -> Dict[str, np.ndarray]:
   """The classical method's result on a uint8 mixture as inference computes it (the
   range estimated from the image, `steps.estimate_range`; `steps.classical_unmix`), with
-  the matcher pinned to one strip (`ONE_STRIP`)."""
+  the matcher pinned to one strip (`ONE_STRIP`); `weight`: a double image's mixing weight
+  (`hints.FrameHint.mixing_weight`: None 1/2, 'auto' estimated, or a number)."""
   default = families.of(name).classical_range()
-  search = steps.estimate_range(mixture, name, None, default, ONE_STRIP)
-  return steps.classical_unmix(mixture, name, search, ONE_STRIP)
+  hint = dataclasses.replace(ONE_STRIP, mixing_weight=weight)
+  search = steps.estimate_range(mixture, name, None, default, hint)
+  return steps.classical_unmix(mixture, name, search, hint)
 
 
 def _shard_path(folder: str, shard: int) -> str:

@@ -18,7 +18,9 @@ A family answers, for each of its encodings (`names`):
     may shift their `right_eye` channels (`disparity_range.plan`, `to_network`);
   * learned stages: `learned_stages` names the networks built on its classical stage
     ('refiner', 'features': the learned matching stage);
-  * `input_is_left`: a network's input is the left view itself (monocular).
+  * `input_is_left`: a network's input is the left view itself (monocular);
+  * `weighted`: the encoding may mix the eyes with unequal weights a L + (1 - a) R that
+    the classical stage takes from `hints.FrameHint.mixing_weight` (double images).
 A registry maps each mixture name to its family (`of`); a new family is one `Family`
 subclass and one `register` call.
 """
@@ -49,6 +51,7 @@ class Family:
   restores_views = False
   has_classical = False
   input_is_left = False
+  weighted = False
   learned_stages: Tuple[str, ...] = ()
 
   def estimate_range(self, image: np.ndarray, name: str, default: Range,
@@ -146,6 +149,7 @@ class Diplopia(Family):
   disparities (the average is symmetric in the views), layers by least squares."""
   names = ('diplopia',)
   has_classical = True
+  weighted = True
   learned_stages = ('refiner', 'echo_features')
 
   def estimate_range(self, image, name, default, hint=None):

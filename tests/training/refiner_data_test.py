@@ -123,5 +123,42 @@ def test_config_checks():
     refiner_data.ExampleConfig(large_probability=1.5)
   with pytest.raises(ValueError, match='large_factor'):
     refiner_data.ExampleConfig(large_factor=0)
+  with pytest.raises(ValueError, match='weighted_probability'):
+    refiner_data.ExampleConfig(weighted_probability=1.2)
+  with pytest.raises(ValueError, match='weight_range'):
+    refiner_data.ExampleConfig(weight_range=(0.6, 0.4))
+  with pytest.raises(ValueError, match='weight_range'):
+    refiner_data.ExampleConfig(weight_range=(0.0, 0.5))
   with pytest.raises(ValueError):
     refiner_data.ExampleConfig(mixtures='nothing')
+
+
+def test_weights_are_drawn_for_double_images_only_and_keep_the_other_draws():
+  weighted = dataclasses.replace(SMALL, weighted_probability=1.0, weight_range=(0.3, 0.4))
+  assert refiner_data.mixing_weight(3, 'anaglyph', weighted) is None
+  assert refiner_data.mixing_weight(3, 'diplopia', SMALL) is None
+  drawn = [refiner_data.mixing_weight(i, 'diplopia', weighted) for i in range(20)]
+  assert all(0.3 <= a <= 0.4 for a in drawn) and len(set(drawn)) == 20
+  half = dataclasses.replace(weighted, weighted_probability=0.5)
+  share = np.mean([refiner_data.mixing_weight(i, 'diplopia', half) is not None
+                   for i in range(400)])
+  assert 0.4 < share < 0.6
+
+
+def test_a_weighted_double_image_and_its_classical_stage_with_the_weight_estimated(textures):
+  config = dataclasses.replace(SMALL, mixtures='diplopia', height=64, width=128,
+                               max_disparity=24, weighted_probability=1.0,
+                               weight_range=(0.3, 0.3))
+  example = refiner_data.make_example(3, config, textures)
+  left, right = (example[k].astype(float) for k in ('left', 'right'))
+  assert np.abs(0.3 * left + 0.7 * right - example['mixture']).max() <= 1
+  assert np.abs((left + right) / 2 - example['mixture']).mean() > 2
+  # Its classical arrays are the served method's with --mixing_weight=auto, not 1/2.
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical',
+                                                                mixture='diplopia'))
+  served = {weight: unmixer(example['mixture'], hint=dataclasses.replace(
+      refiner_data.ONE_STRIP, mixture='diplopia', mixing_weight=weight))
+            for weight in ('auto', None)}
+  for key in ('left', 'right', 'disparity_left', 'disparity_right'):
+    np.testing.assert_array_equal(served['auto'][key], example[f'classical_{key}'])
+  assert not np.array_equal(served[None]['left'], example['classical_left'])
