@@ -5,8 +5,10 @@
 A procedural scene (held-out textures, disparities up to 51 px) rendered at 1280x720 and
 panned 4 px per frame, mixed as I = (L + R) / 2, written as an H.264 MP4 and unmixed by
 `unmix_files.unmix_inputs` as `mixstereo-unmix --mixture=diplopia --layout=sbs` does
-(decoding, unmixing, encoding), after one warm-up frame; per frame (double images have no
-temporal prior). Frames/s of the whole call and inside the unmixer, per method (`METHODS`);
+(decoding, unmixing, encoding), after one warm-up frame: per frame (`--notemporal`: the
+encoding and the range are found again on every frame) and per shot (the default: found at
+the shot's first frame; double images take no disparity prior). Frames/s of the whole call
+and inside the unmixer, per method (`METHODS`);
 then one frame's stages timed apart (range, cost volume, SGM and post-processing, mixing
 weight, layers, seconds) for the classical method and the learned echo stage. Each
 measurement runs in its own process; with --before_checkout (a checkout of an earlier
@@ -46,9 +48,9 @@ FLAGS = flags.FLAGS
 WIDTH, HEIGHT, PAN = 1280, 720, 4
 STAGES = ('range', 'costs', 'sgm', 'weight', 'layers')
 # The classical method, the default (the refiner on the classical result, `--pretrained=
-# diplopia`) and the learned echo stage (`--pretrained=diplopia_echo`).
+# diplopia_weighted`; the same network as `diplopia`, so the same speed) and the learned echo stage (`--pretrained=diplopia_echo`).
 METHODS = {'classical': dict(method='classical'),
-           'refiner (default)': dict(method='model', pretrained='diplopia'),
+           'refiner (default)': dict(method='model', pretrained='diplopia_weighted'),
            'learned echo': dict(method='model', pretrained='diplopia_echo')}
 
 
@@ -60,15 +62,16 @@ def frames(count):
   return [np.rint(both[:, PAN * i:PAN * i + WIDTH]).astype(np.uint8) for i in range(count)]
 
 
-def video_fps(method, path, count):
-  """(frames/s, frames/s inside the unmixer) of `method` on the clip at `path`."""
+def video_fps(method, path, count, per_shot=False):
+  """(frames/s, frames/s inside the unmixer) of `method` on the clip at `path`, per frame
+  or `per_shot` (`temporal.TemporalConfig.enabled`)."""
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(mixture='diplopia',
                                                                 **METHODS[method]))
   unmixer(frames(1)[0])  # Warm-up: numba's cache, tracing.
   output_dir = tempfile.mkdtemp()
   try:
     report = unmix_files.unmix_inputs(unmixer, path, output_dir, media.OutputOptions(
-        layout='sbs', temporal_config=temporal.TemporalConfig(enabled=False)))
+        layout='sbs', temporal_config=temporal.TemporalConfig(enabled=per_shot)))
   finally:
     shutil.rmtree(output_dir, ignore_errors=True)
   if report.failures or report.frames != count:
@@ -124,13 +127,17 @@ def main(argv):
     for index, image in enumerate(frames(count)):
       writer.write(image, fractions.Fraction(index, 25))
     writer.close()
-    print(f'| method | frames/s, {WIDTH}x{HEIGHT} | inside the unmixer |')
+    print(f'| method | {WIDTH}x{HEIGHT} frames/s, per frame (unmix only) | per shot, the '
+          'default (unmix only) |')
     print('|---|---:|---:|')
     for method in METHODS:
       for suffix, checkout in runs:
-        fps, unmix_fps = checkouts.measure(
-            'benchmark_diplopia', f'b.video_fps({method!r}, {path!r}, {count})', checkout)
-        print(f'| {method}{suffix} | {fps:.3f} | {unmix_fps:.3f} |', flush=True)
+        cells = [checkouts.measure('benchmark_diplopia', f'b.video_fps({method!r}, '
+                                   f'{path!r}, {count}, {per_shot})', checkout)
+                 for per_shot in (False, True)]
+        print(f'| {method}{suffix} | ' + ' | '.join(f'{fps:.3f} ({unmix:.3f})'
+                                                    for fps, unmix in cells) + ' |',
+              flush=True)
     print('\n| one frame | range searched | ' + ' | '.join(STAGES) + ' | total |')
     print('|---|---|' + '---:|' * (len(STAGES) + 1))
     for label, costs in STAGE_ROWS.items():

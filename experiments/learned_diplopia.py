@@ -9,12 +9,14 @@ Scenes with ground truth (as experiments/same_channel.py): the 8 procedural held
 KITTI object frame (sparse ground truth from its Velodyne scan). Not window-aligned: a
 double image's disparities are positive by convention (docs/DESIGN.md).
   1. I = (L + R) / 2 (`--mixture=diplopia`): rows mixture (I as both views), classical,
-     refiner (`--pretrained=diplopia`, the previous model), learned (`--pretrained=
-     diplopia_echo`, the default); bad-1, bad-3, D1, views' RGB PSNR.
+     the refiner trained on a = 1/2 only (`--pretrained=diplopia`, the previous default),
+     the refiner trained on any a (`--pretrained=diplopia_weighted`, the default), learned
+     (`--pretrained=diplopia_echo`); bad-1, bad-3, D1, views' RGB PSNR.
   2. I = a L + (1 - a) R for a in WEIGHTS, classical method with `--mixing_weight=auto`: the
      estimate's error, views with the estimated a against views with the true a and with
      a = 1/2 (the separation before this issue: the ablation of the weight), and the views
-     of the default (the refiner on the classical result, trained on a = 1/2 only).
+     of both refiners with the estimated a; then their mean gain over the classical views
+     at a != 1/2.
   3. Eye order: a run's eyes are in order when its left view is nearer (PSNR) to the true
      left view than to the true right one; the share over every run of 1 and 2.
   4. Ablation of the cost (I = (L + R) / 2): the ZNCC share of the blended cost
@@ -48,8 +50,10 @@ flags.DEFINE_string('learned_diplopia_output', 'experiments/results/learned_dipl
 FLAGS = flags.FLAGS
 
 METHODS = {'classical': dict(method='classical'),
-           'refiner': dict(method='model', pretrained='diplopia'),
+           'refiner, a = 1/2': dict(method='model', pretrained='diplopia'),
+           'refiner, any a': dict(method='model', pretrained='diplopia_weighted'),
            'learned': dict(method='model', pretrained='diplopia_echo')}
+REFINERS = {'refiner_half': 'refiner, a = 1/2', 'default': 'refiner, any a'}  # Part 2's columns.
 WEIGHTS = (0.3, 0.4, 0.5, 0.6, 0.7)
 ZNCC_SHARES = (0.0, 0.25, 0.5, 0.75)
 
@@ -81,7 +85,8 @@ def evaluate(shared_dir):
   rows = []
   built = {m: unmixer(m) for m in METHODS}
   auto, given = unmixer('classical', 'auto'), {a: unmixer('classical', a) for a in WEIGHTS}
-  half, default = built['classical'], unmixer('refiner', 'auto')
+  half = built['classical']
+  refiners = {key: unmixer(method, 'auto') for key, method in REFINERS.items()}
   echo = learned_diplopia.echo_function(pretrained.load_model(pretrained.get('diplopia_echo')))
   for scene, data in same_channel.scenes(shared_dir):
     base = dict(scene=scene, group=same_channel.group(scene))
@@ -97,9 +102,10 @@ def evaluate(shared_dir):
     for weight in WEIGHTS:
       image = mix(data, weight)
       out = auto(image)
-      true, fixed, refined = (score(data, run(image)) for run in (given[weight], half, default))
-      views = {f'{name}_psnr_{eye}': got[f'psnr_{eye}'] for eye in ('left', 'right')
-               for name, got in (('true', true), ('half', fixed), ('default', refined))}
+      got = {'true': score(data, given[weight](image)), 'half': score(data, half(image))}
+      got.update({key: score(data, run(image)) for key, run in refiners.items()})
+      views = {f'{name}_psnr_{eye}': value[f'psnr_{eye}'] for eye in ('left', 'right')
+               for name, value in got.items()}
       rows.append(dict(base, part=2, method='classical auto', weight=weight,
                        estimate=out['info']['mixing_weight'], **views, **score(data, out)))
     rows += _cost_ablation(echo, data, base)
@@ -147,8 +153,9 @@ def tables(rows):
   lines += ['', '## 2. The mixing weight: I = a L + (1 - a) R, classical method, '
             '`--mixing_weight=auto`', '',
             '| scenes | a | estimated a (mean) | mean abs error | views L / R, estimated a | '
-            'views L / R, true a | views L / R, a = 1/2 | default (refiner), estimated a |',
-            '| --- ' * 8 + '|']
+            'views L / R, true a | views L / R, a = 1/2 | refiner trained on a = 1/2, '
+            'estimated a | default (refiner trained on any a), estimated a |',
+            '| --- ' * 9 + '|']
   part2 = [r for r in rows if r['part'] == 2]
   for name in dict.fromkeys(r['group'] for r in part2):
     for weight in WEIGHTS:
@@ -158,8 +165,11 @@ def tables(rows):
                    f"{_mean(got, 'psnr_left'):.2f} / {_mean(got, 'psnr_right'):.2f} | "
                    f"{_mean(got, 'true_psnr_left'):.2f} / {_mean(got, 'true_psnr_right'):.2f} | "
                    f"{_mean(got, 'half_psnr_left'):.2f} / {_mean(got, 'half_psnr_right'):.2f} | "
+                   f"{_mean(got, 'refiner_half_psnr_left'):.2f} / "
+                   f"{_mean(got, 'refiner_half_psnr_right'):.2f} | "
                    f"{_mean(got, 'default_psnr_left'):.2f} / "
                    f"{_mean(got, 'default_psnr_right'):.2f} |")
+  lines += ['', *_weighted_gains(part2)]
   lines += ['', '## 3. Eye order', '', 'Share of runs whose left view is nearer (RGB PSNR) '
             'to the true left view than to the true right one. For a != 1/2 the criterion '
             'also fails when a weak separation leaves the mixture, which then resembles the '
@@ -172,6 +182,24 @@ def tables(rows):
             '## 4. Ablation: the ZNCC share of the learned stage\'s cost, I = (L + R) / 2', '',
             *same_channel.method_table([r for r in rows if r['part'] == 4],
                                        [f'zncc share {s}' for s in ZNCC_SHARES], 'cost'), '']
+  return lines
+
+
+def _weighted_gains(part2):
+  """Part 2's summary: each refiner's views minus the classical ones (both with the
+  estimated a), averaged over every scene group and a != 1/2, and the worst case."""
+  lines = ['Views minus the classical views (dB, L / R), both with the estimated a, at '
+           'a != 1/2: mean over the groups and weights, and the worst group and weight.', '',
+           '| refiner | mean | worst |', '| --- | --- | --- |']
+  cells = [[r for r in part2 if r['group'] == name and r['weight'] == weight]
+           for name in dict.fromkeys(r['group'] for r in part2)
+           for weight in WEIGHTS if weight != 0.5]
+  for key, label in REFINERS.items():
+    gains = np.array([[_mean(cell, f'{key}_psnr_{eye}') - _mean(cell, f'psnr_{eye}')
+                       for eye in ('left', 'right')] for cell in cells])
+    mean, worst = gains.mean(axis=0), gains.min(axis=0)
+    lines.append(f'| {label} | {mean[0]:+.2f} / {mean[1]:+.2f} | '
+                 f'{worst[0]:+.2f} / {worst[1]:+.2f} |')
   return lines
 
 

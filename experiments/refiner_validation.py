@@ -9,7 +9,9 @@ pretrained/diplopia/weights.npz` and its info.json in one folder.)
 Validation examples: `refiner_data.make_example` at indices 100000 on (training uses
 0-1499 of the same generator: realistic `sample` scenes with scikit-image's training
 photographs, 30% clean, the rest degraded), 24 at 160 x 320 (disparities up to 64 px) and
-16 cut from scenes twice as large and deep. Rows: the classical method, the shipped model
+16 cut from scenes twice as large and deep; for double images the same again with
+a L + (1 - a) R, a from [0.3, 0.7] (`ExampleConfig.weighted_probability` = 1), every
+method estimating a (`--mixing_weight=auto`). Rows: the classical method, the shipped model
 of the encoding (`pretrained.choose`) and each item of --refiner_runs (a training run,
 its newest checkpoint, or a pretrained folder holding info.json), all as the tools run them (range estimated per image). Scores: left bad-1
 over every pixel and both views' RGB PSNR against the scenes' truth.
@@ -28,6 +30,7 @@ from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.training import refiner_data
+from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import shipped
 
@@ -41,14 +44,18 @@ flags.DEFINE_string('refiner_validation_output',
 FLAGS = flags.FLAGS
 
 FIRST_INDEX = 100000
-SCALES = (('160x320, up to 64 px', 0.0, 24), ('320x640, up to 128 px', 1.0, 16))
+# (label, large_probability, weighted, count).
+SCALES = (('160x320, up to 64 px', 0.0, False, 24), ('320x640, up to 128 px', 1.0, False, 16),
+          ('160x320, a in [0.3, 0.7]', 0.0, True, 24),
+          ('320x640, a in [0.3, 0.7]', 1.0, True, 16))
 
 
-def _unmixers(name, runs, folder):
-  """{label: Unmixer}: classical, the shipped model, then each run."""
-  config = predictors.PredictorConfig(mixture=name, method='model')
+def _unmixers(name, runs, folder, weight):
+  """{label: Unmixer}: classical, the shipped model, then each run; `weight`: their
+  mixing weight (`PredictorConfig.mixing_weight`)."""
+  config = predictors.PredictorConfig(mixture=name, method='model', mixing_weight=weight)
   out = {'classical': predictors.build_unmixer(
-      predictors.PredictorConfig(mixture=name, method='classical')),
+      predictors.PredictorConfig(mixture=name, method='classical', mixing_weight=weight)),
          'shipped': shipped.pretrained_unmixer(pretrained.choose(None, name), config)}
   for index, run in enumerate(runs):
     if not os.path.isdir(run):
@@ -64,10 +71,14 @@ def main(argv):
   textures = synthetic.load_textures('train')
   lines = ['| scenes | model | bad-1 | views L / R (dB) |', '| --- | --- | --- | --- |']
   with tempfile.TemporaryDirectory() as folder:
-    unmixers = _unmixers(FLAGS.refiner_mixture, FLAGS.refiner_runs, folder)
-    for label, large, count in SCALES:
+    for label, large, weighted, count in SCALES:
+      if weighted and not families.of(FLAGS.refiner_mixture).weighted:
+        continue
+      unmixers = _unmixers(FLAGS.refiner_mixture, FLAGS.refiner_runs, folder,
+                           'auto' if weighted else None)
       config = refiner_data.ExampleConfig(mixtures=FLAGS.refiner_mixture,
-                                          clean_probability=0.3, large_probability=large)
+                                          clean_probability=0.3, large_probability=large,
+                                          weighted_probability=float(weighted))
       rows = {key: [] for key in unmixers}
       for index in range(FIRST_INDEX, FIRST_INDEX + count):
         example = refiner_data.make_example(index, config, textures)

@@ -33,7 +33,8 @@ for path in sys.argv[1:]:
                'model': model.to_dict(), 'loss': dataclasses.asdict(loss),
                'num_steps': flags.FLAGS.num_steps, 'num_epochs': flags.FLAGS.num_epochs,
                'mode': flags.FLAGS.mode, 'init_checkpoint': flags.FLAGS.init_checkpoint,
-               'optimizer': flags.FLAGS.optimizer, 'architecture': flags.FLAGS.architecture}
+               'optimizer': flags.FLAGS.optimizer, 'architecture': flags.FLAGS.architecture,
+               'weighted_probability': flags.FLAGS.weighted_probability}
 print(json.dumps(out))
 '''
 
@@ -70,9 +71,19 @@ def test_every_flagfile_builds_valid_configs():
   assert parsed['eigen_monocular.flags']['pipeline']['mixture'] == 'monocular'
   # The shipped models' recipes: the hybrid refiner (not the paper's network).
   for name, mixture in (('pretrained_anaglyph.flags', 'anaglyphs'),
-                        ('pretrained_diplopia.flags', 'diplopia')):
+                        ('pretrained_diplopia.flags', 'diplopia'),
+                        ('pretrained_diplopia_weighted.flags', 'diplopia')):
     assert parsed[name]['architecture'] == 'refiner'
     assert parsed[name]['pipeline']['mixture'] == mixture
+  # The weighted recipe is the a = 1/2 one with half of its examples mixed unequally, twice
+  # the examples (as many at a = 1/2) and 1.5x the steps.
+  half, weighted = (parsed[f'pretrained_diplopia{s}.flags'] for s in ('', '_weighted'))
+  assert half['weighted_probability'] == 0.0 and weighted['weighted_probability'] == 0.5
+  assert weighted['data']['sample_scenes'] == 2 * half['data']['sample_scenes']
+  assert weighted['num_steps'] == 1.5 * half['num_steps']
+  same = lambda run: {k: v for k, v in run.items()
+                      if k not in ('weighted_probability', 'num_steps', 'data')}
+  assert same(weighted) == same(half)
   assert parsed['pretrained_features.flags']['architecture'] == 'features'
   assert parsed['eigen_monocular.flags']['num_epochs'] == 10
   assert parsed['kitti_anaglyph_separation_only.flags']['mode'] == 'separation_only'
