@@ -98,6 +98,24 @@ def test_the_shipped_echo_features_load_and_run_but_are_not_the_default():
   assert out['left'].shape == image.shape
 
 
+def test_the_learned_echo_stage_picks_the_true_echo_more_often_on_held_out_scenes(scenes):
+  """Held-out procedural double images (textures and scenes it never saw: the echo
+  features trained on warped photographs only): the share of pixels whose lag is off by
+  more than 3 px (a wrong echo) is lower with the learned stage than with the classical
+  ZNCC. Measured: 21.2% against 24.9% on average, better on 3 of the 5 scenes. (On the
+  real frames it is the other way round: docs/LEARNED_DIPLOPIA.md.)"""
+  methods = {name: predictors.build_unmixer(predictors.PredictorConfig(
+      'model' if name else 'classical', pretrained=name, mixture='diplopia'))
+             for name in (None, 'diplopia_echo')}
+  wrong = {name: [] for name in methods}
+  for scene in scenes:
+    image = np.rint((scene['left'].astype(float) + scene['right']) / 2).astype(np.uint8)
+    for name, unmix in methods.items():
+      error = np.abs(unmix(image)['disparity_left'] - scene['disparity_left'])
+      wrong[name].append((error > 3)[scene['valid_left']].mean())
+  assert np.mean(wrong['diplopia_echo']) < np.mean(wrong[None]) - 0.02, wrong
+
+
 def test_the_diplopia_refiner_reports_the_mixing_weight_of_its_base():
   rng = np.random.default_rng(1)
   texture = rng.integers(0, 256, (32, 72, 3)).astype(np.float32)
