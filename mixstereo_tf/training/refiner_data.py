@@ -23,9 +23,10 @@ One example (`make_example`):
      times as high, wide and deep, and a random height x width window of everything is
      kept: the network sees disparities, occlusions and classical errors of photo-sized
      images (as it does in a tile of one at inference) in an example of the usual size.
-Seeds: example i draws everything from seed i, its weight from seed (i, 1) (scenes: the `sample` training seeds; the
-held-out scenes use other textures and seeds 2^31 + i). Shards `shard_<k>.npz` of
-`shard_size` examples each are written atomically, so an interrupted build resumes.
+Seeds: example i draws everything from seed i and its weight from seed (i, 1) (scenes:
+the `sample` training seeds; the held-out scenes use other textures and seeds 2^31 + i).
+Shards `shard_<k>.npz` of `shard_size` examples each are written atomically, so an
+interrupted build resumes.
 """
 
 import dataclasses
@@ -62,7 +63,7 @@ class ExampleConfig:
     degrade: pass each mixture through `degrade.degrade` ...
     clean_probability: ... except this share of them, left clean.
     texture_dir: a folder of photographs for the scenes (None: scikit-image's).
-    large_probability: chance of an example cut from a larger scene (step 6) ...
+    large_probability: chance of an example cut from a larger scene (step 7) ...
     large_factor: ... this many times the size and disparity range.
     weighted_probability: chance that a double image mixes its eyes with a != 1/2 ...
     weight_range: ... drawn uniformly from this (low, high), 0 < low <= high < 1.
