@@ -13,8 +13,9 @@ photographs, 30% clean, the rest degraded), 24 at 160 x 320 (disparities up to 6
 a L + (1 - a) R, a from [0.3, 0.7] (`ExampleConfig.weighted_probability` = 1), every
 method estimating a (`--mixing_weight=auto`). Rows: the classical method, the shipped model
 of the encoding (`pretrained.choose`) and each item of --refiner_runs (a training run,
-its newest checkpoint, or a pretrained folder holding info.json), all as the tools run them (range estimated per image). Scores: left bad-1
-over every pixel and both views' RGB PSNR against the scenes' truth.
+its newest checkpoint, or a pretrained folder holding info.json), all as the tools run
+them (range estimated per image). Scores: left bad-1 over every pixel and both views'
+RGB PSNR against the scenes' truth.
 """
 
 import os
@@ -71,11 +72,14 @@ def main(argv):
   textures = synthetic.load_textures('train')
   lines = ['| scenes | model | bad-1 | views L / R (dB) |', '| --- | --- | --- | --- |']
   with tempfile.TemporaryDirectory() as folder:
+    weights = (False, True) if families.of(FLAGS.refiner_mixture).weighted else (False,)
+    built = {weighted: _unmixers(FLAGS.refiner_mixture, FLAGS.refiner_runs,
+                                 os.path.join(folder, str(weighted)),
+                                 'auto' if weighted else None) for weighted in weights}
     for label, large, weighted, count in SCALES:
-      if weighted and not families.of(FLAGS.refiner_mixture).weighted:
+      if weighted not in built:
         continue
-      unmixers = _unmixers(FLAGS.refiner_mixture, FLAGS.refiner_runs, folder,
-                           'auto' if weighted else None)
+      unmixers = built[weighted]
       config = refiner_data.ExampleConfig(mixtures=FLAGS.refiner_mixture,
                                           clean_probability=0.3, large_probability=large,
                                           weighted_probability=float(weighted))

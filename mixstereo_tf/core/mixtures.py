@@ -212,6 +212,13 @@ def mix(name: str, left, right) -> tf.Tensor:
   return get_mixture(name).fn(left, right)
 
 
+def mix_double(left, right, weight: float) -> tf.Tensor:
+  """A double image a L + (1 - a) R of images in [-1, 1], a = `weight` the left eye's
+  share (the 'diplopia' operator is a = 1/2); returns a float32 tensor."""
+  left, right = (tf.convert_to_tensor(image, tf.float32) for image in (left, right))
+  return float(weight) * left + (1.0 - float(weight)) * right
+
+
 def parse_names(text: str) -> Tuple[str, ...]:
   """'anaglyph' or a comma-separated list ('anaglyph,gray,dubois'); 'anaglyphs' stands for
   every anaglyph encoding. Raises ValueError naming an unknown name."""

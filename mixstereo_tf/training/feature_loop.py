@@ -137,8 +137,7 @@ def _mix(rng, config: FeatureTrainConfig, pair) -> Tuple[np.ndarray, str]:
   name = names[rng.integers(len(names))]
   left, right = (image_range.u8_to_signed(pair[k]) for k in ('left', 'right'))
   if name == DIPLOPIA:
-    weight = rng.uniform(*config.weight_range)
-    mixed = weight * np.asarray(left) + (1.0 - weight) * np.asarray(right)
+    mixed = mixtures.mix_double(left, right, rng.uniform(*config.weight_range))
   else:
     mixed = mixtures.mix(name, left, right)
   mixed = image_range.signed_to_unit(mixed)

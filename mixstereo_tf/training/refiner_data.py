@@ -127,11 +127,8 @@ def mixing_weight(index: int, name: str, config: ExampleConfig) -> Optional[floa
 def _mix(name: str, left: np.ndarray, right: np.ndarray, weight: Optional[float]):
   """uint8 views -> the mixture in [0, 1]: encoding `name`, or a L + (1 - a) R."""
   left, right = image_range.u8_to_signed(left), image_range.u8_to_signed(right)
-  if weight is None:
-    mixed = mixtures.mix(name, left, right)
-  else:
-    mixed = weight * np.asarray(left, np.float32) + (1.0 - weight) * np.asarray(right,
-                                                                               np.float32)
+  mixed = (mixtures.mix(name, left, right) if weight is None else
+           mixtures.mix_double(left, right, weight))
   return image_range.signed_to_unit(mixed)
 
 

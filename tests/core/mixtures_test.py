@@ -150,3 +150,11 @@ def test_eye_channels(name, eyes):
 def test_anaglyph_names_exclude_the_papers_other_operators():
   assert 'diplopia' not in mixtures.ANAGLYPH_NAMES and 'monocular' not in mixtures.ANAGLYPH_NAMES
   assert len(mixtures.ANAGLYPH_NAMES) == len(mixtures.MIXTURE_NAMES) - 2
+
+
+def test_mix_double_weights_the_left_eye_by_a():
+  left, right = np.full((2, 3, 3), 0.5, np.float32), np.full((2, 3, 3), -1.0, np.float32)
+  np.testing.assert_allclose(mixtures.mix_double(left, right, 0.3).numpy(),
+                             0.3 * 0.5 + 0.7 * -1.0, atol=1e-6)
+  np.testing.assert_allclose(mixtures.mix_double(left, right, 0.5).numpy(),
+                             mixtures.mix('diplopia', left, right).numpy(), atol=1e-6)
