@@ -137,6 +137,10 @@ flags.DEFINE_float('weighted_probability', refiner_data.ExampleConfig.weighted_p
                    'The share of double-image refiner examples mixed as a L + (1 - a) R with '
                    'a drawn from [0.3, 0.7] and estimated by their classical stage '
                    '(--mixing_weight=auto; not in the paper).')
+flags.DEFINE_string('refiner_base', refiner_data.ExampleConfig.base, '--architecture=refiner: '
+                    'the shipped stage (a --pretrained name, e.g. anaglyph_matching) the '
+                    'refiner is trained on and runs on, instead of the classical method (not '
+                    'in the paper).')
 
 flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner', 'features'), "joint: the "
                   "paper's network; refiner: the hybrid that refines the classical result "
@@ -226,7 +230,8 @@ def _train_refiner() -> None:
         width=FLAGS.sample_width or FLAGS.crop_width, max_disparity=FLAGS.max_disparity,
         degrade=FLAGS.degrade, clean_probability=FLAGS.clean_probability,
         large_probability=FLAGS.large_probability,
-        weighted_probability=FLAGS.weighted_probability, texture_dir=FLAGS.texture_dir)
+        weighted_probability=FLAGS.weighted_probability, texture_dir=FLAGS.texture_dir,
+        base=FLAGS.refiner_base)
     config = refiner_loop.RefinerTrainConfig(
         model_dir=FLAGS.model_dir, num_shards=-(-FLAGS.sample_scenes // shard_size),
         crop_height=FLAGS.crop_height, crop_width=FLAGS.crop_width,

@@ -34,7 +34,8 @@ for path in sys.argv[1:]:
                'num_steps': flags.FLAGS.num_steps, 'num_epochs': flags.FLAGS.num_epochs,
                'mode': flags.FLAGS.mode, 'init_checkpoint': flags.FLAGS.init_checkpoint,
                'optimizer': flags.FLAGS.optimizer, 'architecture': flags.FLAGS.architecture,
-               'weighted_probability': flags.FLAGS.weighted_probability}
+               'weighted_probability': flags.FLAGS.weighted_probability,
+               'refiner_base': flags.FLAGS.refiner_base}
 print(json.dumps(out))
 '''
 
@@ -84,6 +85,11 @@ def test_every_flagfile_builds_valid_configs():
   same = lambda run: {k: v for k, v in run.items()
                       if k not in ('weighted_probability', 'num_steps', 'data')}
   assert same(weighted) == same(half)
+  # The refiner on the learned stage: trained on that stage's results, photograph textures.
+  learned, plain = (parsed[f'pretrained_anaglyph{s}.flags'] for s in ('_learned', ''))
+  assert (learned['refiner_base'], plain['refiner_base']) == ('anaglyph_matching', '')
+  assert learned['data']['texture_dir'] == 'photos/warps' and learned['architecture'] == 'refiner'
+  assert learned['pipeline']['mixture'] == plain['pipeline']['mixture']
   assert parsed['pretrained_features.flags']['architecture'] == 'features'
   assert parsed['eigen_monocular.flags']['num_epochs'] == 10
   assert parsed['kitti_anaglyph_separation_only.flags']['mode'] == 'separation_only'

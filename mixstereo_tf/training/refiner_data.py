@@ -14,7 +14,9 @@ One example (`make_example`):
      pairs, as FFmpeg or StereoPhoto Maker make them), and 8-bit quantisation;
   5. the classical stage on it by inference's own route (`classical_stage`: the range
      planned by `steps.estimate_range`, then `steps.classical_unmix`), with the matcher
-     pinned to one SGM strip (`ONE_STRIP`);
+     pinned to one SGM strip (`ONE_STRIP`); with `base`, the shipped stage of that name
+     instead (`base_stage`: the solver serving runs, `shipped.stage_solver`), so a refiner
+     learns to correct the stage it will run on;
   6. for encodings that may mix the eyes unequally (`families.Family.weighted`: double
      images), with probability `weighted_probability` the mixture is a L + (1 - a) R
      with a drawn uniformly from `weight_range` (else a = 1/2), and the classical stage
@@ -31,22 +33,26 @@ interrupted build resumes.
 
 import dataclasses
 import os
-from typing import Dict, Optional, Tuple, Union
+from typing import Callable, Dict, Optional, Tuple, Union
 
 import numpy as np
 import tensorflow as tf
 
+from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import degrade
+from mixstereo_tf.data import photo_warps
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.unmixing import families
+from mixstereo_tf.unmixing import shipped
 from mixstereo_tf.unmixing import steps
 
 # One SGM strip: the matcher's strips otherwise follow the core count, and so would the
 # examples (the aggregation differs near strip borders).
 ONE_STRIP = hints.FrameHint(matcher_strips=1)
+Stage = Callable[..., Dict[str, object]]  # `shipped.stage_solver`'s solve(image, name, ...).
 KEYS = ('mixture', 'classical_left', 'classical_right', 'classical_disparity_left',
         'classical_disparity_right', 'left', 'right', 'disparity_left', 'disparity_right')
 
@@ -67,6 +73,8 @@ class ExampleConfig:
     large_factor: ... this many times the size and disparity range.
     weighted_probability: chance that a double image mixes its eyes with a != 1/2 ...
     weight_range: ... drawn uniformly from this (low, high), 0 < low <= high < 1.
+    base: the shipped stage (`artifacts/pretrained` name) the examples' first stage is
+      (step 5); '' the classical method.
   """
   mixtures: str = 'anaglyphs'
   height: int = 160
@@ -80,12 +88,19 @@ class ExampleConfig:
   large_factor: int = 2
   weighted_probability: float = 0.0
   weight_range: Tuple[float, float] = (0.3, 0.7)
+  base: str = ''
 
   def __post_init__(self):
     mixtures.parse_names(self.mixtures)  # ValueError naming an unknown encoding.
     synthetic.SceneConfig(self.max_disparity, self.height, self.width + self.max_disparity)
     if self.large_factor < 1:
       raise ValueError(f'ExampleConfig.large_factor must be >= 1, got {self.large_factor}.')
+    if self.base:
+      entry = pretrained.get(self.base)  # ValueError listing the shipped models.
+      if entry.kind == 'refiner' or any(m not in entry.mixtures
+                                        for m in mixtures.parse_names(self.mixtures)):
+        raise ValueError(f'ExampleConfig.base {self.base!r} ({entry.kind} for '
+                         f'{entry.mixture}) is no first stage of {self.mixtures!r}.')
     low, high = self.weight_range
     if not 0.0 < low <= high < 1.0:
       raise ValueError(f'ExampleConfig.weight_range needs 0 < low <= high < 1, got '
@@ -99,6 +114,7 @@ class ExampleConfig:
 
 def _textures(config: ExampleConfig) -> synthetic.TextureAtlas:
   if config.texture_dir:
+    photo_warps.refuse_evaluation_photos(config.texture_dir)
     return synthetic.load_texture_dir(config.texture_dir)
   return synthetic.load_textures('train')
 
@@ -132,10 +148,16 @@ def _mix(name: str, left: np.ndarray, right: np.ndarray, weight: Optional[float]
   return image_range.signed_to_unit(mixed)
 
 
-def make_example(index: int, config: ExampleConfig,
-                 textures: synthetic.TextureAtlas) -> Dict[str, np.ndarray]:
+def base_stage(config: ExampleConfig) -> Optional[Stage]:
+  """The solver of `config.base` (step 5), or None for the classical method."""
+  return shipped.stage_solver(pretrained.get(config.base)) if config.base else None
+
+
+def make_example(index: int, config: ExampleConfig, textures: synthetic.TextureAtlas,
+                 stage: Optional[Stage] = None) -> Dict[str, np.ndarray]:
   """Example `index` (module docstring): uint8 images, float32 disparities, str 'name',
-  bool 'clean' (whether the mixture was left undegraded)."""
+  bool 'clean' (whether the mixture was left undegraded). `stage`: `base_stage(config)`
+  (built once by the caller; None: the classical method)."""
   rng = np.random.default_rng(index)
   window = rng.uniform() < config.window_probability
   fraction = rng.uniform(0.0, 0.7) if window else 0.0
@@ -145,14 +167,15 @@ def make_example(index: int, config: ExampleConfig,
   # Drawn after the others: with p = 0 the examples of earlier recipes stay the same.
   factor = config.large_factor if rng.uniform() < config.large_probability else 1
   height, width = factor * config.height, factor * config.width
-  example = _whole_example(index, name, window, fraction, clean, factor, config, textures)
+  example = _whole_example(index, name, window, fraction, clean, factor, config, textures,
+                           stage)
   y0, x0 = rng.integers(height - config.height + 1), rng.integers(width - config.width + 1)
   window_of = lambda a: a[y0:y0 + config.height, x0:x0 + config.width]
   return dict({key: window_of(example[key]) for key in KEYS}, name=name,
               clean=bool(clean or not config.degrade))
 
 
-def _whole_example(index, name, window, fraction, clean, factor, config, textures):
+def _whole_example(index, name, window, fraction, clean, factor, config, textures, stage):
   """Steps 1-6 on a scene `factor` times the configured size (all of KEYS)."""
   max_disparity = factor * config.max_disparity
   width = factor * config.width
@@ -169,7 +192,7 @@ def _whole_example(index, name, window, fraction, clean, factor, config, texture
   if config.degrade and not clean:
     mixed = degrade.degrade(mixed, tf.constant([index, 7], tf.int32))
   mixture = image_range.unit_to_u8(np.asarray(mixed))
-  base = classical_stage(mixture, name, None if weight is None else 'auto')
+  base = classical_stage(mixture, name, None if weight is None else 'auto', stage)
   return {'mixture': mixture,
           'classical_left': base['left'], 'classical_right': base['right'],
           'classical_disparity_left': base['disparity_left'].astype(np.float32),
@@ -179,16 +202,17 @@ def _whole_example(index, name, window, fraction, clean, factor, config, texture
           'disparity_right': pair['disparity_right'].astype(np.float32)}
 
 
-def classical_stage(mixture: np.ndarray, name: str,
-                    weight: Union[None, float, str] = None) -> Dict[str, np.ndarray]:
+def classical_stage(mixture: np.ndarray, name: str, weight: Union[None, float, str] = None,
+                    stage: Optional[Stage] = None) -> Dict[str, np.ndarray]:
   """The classical method's result on a uint8 mixture as inference computes it (the
-  range estimated from the image, `steps.estimate_range`; `steps.classical_unmix`), with
-  the matcher pinned to one strip (`ONE_STRIP`); `weight`: a double image's mixing weight
-  (`hints.FrameHint.mixing_weight`: None 1/2, 'auto' estimated, or a number)."""
+  range estimated from the image, `steps.estimate_range`; `steps.classical_unmix`, or
+  `stage` in its place), with the matcher pinned to one strip (`ONE_STRIP`); `weight`: a
+  double image's mixing weight (`hints.FrameHint.mixing_weight`: None 1/2, 'auto'
+  estimated, or a number)."""
   default = families.of(name).classical_range()
   hint = dataclasses.replace(ONE_STRIP, mixing_weight=weight)
   search = steps.estimate_range(mixture, name, None, default, hint)
-  return steps.classical_unmix(mixture, name, search, hint)
+  return (stage or steps.classical_unmix)(mixture, name, search, hint)
 
 
 def _shard_path(folder: str, shard: int) -> str:
@@ -200,8 +224,8 @@ def build_shard(folder: str, shard: int, shard_size: int, config: ExampleConfig)
   path = _shard_path(folder, shard)
   if os.path.exists(path):
     return path
-  textures = _textures(config)
-  examples = [make_example(i, config, textures)
+  textures, stage = _textures(config), base_stage(config)
+  examples = [make_example(i, config, textures, stage)
               for i in range(shard * shard_size, (shard + 1) * shard_size)]
   arrays = {key: np.stack([e[key] for e in examples]) for key in KEYS}
   arrays['name'] = np.array([e['name'] for e in examples])

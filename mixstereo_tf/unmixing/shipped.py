@@ -57,17 +57,34 @@ _SOLVERS: Dict[str, Callable[[tf.keras.Model, Optional[Solve]], Solve]] = {
                                        learned_diplopia.learned_unmix, 'learned echo stage')}
 
 
+def stage_solver(entry: pretrained.Pretrained, base: Optional[Solve] = None) -> Solve:
+  """The `steps.run` solver of a shipped stage (kind 'refiner', 'features' or
+  'echo_features'): `solve(image, name, search, hint)` -> outputs. Serving and the
+  refiner's training examples (`training/refiner_data.py`) both run stages through it.
+
+  Raises:
+    ValueError: a kind without such a solver ('joint').
+  """
+  if entry.kind not in _SOLVERS:
+    raise ValueError(f'{entry.name}: a {entry.kind} model is no stage of the classical '
+                     f'route; stages: {", ".join(_SOLVERS)}.')
+  return _SOLVERS[entry.kind](pretrained.load_model(entry), base)
+
+
 def pretrained_unmixer(entry: pretrained.Pretrained,
                        config: unmixer.PredictorConfig = unmixer.PredictorConfig(),
                        base: Optional[pretrained.Pretrained] = None) -> unmixer.Unmixer:
-  """The 'model' Unmixer of a shipped model (module docstring); with `base`, a shipped
-  stage that `entry` (a refiner) runs on instead of the classical method.
+  """The 'model' Unmixer of a shipped model (module docstring); with `base` (default: the
+  model's own `Pretrained.base`), a shipped stage that `entry` (a refiner) runs on instead
+  of the classical method.
 
   Raises:
     ValueError: a mixture the model does not unmix, or one without the model's stage.
   """
-  model = pretrained.load_model(entry)
+  if base is None and entry.base:
+    base = pretrained.get(entry.base)
   if entry.kind == 'joint':
+    model = pretrained.load_model(entry)
     run_info = runs.RunInfo(entry.mixture, entry.crop[0], entry.crop[1], model.model_config)
     graph = tf.function(graphs.serving_function(model),
                         input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)])
@@ -79,8 +96,7 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
   if config.mixture is None and len(trained) > 1:  # Several encodings: detect each image's.
     config = dataclasses.replace(config, mixture=steps.AUTO)
   requested = unmixer.check_mixture(config, trained)
-  base_stage = base and _SOLVERS[base.kind](pretrained.load_model(base), None)
-  stage = _SOLVERS[entry.kind](model, base_stage)
+  stage = stage_solver(entry, base and stage_solver(base))
 
   def solve(image, name, search, hint):
     outputs = stage(image, name, search, hint)

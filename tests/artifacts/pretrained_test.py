@@ -93,6 +93,24 @@ def test_untrained_refiner_unmixes_like_the_classical_method(tmp_path):
                                                       checkpoint=str(tmp_path)))
 
 
+def test_a_refiner_saved_with_a_base_runs_on_that_shipped_stage(tmp_path):
+  """A zero refiner on `base` returns the base stage's disparities, not classical's."""
+  entry = pretrained.save(refiner.build_refiner(TINY), str(tmp_path / 'zero'), 'refiner',
+                          'anaglyphs', TINY.to_dict(), 'r', 'n', base='anaglyph_matching')
+  assert entry.base == 'anaglyph_matching'
+  assert json.loads((tmp_path / 'zero' / 'info.json').read_text())['base'] == entry.base
+  rng = np.random.default_rng(1)
+  left = (rng.uniform(size=(48, 96, 3)) * 255).astype(np.uint8)
+  right = np.roll(left, -4, axis=1)
+  image = np.concatenate([left[..., :1], right[..., 1:]], -1)
+  run = lambda **kw: predictors.build_unmixer(predictors.PredictorConfig(
+      mixture='anaglyph', disparity_range=(0, 15), **kw))(image)
+  ours, stage = run(pretrained=entry.folder), run(pretrained='anaglyph_matching')
+  assert ours['info']['pretrained'] == 'zero on anaglyph_matching'
+  np.testing.assert_allclose(ours['disparity_left'], stage['disparity_left'], atol=1e-4)
+  assert not np.allclose(ours['disparity_left'], run(method='classical')['disparity_left'])
+
+
 def test_choose_prefers_the_model_marked_default(tmp_path, monkeypatch):
   model = refiner.build_refiner(TINY)
   for name, default in (('a_first', False), ('b_marked', True), ('c_other', False)):

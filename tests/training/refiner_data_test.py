@@ -162,3 +162,35 @@ def test_a_weighted_double_image_and_its_classical_stage_with_the_weight_estimat
   for key in ('left', 'right', 'disparity_left', 'disparity_right'):
     np.testing.assert_array_equal(served['auto'][key], example[f'classical_{key}'])
   assert not np.array_equal(served[None]['left'], example['classical_left'])
+
+
+def test_a_shipped_base_stage_gives_the_examples_first_stage_as_served(textures):
+  config = dataclasses.replace(SMALL, mixtures='anaglyph', height=64, width=128,
+                               max_disparity=24, base='anaglyph_matching')
+  stage = refiner_data.base_stage(config)
+  example = refiner_data.make_example(3, config, textures, stage)
+  plain = refiner_data.make_example(3, dataclasses.replace(config, base=''), textures)
+  np.testing.assert_array_equal(example['mixture'], plain['mixture'])
+  # Its first-stage arrays are what `--pretrained=anaglyph_matching` serves, not classical.
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'model', mixture='anaglyph', pretrained='anaglyph_matching'))
+  served = unmixer(example['mixture'], hint=dataclasses.replace(refiner_data.ONE_STRIP,
+                                                                mixture='anaglyph'))
+  for key in ('left', 'right', 'disparity_left', 'disparity_right'):
+    np.testing.assert_array_equal(served[key], example[f'classical_{key}'])
+  assert not np.array_equal(plain['classical_disparity_left'],
+                            example['classical_disparity_left'])
+
+
+@pytest.mark.parametrize('base, message', [('no_such_model', 'No pretrained model'),
+                                           ('anaglyph', 'no first stage'),
+                                           ('diplopia_echo', 'no first stage')])
+def test_a_base_that_is_no_first_stage_of_the_mixtures_is_refused(base, message):
+  with pytest.raises(ValueError, match=message):
+    dataclasses.replace(SMALL, base=base)
+
+
+def test_texture_photographs_that_look_like_evaluation_scenes_are_refused(tmp_path):
+  (tmp_path / 'teddy.png').write_bytes(b'')
+  with pytest.raises(ValueError, match='teddy.png'):
+    refiner_data._textures(dataclasses.replace(SMALL, texture_dir=str(tmp_path)))  # pylint: disable=protected-access

@@ -64,6 +64,8 @@ class Pretrained:
     crop: its training crop (height, width).
     default: the tools' model for the mixtures it unmixes (`choose`; chosen by the
       evaluation of its `results`).
+    base: a refiner's first stage, the shipped model it was trained on and runs on (its
+      examples' `refiner_data.ExampleConfig.base`); '' the classical method.
   """
   name: str
   folder: str
@@ -74,6 +76,7 @@ class Pretrained:
   results: str = ''
   crop: Tuple[int, int] = (0, 0)
   default: bool = False
+  base: str = ''
 
   @property
   def mixtures(self) -> Tuple[str, ...]:
@@ -96,7 +99,8 @@ def read(folder: str) -> Pretrained:
                        kind=info['kind'], mixture=info['mixture'], config=info['config'],
                        recipe=info.get('recipe', ''), results=info.get('results', ''),
                        crop=tuple(info.get('crop', (0, 0))),
-                       default=bool(info.get('default', False)))
+                       default=bool(info.get('default', False)),
+                       base=str(info.get('base') or ''))
   except (json.JSONDecodeError, KeyError, TypeError) as e:
     raise ValueError(f'{path} is not a valid pretrained model description: {e!r}') from None
   if entry.kind not in _BUILDERS:
@@ -147,6 +151,7 @@ def describe() -> str:
   lines = []
   for entry in available():
     lines += [f'{entry.name}: {entry.kind} model for {", ".join(entry.mixtures)}'
+              + (f' on {entry.base}' if entry.base else '')
               + (' (the default)' if entry.default else ''),
               f'  recipe: {entry.recipe}', f'  held-out: {entry.results}', '']
   return '\n'.join(lines) or 'No pretrained models are installed.'
@@ -172,17 +177,21 @@ def load_model(entry: Pretrained) -> tf.keras.Model:
 
 def save(model: tf.keras.Model, folder: str, kind: str, mixture: str,
          config: Mapping[str, Any], recipe: str, results: str,
-         crop: Tuple[int, int] = (0, 0)) -> Pretrained:
-  """Writes `model` as a pretrained folder (float16 weights); returns its entry."""
+         crop: Tuple[int, int] = (0, 0), base: str = '') -> Pretrained:
+  """Writes `model` as a pretrained folder (float16 weights); returns its entry. `base`:
+  the shipped stage a refiner runs on (`Pretrained.base`)."""
   if kind not in _BUILDERS:
     raise ValueError(f'Unknown kind {kind!r}; valid: {", ".join(KINDS)}.')
   os.makedirs(folder, exist_ok=True)
   np.savez_compressed(os.path.join(folder, WEIGHTS_FILE),
                       **{f'w{i:04d}': np.asarray(v, np.float16)
                          for i, v in enumerate(model.get_weights())})
+  info = {'kind': kind, 'mixture': mixture, 'config': dict(config), 'recipe': recipe,
+          'results': results, 'crop': list(crop)}
+  if base:
+    info['base'] = base
   with open(os.path.join(folder, INFO_FILE), 'w', encoding='utf-8') as f:
-    json.dump({'kind': kind, 'mixture': mixture, 'config': dict(config), 'recipe': recipe,
-               'results': results, 'crop': list(crop)}, f, indent=2, sort_keys=True)
+    json.dump(info, f, indent=2, sort_keys=True)
   return read(folder)
 
 
@@ -209,4 +218,5 @@ def from_run(path: str, folder: str, recipe: str, results: str) -> Pretrained:
     return save(model, folder, kind, sections['train']['mixtures'], config, recipe, results)
   pipeline = sections['pipeline']
   return save(model, folder, kind, pipeline['mixture'], config, recipe, results,
-              (int(pipeline['crop_height']), int(pipeline['crop_width'])))
+              (int(pipeline['crop_height']), int(pipeline['crop_width'])),
+              sections.get('examples', {}).get('base') or '')
