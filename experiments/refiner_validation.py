@@ -2,6 +2,10 @@
 
     python -m experiments.refiner_validation --refiner_runs=runs/diplopia_r7,OLD \
         [--refiner_mixture=diplopia]
+    python -m experiments.refiner_validation --refiner_mixture=anaglyph \
+        --refiner_runs=mixstereo_tf/artifacts/pretrained/anaglyph_refined,\
+mixstereo_tf/artifacts/pretrained/anaglyph \
+        --refiner_validation_output=experiments/results/refiner_validation_anaglyph.md
 
 (OLD: a pretrained folder, e.g. an earlier commit's, `git show REV:mixstereo_tf/artifacts/
 pretrained/diplopia/weights.npz` and its info.json in one folder.)
@@ -14,7 +18,8 @@ a L + (1 - a) R, a from [0.3, 0.7] (`ExampleConfig.weighted_probability` = 1), e
 method estimating a (`--mixing_weight=auto`). Rows: the classical method, the shipped model
 of the encoding (`pretrained.choose`) and each item of --refiner_runs (a training run,
 its newest checkpoint, or a pretrained folder holding info.json), all as the tools run
-them (range estimated per image). Scores: left bad-1 over every pixel and both views'
+them (range estimated per image; a refiner trained on a shipped stage runs on it,
+`Pretrained.base`). Scores: left bad-1 over every pixel and both views'
 RGB PSNR against the scenes' truth.
 """
 

@@ -13,6 +13,10 @@ experiments/realworld.py) and made into anaglyphs by FFmpeg: the colour ('anagly
 carry the same luminance channel: the same-channel reference. Scored: classical on each,
 the 'sgbm' peer baseline on the colour and the gray anaglyph; bad-1 / bad-3 / EPE over the
 valid ground truth, views' RGB PSNR, and each bad-1 over the same method's on 'gray'.
+Row 'true disparity' (scenes with dense ground truth): the shipped restoration on the true
+left disparity and the right one forward-warped from it (`eye_order.right_from_left`;
+the learned stage's where either is unknown): what the views would be with perfect
+matching, the views' headroom that matching can give.
 """
 
 import csv
@@ -32,6 +36,9 @@ from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.evaluation import velodyne
 from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.core import image_range
+from mixstereo_tf.restoration import views
+from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import shipped
 
@@ -45,20 +52,24 @@ FLAGS = flags.FLAGS
 FRACTION = 0.3
 REFERENCE = 'gray'
 # Row label -> the predictor: the classical method, the learned matching stage (the shipped
-# 'anaglyph_matching' features, the default), the refiner on it, the refiner on the
-# classical result (the previous default), and OpenCV's SGBM, the peer baseline.
+# 'anaglyph_matching' features), the refiner trained on it ('anaglyph_refined', which runs
+# on it), the classical method's refiner on it, the refiner on the classical result, and
+# OpenCV's SGBM, the peer baseline.
 METHODS = {'classical': dict(method='classical'),
            'learned': dict(method='model', pretrained='anaglyph_matching'),
+           'learned + its refiner': dict(method='model', pretrained='anaglyph_refined'),
            'learned + refiner': dict(method='model', pretrained='anaglyph'),
            'refiner': dict(method='model', pretrained='anaglyph'),
            'sgbm': dict(method='sgbm')}
 # Rows whose shipped refiner runs on the learned stage instead of the classical method.
 ON_LEARNED = {'learned + refiner': 'anaglyph_matching'}
 ENCODINGS = ('anaglyph', 'half_color', 'dubois_ffmpeg', REFERENCE)
-RUNS = tuple((name, method) for method in ('classical', 'learned', 'learned + refiner',
-                                           'refiner')
+RUNS = tuple((name, method) for method in ('classical', 'learned', 'learned + its refiner',
+                                           'learned + refiner', 'refiner')
              for name in ENCODINGS) + (('anaglyph', 'sgbm'), (REFERENCE, 'sgbm'))
 KITTI_FRAME = 'kitti_object_velodyne'
+TRUTH = 'true disparity'
+DENSE = 0.9  # Share of valid ground truth from which a scene gets the TRUTH row.
 
 
 def group(name):
@@ -111,14 +122,29 @@ def _score(pair, out):
   return row
 
 
+def true_disparity_views(pair, image, name):
+  """The TRUTH row's outputs (module docstring) for anaglyph `image` of `pair`."""
+  learned = unmixer(name, 'learned')(image)
+  d_left = np.where(pair['valid_left'], pair['disparity_left'], learned['disparity_left'])
+  d_right = eye_order.right_from_left(d_left.astype(np.float32))
+  d_right = np.where(np.isfinite(d_right), d_right, learned['disparity_right'])
+  restored = views.restore_views(image_range.u8_to_unit(image), name, d_left,
+                                 d_right.astype(np.float32))
+  return {'left': image_range.unit_to_u8(restored['left']),
+          'right': image_range.unit_to_u8(restored['right']),
+          'disparity_left': d_left.astype(np.float32), 'info': learned['info']}
+
+
 def _evaluate(shared_dir):
   rows = []
   for scene, data in scenes(shared_dir):
     pair = realworld.window_align(data, FRACTION)
-    for name, method in RUNS:
+    dense = np.mean(pair['valid_left']) >= DENSE
+    for name, method in RUNS + tuple((n, TRUTH) for n in ENCODINGS if dense):
       image = realworld.make_anaglyph(pair, name, 'ffmpeg')
       start = time.perf_counter()
-      out = unmixer(name, method)(image)
+      out = (true_disparity_views(pair, image, name) if method == TRUTH
+             else unmixer(name, method)(image))
       rows.append(dict(scene=scene, group=group(scene), encoding=name, method=method,
                        shift=pair['shift'], searched=out['info']['disparity_range'],
                        seconds=round(time.perf_counter() - start, 2), **_score(pair, out)))
@@ -152,13 +178,16 @@ def _table(rows):
   lines = ['| scenes | encoding | method | bad-1 | bad-3 | EPE px | RGB PSNR L / R | '
            f'bad-1 / {REFERENCE} (same method) |', '| --- ' * 8 + '|']
   for group in dict.fromkeys(r['group'] for r in rows):
-    for name, method in RUNS:
+    for name, method in RUNS + tuple((n, TRUTH) for n in ENCODINGS):
       these = [r for r in rows if r['group'] == group and r['encoding'] == name
                and r['method'] == method]
+      if not these:
+        continue
       gray = _mean([r for r in rows if r['group'] == group and r['encoding'] == REFERENCE
                     and r['method'] == method], 'bad1')
       bad1 = _mean(these, 'bad1')
-      ratio = 'reference' if name == REFERENCE else f'{bad1 / gray:.2f}x'
+      ratio = ('-' if method == TRUTH else 'reference' if name == REFERENCE
+               else f'{bad1 / gray:.2f}x')
       lines.append(f"| {group} | {name} | {method} | {100 * bad1:.1f}% | "
                    f"{100 * _mean(these, 'bad3'):.1f}% | {_mean(these, 'epe'):.2f} | "
                    f"{_mean(these, 'psnr_left'):.2f} / {_mean(these, 'psnr_right'):.2f} | "
@@ -190,9 +219,12 @@ def main(argv):
           '`--disparity_range=auto`). classical = `--method=classical`; learned = the '
           'learned matching stage, the default (`--pretrained=anaglyph_matching`: learned '
           'descriptors of both eyes, cosine costs, SGM; trained on warped photographs only, '
-          'so every camera here is unseen); learned + refiner = the shipped refiner on the '
-          'learned stage instead of the classical method; refiner = the previous default '
-          '(`--pretrained=anaglyph`, the refiner on the classical result); sgbm = '
+          'so every camera here is unseen); learned + its refiner = the refiner trained on '
+          "the learned stage's results (`--pretrained=anaglyph_refined`, which runs on it; "
+          'photograph textures, no stereo pair); learned + refiner = the classical '
+          "method's refiner (`--pretrained=anaglyph`) on the learned stage instead of the "
+          'classical method; refiner = that refiner on the classical result (a previous '
+          'default); sgbm = '
           "`--method=sgbm`, OpenCV's StereoSGBM untuned (block 5, P1 = 200, P2 = 800, "
           "OpenCV's defaults otherwise) on the left eye's channel against the mean of the "
           "right eye's (`mixstereo_tf/classical/sgbm.py`). gray: both eyes carry "
