@@ -137,6 +137,9 @@ flags.DEFINE_float('weighted_probability', refiner_data.ExampleConfig.weighted_p
                    'The share of double-image refiner examples mixed as a L + (1 - a) R with '
                    'a drawn from [0.3, 0.7] and estimated by their classical stage '
                    '(--mixing_weight=auto; not in the paper).')
+flags.DEFINE_integer('refiner_disparity_features', refiner.RefinerConfig.disparity_features,
+                     '--architecture=refiner: width of the disparity refinement network (its '
+                     'cost grows with the square; not in the paper).')
 flags.DEFINE_string('refiner_base', refiner_data.ExampleConfig.base, '--architecture=refiner: '
                     'the shipped stage (a --pretrained name, e.g. anaglyph_matching) the '
                     'refiner is trained on and runs on, instead of the classical method (not '
@@ -167,6 +170,9 @@ flags.DEFINE_list('feature_dilations', list(matching_features.FeatureConfig.dila
                   'convolutions (comma-separated); empty: all 1.')
 
 _RENAMED = {'DataConfig.split_list': 'train_list'}
+# The refiner's config fields behind differently named flags.
+_REFINER_RENAMED = {'ExampleConfig.base': 'refiner_base',
+                    'RefinerConfig.disparity_features': 'refiner_disparity_features'}
 
 
 def _ints(values, name):
@@ -238,11 +244,12 @@ def _train_refiner() -> None:
         batch_size=FLAGS.batch_size, learning_rate=FLAGS.learning_rate,
         num_steps=FLAGS.num_steps, checkpoint_every=FLAGS.checkpoint_every,
         log_every=FLAGS.log_every, seed=FLAGS.seed)
+    architecture = refiner.RefinerConfig(disparity_features=FLAGS.refiner_disparity_features)
   except ValueError as e:
-    raise cli_flags.usage_error(e) from None
+    raise cli_flags.usage_error(e, _REFINER_RENAMED) from None
   logging.info('Training the refiner on %d examples for %d steps.',
                config.num_shards * shard_size, config.num_steps)
-  refiner_loop.train(config, examples, refiner.RefinerConfig(), FLAGS.flags_into_string())
+  refiner_loop.train(config, examples, architecture, FLAGS.flags_into_string())
 
 
 def _train_features() -> None:

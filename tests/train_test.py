@@ -165,3 +165,12 @@ def test_multi_worker_strategy_from_tf_config_trains_with_two_workers(tmp_path):
   assert 'with 2 replica(s)' in outputs[0]
   # Only the chief (worker 0) writes into model_dir.
   assert tf.train.latest_checkpoint(str(tmp_path / 'run')).endswith('ckpt-2')
+
+
+def test_bad_refiner_flags_are_usage_errors_naming_the_flag(tmp_path):
+  for flag, message in (('--refiner_disparity_features=0',
+                         '--refiner_disparity_features must be positive'),
+                        ('--refiner_base=anaglyph', "--refiner_base 'anaglyph'")):
+    process = _train_cli(tmp_path / 'run', '--architecture=refiner', '--num_steps=1', flag)
+    output = process.communicate(timeout=120)[0]
+    assert process.returncode != 0 and message in output, output[-2000:]

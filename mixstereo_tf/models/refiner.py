@@ -66,8 +66,11 @@ class RefinerConfig:
     if len(self.view_widths) < 2 or min(self.view_widths) <= 0:
       raise ValueError(f'RefinerConfig.view_widths needs >= 2 positive entries, got '
                        f'{self.view_widths}.')
-    if self.disparity_features <= 0 or not self.dilations or min(self.dilations) <= 0:
-      raise ValueError('RefinerConfig.disparity_features and dilations must be positive.')
+    if self.disparity_features <= 0:
+      raise ValueError(f'RefinerConfig.disparity_features must be positive, got '
+                       f'{self.disparity_features}.')
+    if not self.dilations or min(self.dilations) <= 0:
+      raise ValueError(f'RefinerConfig.dilations must be positive, got {self.dilations}.')
     if not self.disparity_unit > 0:
       raise ValueError(f'RefinerConfig.disparity_unit must be positive, got '
                        f'{self.disparity_unit}.')
