@@ -232,7 +232,10 @@ def main(argv):
           'bad-1 / bad-3: share of valid ground-truth pixels off by more than 1 / 3 px; '
           'EPE: mean absolute error, px. KITTI: the object frame, sparse ground truth '
           'from its Velodyne scan (no occlusion filtering); the KITTI 2015 frame of '
-          '--shared_dir has no ground truth and is left out.', '', *_table(rows), '']
+          '--shared_dir has no ground truth and is left out. true disparity (scenes with '
+          'dense ground truth): the shipped restoration on the true left disparity and the '
+          'right one forward-warped from it (the learned stage\'s where unknown): the views '
+          'that perfect matching would give with this restoration.', '', *_table(rows), '']
   with open(FLAGS.same_channel_output, 'w') as handle:
     handle.write('\n'.join(text))
   print('\n'.join(text))
