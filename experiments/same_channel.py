@@ -122,17 +122,18 @@ def _score(pair, out):
   return row
 
 
-def true_disparity_views(pair, image, name):
-  """The TRUTH row's outputs (module docstring) for anaglyph `image` of `pair`."""
-  learned = unmixer(name, 'learned')(image)
-  d_left = np.where(pair['valid_left'], pair['disparity_left'], learned['disparity_left'])
-  d_right = eye_order.right_from_left(d_left.astype(np.float32))
-  d_right = np.where(np.isfinite(d_right), d_right, learned['disparity_right'])
-  restored = views.restore_views(image_range.u8_to_unit(image), name, d_left,
-                                 d_right.astype(np.float32))
+def true_disparity_views(pair, image, name, learned):
+  """The TRUTH row's outputs (module docstring) for anaglyph `image` of `pair`; `learned`:
+  the learned stage's outputs on it, where the truth is unknown."""
+  d_left = np.where(pair['valid_left'], pair['disparity_left'],
+                    learned['disparity_left']).astype(np.float32)
+  d_right = eye_order.right_from_left(d_left)
+  d_right = np.where(np.isfinite(d_right), d_right,
+                     learned['disparity_right']).astype(np.float32)
+  restored = views.restore_views(image_range.u8_to_unit(image), name, d_left, d_right)
   return {'left': image_range.unit_to_u8(restored['left']),
           'right': image_range.unit_to_u8(restored['right']),
-          'disparity_left': d_left.astype(np.float32), 'info': learned['info']}
+          'disparity_left': d_left, 'info': learned['info']}
 
 
 def _evaluate(shared_dir):
@@ -140,11 +141,14 @@ def _evaluate(shared_dir):
   for scene, data in scenes(shared_dir):
     pair = realworld.window_align(data, FRACTION)
     dense = np.mean(pair['valid_left']) >= DENSE
+    learned = {}  # Encoding -> the learned stage's outputs, for the TRUTH rows.
     for name, method in RUNS + tuple((n, TRUTH) for n in ENCODINGS if dense):
       image = realworld.make_anaglyph(pair, name, 'ffmpeg')
       start = time.perf_counter()
-      out = (true_disparity_views(pair, image, name) if method == TRUTH
+      out = (true_disparity_views(pair, image, name, learned[name]) if method == TRUTH
              else unmixer(name, method)(image))
+      if method == 'learned':
+        learned[name] = out
       rows.append(dict(scene=scene, group=group(scene), encoding=name, method=method,
                        shift=pair['shift'], searched=out['info']['disparity_range'],
                        seconds=round(time.perf_counter() - start, 2), **_score(pair, out)))

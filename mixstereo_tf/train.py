@@ -169,10 +169,9 @@ flags.DEFINE_list('feature_dilations', list(matching_features.FeatureConfig.dila
                   '--architecture=features: the dilation of each of the --feature_layers '
                   'convolutions (comma-separated); empty: all 1.')
 
-_RENAMED = {'DataConfig.split_list': 'train_list'}
-# The refiner's config fields behind differently named flags.
-_REFINER_RENAMED = {'ExampleConfig.base': 'refiner_base',
-                    'RefinerConfig.disparity_features': 'refiner_disparity_features'}
+# Config fields behind differently named flags.
+_RENAMED = {'DataConfig.split_list': 'train_list', 'ExampleConfig.base': 'refiner_base',
+            'RefinerConfig.disparity_features': 'refiner_disparity_features'}
 
 
 def _ints(values, name):
@@ -246,7 +245,7 @@ def _train_refiner() -> None:
         log_every=FLAGS.log_every, seed=FLAGS.seed)
     architecture = refiner.RefinerConfig(disparity_features=FLAGS.refiner_disparity_features)
   except ValueError as e:
-    raise cli_flags.usage_error(e, _REFINER_RENAMED) from None
+    raise cli_flags.usage_error(e, _RENAMED) from None
   logging.info('Training the refiner on %d examples for %d steps.',
                config.num_shards * shard_size, config.num_steps)
   refiner_loop.train(config, examples, architecture, FLAGS.flags_into_string())
