@@ -144,7 +144,9 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   def render(frame):
     unmix_start = time.perf_counter()
     index = state['done'] + state['rendered']
-    hint = shots.begin(frame, cut=index % video_config.segment_frames == 0)
+    # A video writes the views and the left disparity: the right one is not read.
+    hint = dataclasses.replace(shots.begin(frame, cut=index % video_config.segment_frames == 0),
+                               unread='disparity_right')
     result = unmixer(frame, hint=hint)
     shots.end(result)
     report.unmix_seconds += time.perf_counter() - unmix_start

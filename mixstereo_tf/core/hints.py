@@ -32,6 +32,9 @@ class FrameHint:
     mixing_weight: double images: the left view's weight a of I = a L + (1 - a) R; None:
       1/2 (`--mixture=diplopia` exactly); 'auto': estimated from the frame; a number in
       (0, 1): that weight (`classical.diplopia_layers.resolve_weight`).
+    unread: an output the caller does not read ('disparity_right': a video's frames,
+      which write the views and the left disparity): a stage may return its first stage's
+      value there instead of refining it (`steps.refiner_unmix`); None: every output.
   """
   mixture: Optional[str] = None
   detection: Optional[Dict[str, object]] = None
@@ -42,3 +45,4 @@ class FrameHint:
   full_search_cells: Optional[int] = None
   matcher_strips: Optional[int] = None
   mixing_weight: Union[None, float, str] = None
+  unread: Optional[str] = None

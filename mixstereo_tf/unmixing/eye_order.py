@@ -184,9 +184,17 @@ def right_from_left(disparity_left: np.ndarray) -> np.ndarray:
   return np.where(np.isfinite(out), out, np.nan).astype(np.float32)
 
 
+# An output of one eye -> the same output of the other (`unmirror` maps them so).
+_OTHER_EYE = {'left': 'right', 'right': 'left', 'disparity_left': 'disparity_right',
+              'disparity_right': 'disparity_left'}
+
+
 def mirror_hint(hint: hints.FrameHint) -> hints.FrameHint:
   """A frame hint for the mirrored image: its prior (the previous frame's left disparity)
-  becomes the mirrored problem's left disparity, the mirrored right one."""
+  becomes the mirrored problem's left disparity, the mirrored right one; an unread output
+  of one eye becomes the other eye's."""
+  if hint.unread in _OTHER_EYE:
+    hint = dataclasses.replace(hint, unread=_OTHER_EYE[hint.unread])
   if hint.prior is None:
     return hint
   return dataclasses.replace(hint, prior=_flip(right_from_left(hint.prior)))

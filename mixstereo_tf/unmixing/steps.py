@@ -130,27 +130,34 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
   return outputs
 
 
-def refiner_unmix(network: tiling.Network, multiple: int, image: np.ndarray, name: str,
-                  search: Range, hint: Optional[hints.FrameHint] = None,
+def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: int,
+                  image: np.ndarray, name: str, search: Range,
+                  hint: Optional[hints.FrameHint] = None,
                   base_stage: Optional[Callable[..., Dict[str, object]]] = None
                   ) -> Dict[str, object]:
   """The hybrid (`models/refiner.py`): the base stage (`classical_unmix`, or another with
   its signature and outputs, e.g. the learned matching stage), the refiner on its result
-  (in tiles), then, for anaglyphs, both views restored from the refined disparities with,
+  (`network(None)`, in tiles; `network(key)`: the refiner without output `key`, run when
+  the hint's `unread` is a disparity that nothing else reads: families that do not restore
+  views from both, whose output there is the base stage's), then, for anaglyphs, both
+  views restored from the refined disparities with,
   as the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
   the rest of the classical colour transfer (each alone was worse on some encodings),
   and the colour-line pass (+0.1 to +0.8 dB on validation examples); 'consistent_left'
   is that restoration's left-right check of the refined disparities."""
   base = (base_stage or classical_unmix)(image, name, search, hint)
-  refined = tiling.apply(network, refiner.network_input(
+  family = families.of(name)
+  unread = hint and hint.unread
+  skipped = (unread if unread in ('disparity_left', 'disparity_right')
+             and not family.restores_views else None)
+  refined = tiling.apply(network(skipped), refiner.network_input(
       image, base['left'], base['right'], base['disparity_left'],
       base['disparity_right']), multiple)
   outputs = {key: image_range.signed_to_u8(refined[key]) for key in ('left', 'right')}
   for key in ('disparity_left', 'disparity_right'):
-    outputs[key] = refined[key][..., 0]
+    outputs[key] = refined[key][..., 0] if key != skipped else base[key]
   if 'info' in base:  # The base's record: a double image's mixing weight.
     outputs['info'] = base['info']
-  family = families.of(name)
   if family.restores_views:
     mixture01 = image_range.u8_to_unit(image)
     disparities = outputs['disparity_left'], outputs['disparity_right']

@@ -1,6 +1,7 @@
 """Fully convolutional networks on images of any size in bounded memory: overlapping tiles.
 
-The image is cut into cores of `tile - 2 overlap` pixels; each core is run with `overlap`
+An image of at most `tile` x `tile` pixels in area (1280x720 for the default 1024) runs in
+one pass (padded at the bottom / right to the network's multiple). A larger one is cut into cores of `tile - 2 overlap` pixels; each core is run with `overlap`
 pixels of context on every side (edge-replicated at the image border and padded at the
 bottom / right to the network's multiple), and only the core of each result is kept. With
 an overlap at least the network's receptive radius the result equals one pass over the
@@ -28,7 +29,8 @@ def apply(network: Network, image: np.ndarray, multiple: int, tile: int = 1024,
       [1, h, w, c] arrays (tensors or NumPy).
     image: [H, W, C] float32.
     multiple: the network's size multiple.
-    tile: the largest side of one network input before padding, pixels.
+    tile: one network input holds at most tile x tile pixels before padding: the whole
+      image when it fits, else tiles of at most `tile` pixels a side.
     overlap: context pixels on each side of a core.
 
   Returns:
@@ -37,6 +39,10 @@ def apply(network: Network, image: np.ndarray, multiple: int, tile: int = 1024,
   if tile <= 2 * overlap:
     raise ValueError(f'tile ({tile}) must exceed twice the overlap ({overlap}).')
   height, width = image.shape[:2]
+  if height * width <= tile * tile:  # Same memory as one tile; no tile overheads.
+    outputs = network(_padded(image, multiple)[None].astype(np.float32))
+    return {key: np.asarray(value)[0, :height, :width].astype(np.float32)
+            for key, value in outputs.items()}
   core = tile - 2 * overlap
   result: Dict[str, np.ndarray] = {}
   for y in range(0, height, core):

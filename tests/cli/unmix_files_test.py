@@ -195,6 +195,23 @@ def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extensio
       np.testing.assert_array_equal(a.image, b.image)
 
 
+def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_path):
+  """Videos write the views and the left disparity: each frame's hint says so, which lets a
+  refiner leave out its right disparity correction (tests/unmixing/shipped_test.py)."""
+  source = _anaglyph_clip(tmp_path / 'clip.mp4', 'gray', frames=3)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='gray', disparity_range=(0, 8)))
+  seen = []
+
+  def unmix(image, hint=None):
+    seen.append(hint.unread)
+    return unmixer(image, hint=hint)
+
+  report = unmix_files.unmix_inputs(dataclasses.replace(unmixer, fn=unmix), source,
+                                    str(tmp_path / 'out'), media.OutputOptions('sbs'))
+  assert report.frames == 3 and seen == ['disparity_right'] * 3
+
+
 def test_unreadable_video_is_named(setup, tmp_path):
   (tmp_path / 'broken.mp4').write_bytes(b'not a video' * 100)
   report = unmix_files.unmix_inputs(setup, str(tmp_path / 'broken.mp4'), str(tmp_path / 'out'))

@@ -119,6 +119,11 @@ def test_right_disparity_forward_warped_from_the_left():
   assert hint.mixture == 'gray'
 
 
+def test_a_mirrored_hint_leaves_out_the_other_eyes_output():
+  for unread, mirrored in (('disparity_right', 'disparity_left'), ('left', 'right'), (None, None)):
+    assert eye_order.mirror_hint(hints.FrameHint(unread=unread)).unread == mirrored
+
+
 def test_auto_keeps_the_order_of_undetectable_encodings_and_refuses_a_single_view():
   image = np.zeros((32, 32, 3), np.uint8)
   assert eye_order.decide(image, 'diplopia', eye_order.AUTO, False) == (

@@ -10,6 +10,7 @@ import pytest
 import tensorflow as tf
 
 from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import sources
@@ -165,3 +166,34 @@ def test_the_default_diplopia_refiner_beats_the_half_trained_one_on_unequal_mixe
                       (1 - weight) * scene['right']).astype(np.uint8)
       gains.append(_views_psnr(default(image), scene) - _views_psnr(half(image), scene))
   assert np.mean(gains) > DIPLOPIA_MARGIN, gains
+
+
+@pytest.mark.parametrize('swap_eyes', [False, True])
+def test_an_unread_right_disparity_is_the_base_stages_and_the_rest_unchanged(scenes, swap_eyes):
+  """A video frame's hint (unread='disparity_right'): the diplopia refiner leaves out its
+  right disparity correction; the views and the left disparity are the full run's, the right
+  disparity is the classical stage's (with swapped eyes: of the mirrored problem)."""
+  scene = scenes[0]
+  image = np.rint((scene['left'].astype(float) + scene['right']) / 2).astype(np.uint8)
+  config = dict(mixture='diplopia', disparity_range=(1, 48),
+                swap_eyes=swap_eyes)
+  refined, classical = (predictors.build_unmixer(predictors.PredictorConfig(
+      method, **config)) for method in ('model', 'classical'))
+  full = refined(image)
+  video = refined(image, hint=hints.FrameHint(unread='disparity_right'))
+  for key in ('left', 'right'):
+    np.testing.assert_array_equal(video[key], full[key])
+  np.testing.assert_allclose(video['disparity_left'], full['disparity_left'], atol=1e-4)
+  base = classical(image)['disparity_right']
+  np.testing.assert_array_equal(video['disparity_right'], base)
+  assert np.abs(full['disparity_right'] - base).max() > 0.1  # The refiner changed it.
+
+
+def test_an_anaglyph_refiner_refines_both_disparities_whatever_is_unread(scenes):
+  """Anaglyph views are restored from both disparities, so an unread one is still refined."""
+  image = _anaglyph(scenes[0])
+  unmix = predictors.build_unmixer(predictors.PredictorConfig(
+      'model', pretrained='anaglyph', mixture='anaglyph', disparity_range=(0, 48)))
+  full, video = unmix(image), unmix(image, hint=hints.FrameHint(unread='disparity_right'))
+  for key in ('left', 'right', 'disparity_left', 'disparity_right'):
+    np.testing.assert_array_equal(video[key], full[key])
