@@ -20,18 +20,13 @@ from absl import logging
 from mixstereo_tf import models
 from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flags as cli_flags
-from mixstereo_tf.data import photo_warps
+from mixstereo_tf.cli import stage_training
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import sources
-from mixstereo_tf.models import matching_features
-from mixstereo_tf.models import refiner
 from mixstereo_tf.training import config as config_lib
-from mixstereo_tf.training import feature_loop
 from mixstereo_tf.training import loop
 from mixstereo_tf.training import objective
 from mixstereo_tf.training import optimizers
-from mixstereo_tf.training import refiner_data
-from mixstereo_tf.training import refiner_loop
 from mixstereo_tf.unmixing import families
 
 FLAGS = flags.FLAGS
@@ -127,25 +122,7 @@ flags.DEFINE_boolean('realistic_scenes', _DATA['realistic_scenes'], '`sample` tr
                      'scenes with ground planes, thin poles and more layers.')
 flags.DEFINE_boolean('degrade', _PIPE['degrade'], 'Degrade each mixture like a real file '
                      '(noise, blur, JPEG, vignetting, channel imbalance; not in the paper).')
-flags.DEFINE_float('clean_probability', refiner_data.ExampleConfig.clean_probability,
-                   'With --degrade, the share of refiner examples left clean (anaglyphs '
-                   'made digitally from clean pairs; not in the paper).')
-flags.DEFINE_float('large_probability', refiner_data.ExampleConfig.large_probability,
-                   'The share of refiner examples cut from a scene twice as large and deep '
-                   '(photo-sized disparities and occlusions; not in the paper).')
-flags.DEFINE_float('weighted_probability', refiner_data.ExampleConfig.weighted_probability,
-                   'The share of double-image refiner examples mixed as a L + (1 - a) R with '
-                   'a drawn from [0.3, 0.7] and estimated by their classical stage '
-                   '(--mixing_weight=auto; not in the paper).')
-flags.DEFINE_integer('refiner_disparity_features', refiner.RefinerConfig.disparity_features,
-                     '--architecture=refiner: width of the disparity refinement network (its '
-                     'cost grows with the square; not in the paper).')
-flags.DEFINE_string('refiner_base', refiner_data.ExampleConfig.base, '--architecture=refiner: '
-                    'the shipped stage (a --pretrained name, e.g. anaglyph_matching) the '
-                    'refiner is trained on and runs on, instead of the classical method (not '
-                    'in the paper).')
-
-flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner', 'features'), "joint: the "
+flags.DEFINE_enum('architecture', 'joint', ('joint', *stage_training.TRAINERS), "joint: the "
                   "paper's network; refiner: the hybrid that refines the classical result "
                   '(models/refiner.py; trained on cached `sample` examples with ground truth, '
                   'from --sample_scenes, --sample_height/width, --max_disparity, --mixture, '
@@ -157,31 +134,6 @@ flags.DEFINE_enum('architecture', 'joint', ('joint', 'refiner', 'features'), "jo
                   'by drawn disparity fields, --crop_height x --crop_width, --max_disparity, '
                   '--mixture, --degrade, --feature_width, --feature_layers, --feature_dilations; '
                   'not in the paper).')
-flags.DEFINE_integer('feature_width', matching_features.FeatureConfig.width,
-                     '--architecture=features: descriptor length (channels per convolution).')
-flags.DEFINE_boolean('photo_warps', photo_warps.WarpConfig.photo_warps,
-                     '--architecture=features: each pair is one photograph warped by a drawn '
-                     'disparity field (data/photo_warps.py); --nophoto_warps: procedural '
-                     'scenes textured from the same photographs (the ablation).')
-flags.DEFINE_integer('feature_layers', matching_features.FeatureConfig.layers,
-                     '--architecture=features: 3x3 convolutions per eye branch.')
-flags.DEFINE_list('feature_dilations', list(matching_features.FeatureConfig.dilations),
-                  '--architecture=features: the dilation of each of the --feature_layers '
-                  'convolutions (comma-separated); empty: all 1.')
-
-# Config fields behind differently named flags.
-_RENAMED = {'DataConfig.split_list': 'train_list', 'ExampleConfig.base': 'refiner_base',
-            'RefinerConfig.disparity_features': 'refiner_disparity_features'}
-
-
-def _ints(values, name):
-  try:
-    return tuple(int(v) for v in values)
-  except ValueError:
-    raise ValueError(f'--{name} must be a comma-separated list of integers, got '
-                     f'{",".join(values)!r}.') from None
-
-
 def build_configs():
   """Builds the frozen configs from the parsed flags (the only place FLAGS is read)."""
   data_config = sources.DataConfig(
@@ -199,9 +151,9 @@ def build_configs():
       flip=FLAGS.flip, seed=FLAGS.seed, skip_bad_pairs=FLAGS.skip_bad_pairs,
       degrade=FLAGS.degrade)
   model_config = models.ModelConfig(
-      separation_widths=_ints(FLAGS.unet_widths, 'unet_widths'),
+      separation_widths=stage_training.int_tuple(FLAGS.unet_widths, 'unet_widths'),
       stereo_features=FLAGS.stereo_features, stereo_residual_blocks=FLAGS.num_res_blocks,
-      stereo_3d_widths=_ints(FLAGS.volume_features, 'volume_features'),
+      stereo_3d_widths=stage_training.int_tuple(FLAGS.volume_features, 'volume_features'),
       max_disparity=FLAGS.max_disparity, census_cost=FLAGS.census_cost,
       # Monocular depth (I = I_L): the input is the left view (paper section 3.1).
       input_is_left=families.input_is_left(pipeline_config.mixture))
@@ -224,63 +176,11 @@ def _train_config(num_steps: int) -> config_lib.TrainConfig:
       seed=FLAGS.seed)
 
 
-def _train_refiner() -> None:
-  """--architecture=refiner: `training/refiner_loop.py` on the flags it reads."""
-  if FLAGS.num_steps is None:
-    raise app.UsageError('--architecture=refiner needs --num_steps.')
-  try:
-    shard_size = refiner_loop.RefinerTrainConfig.shard_size
-    examples = refiner_data.ExampleConfig(
-        mixtures=FLAGS.mixture or 'anaglyphs', height=FLAGS.sample_height or FLAGS.crop_height,
-        width=FLAGS.sample_width or FLAGS.crop_width, max_disparity=FLAGS.max_disparity,
-        degrade=FLAGS.degrade, clean_probability=FLAGS.clean_probability,
-        large_probability=FLAGS.large_probability,
-        weighted_probability=FLAGS.weighted_probability, texture_dir=FLAGS.texture_dir,
-        base=FLAGS.refiner_base)
-    config = refiner_loop.RefinerTrainConfig(
-        model_dir=FLAGS.model_dir, num_shards=-(-FLAGS.sample_scenes // shard_size),
-        crop_height=FLAGS.crop_height, crop_width=FLAGS.crop_width,
-        batch_size=FLAGS.batch_size, learning_rate=FLAGS.learning_rate,
-        num_steps=FLAGS.num_steps, checkpoint_every=FLAGS.checkpoint_every,
-        log_every=FLAGS.log_every, seed=FLAGS.seed)
-    architecture = refiner.RefinerConfig(disparity_features=FLAGS.refiner_disparity_features)
-  except ValueError as e:
-    raise cli_flags.usage_error(e, _RENAMED) from None
-  logging.info('Training the refiner on %d examples for %d steps.',
-               config.num_shards * shard_size, config.num_steps)
-  refiner_loop.train(config, examples, architecture, FLAGS.flags_into_string())
-
-
-def _train_features() -> None:
-  """--architecture=features: `training/feature_loop.py` on the flags it reads."""
-  if FLAGS.num_steps is None:
-    raise app.UsageError('--architecture=features needs --num_steps.')
-  names = FLAGS.mixture or 'anaglyphs'
-  try:
-    warp = photo_warps.WarpConfig(
-        height=FLAGS.crop_height, width=FLAGS.crop_width, max_disparity=FLAGS.max_disparity,
-        window_probability=feature_loop.window_probability(names),
-        photo_warps=FLAGS.photo_warps)
-    low, count = feature_loop.candidates(FLAGS.max_disparity, names)
-    config = feature_loop.FeatureTrainConfig(
-        model_dir=FLAGS.model_dir, texture_dir=FLAGS.texture_dir, mixtures=names, batch_size=FLAGS.batch_size,
-        learning_rate=FLAGS.learning_rate, num_steps=FLAGS.num_steps, min_disparity=low,
-        num_disparities=count, degrade_probability=0.7 if FLAGS.degrade else 0.0,
-        checkpoint_every=FLAGS.checkpoint_every, log_every=FLAGS.log_every, seed=FLAGS.seed)
-    features = matching_features.FeatureConfig(
-        FLAGS.feature_width, FLAGS.feature_layers,
-        _ints(FLAGS.feature_dilations, 'feature_dilations'))
-  except ValueError as e:
-    raise cli_flags.usage_error(e) from None
-  logging.info('Training the matching features for %d steps.', config.num_steps)
-  feature_loop.train(config, warp, features, FLAGS.flags_into_string())
-
-
 def main(argv):
   del argv
   device.log_line()
-  if FLAGS.architecture in ('refiner', 'features'):
-    (_train_refiner if FLAGS.architecture == 'refiner' else _train_features)()
+  if FLAGS.architecture in stage_training.TRAINERS:
+    stage_training.TRAINERS[FLAGS.architecture]()
     return
   if (FLAGS.num_steps is None) == (FLAGS.num_epochs is None):
     raise app.UsageError('Give exactly one of --num_steps and --num_epochs.')
@@ -295,7 +195,7 @@ def main(argv):
         FLAGS.num_epochs * len(samples) / FLAGS.batch_size)
     train_config = _train_config(num_steps)
   except ValueError as e:
-    raise cli_flags.usage_error(e, _RENAMED) from None
+    raise cli_flags.usage_error(e, stage_training.RENAMED) from None
   logging.info('Training on %d pairs from %s for %d steps.', len(samples), FLAGS.dataset,
                num_steps)
   try:
