@@ -7,9 +7,11 @@ Scenes with ground truth: the `sample` held-out scenes (8 procedural + Motorcycl
 source's factor) and the SceneFlow frame of --shared_dir when given. For each: (1) the colour anaglyph made by FFmpeg with no, 30 % and 70 % window
 alignment (`realworld.window_align`): classical bad-1; (2) at 30 % alignment every
 encoding FFmpeg makes of the red-cyan family plus one green-magenta and one amber-blue:
-classical told the encoding, classical on the encoding `detection` reports (and
---checkpoint's model) against the trivial baseline (the mixture as each view), RGB and
-luma PSNR, bad-1 / bad-3, and how often `detection` named the encoding.
+classical told the encoding, classical on the encoding `detection` reports, the shipped
+models told the encoding (`SHIPPED`: the default, the learned matching stage; the refiner
+trained on it; the refiner on the classical result) (and --checkpoint's model) against the
+trivial baseline (the mixture as each view), RGB and luma PSNR, bad-1 / bad-3, and how
+often `detection` named the encoding.
 """
 
 import csv
@@ -22,6 +24,7 @@ from absl import app
 from absl import flags
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
+from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import detection
@@ -35,6 +38,9 @@ flags.DEFINE_string('realworld_output', 'experiments/results/realworld.md', 'Mar
 FLAGS = flags.FLAGS
 
 FRACTIONS = (None, 0.3, 0.7)
+# Row label -> the shipped model (`--pretrained`; None: the default of the encoding).
+SHIPPED = {'shipped default': None, 'learned + its refiner': 'anaglyph_refined',
+           'refiner': 'anaglyph'}
 DETECTED = 'classical, detected encoding'
 ENCODINGS = ('anaglyph', 'gray', 'half_color', 'dubois_ffmpeg', 'green_magenta_half',
              'amber_blue_dubois')
@@ -47,6 +53,13 @@ def _group(name):
 @functools.cache
 def _classical(name):
   return predictors.build_unmixer(predictors.PredictorConfig('classical', mixture=name))
+
+
+@functools.cache
+def _shipped(label, name):
+  """The Unmixer of a `SHIPPED` row for encoding `name`."""
+  return predictors.build_unmixer(predictors.PredictorConfig(
+      'model', mixture=name, pretrained=SHIPPED[label]))
 
 
 def _unmixed(common, method, unmixer, pair, image):
@@ -76,6 +89,9 @@ def _evaluate(shared_dir):
                          **realworld.score(pair, image, image)))
         told = _unmixed(common, 'classical', _classical(name), pair, image)
         rows.append(told)
+        if fraction == 0.3:
+          rows.extend(_unmixed(common, label, _shipped(label, name), pair, image)
+                      for label in SHIPPED)
         if model is not None and model.mixture == name:
           rows.append(_unmixed(common, 'model', model, pair, image))
         if fraction == 0.3 and found.name:  # As `--mixture=auto` would unmix it.
@@ -117,7 +133,7 @@ def _encoding_table(rows):
                       and r['encoding'] == 'anaglyph' and r['method'] == 'classical'], 'bad1')
       right = sum(r['detected'] == name for r in picked if r['method'] == 'trivial')
       total = sum(r['method'] == 'trivial' for r in picked)
-      for method in ('classical', DETECTED, 'model', 'trivial'):
+      for method in ('classical', DETECTED, *SHIPPED, 'model', 'trivial'):
         these = [r for r in picked if r['method'] == method]
         if not these:
           continue
@@ -149,6 +165,10 @@ def main(argv):
           'with the disparity range estimated from each image; '
           + ('model = the --checkpoint run on the encoding it was trained on, range '
              'estimated likewise and fitted around its levels; ' if FLAGS.checkpoint else '')
+          + f'shipped default = `--method=model` (the default `--pretrained` of the encoding: '
+          f'{pretrained.choose(None, "anaglyph").name}); learned + its refiner = '
+          '`--pretrained=anaglyph_refined` (on the learned stage); refiner = '
+          '`--pretrained=anaglyph` (on the classical result); '
           + f'{DETECTED} = classical on the encoding `detection` reports (as '
           '`--mixture=auto`; refused images are left out); trivial = the mixture as each '
           'view. '

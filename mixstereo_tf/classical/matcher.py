@@ -237,15 +237,48 @@ def match(left, right, min_disparity: int, max_disparity: int,
   return _search(left, right, lo, widths, config)
 
 
+def range_copy(images, config: MatcherConfig = MatcherConfig()):
+  """(copies, scale, reach) of `estimate_range`'s search: [H, W, K] `images` area-downsampled
+  to config.range_width px wide (narrower ones as they are), the factor back to full size,
+  and the searched +- reach, pixels of the copy."""
+  w = images[0].shape[1]
+  if w > config.range_width:
+    images = [_downsample(x, w / config.range_width) for x in images]
+  small_width = images[0].shape[1]
+  return images, w / small_width, min(small_width - 1,
+                                      max(1, round(config.range_fraction * small_width)))
+
+
+def dense_range(found: np.ndarray, reach: int, scale: float, width: int,
+                config: MatcherConfig = MatcherConfig()) -> Tuple[int, int]:
+  """`estimate_range`'s range from the consistent disparities `found` of the copy searched
+  over +- `reach`: those whose 5-px window holds >= config.range_density of them, widened
+  by config.range_margin, times `scale`, clipped to |d| <= `width` - 1 (the whole search
+  when none is dense)."""
+  low, high = -reach, reach
+  counts = np.histogram(found, bins=np.arange(-reach, reach + 2))[0]
+  share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)
+  dense = np.nonzero((share >= config.range_density) & (counts > 0))[0]
+  if dense.size:
+    low = dense.min() - reach - config.range_margin
+    high = dense.max() - reach + config.range_margin
+  low = max(math.floor(low * scale), 1 - width)
+  high = min(math.ceil(high * scale), width - 1)
+  if low >= high:  # One disparity (range_margin 0): widen to two.
+    low, high = min(low, width - 2), min(low, width - 2) + 1
+  return low, high
+
+
 def estimate_range(left, right,
                    config: MatcherConfig = MatcherConfig()) -> Tuple[int, int]:
   """The disparity range of a pair from the images alone.
 
   A full search of +- config.range_fraction of the width on copies area-downsampled to
-  config.range_width px (smaller images are searched as they are); among the left-right
-  consistent left disparities, those found whose 5-px window holds >= config.range_density
-  of them (surfaces: false matches are few and spread over the whole search), widened by
-  range_margin pixels of the copy, scaled back to full size.
+  config.range_width px (smaller images are searched as they are; `range_copy`); among the
+  left-right consistent left disparities, those found whose 5-px window holds >=
+  config.range_density of them (surfaces: false matches are few and spread over the whole
+  search), widened by range_margin pixels of the copy, scaled back to full size
+  (`dense_range`).
 
   Args:
     left, right: as `match`.
@@ -257,26 +290,10 @@ def estimate_range(left, right,
   """
   left, right = _pair(left, right, config)
   h, w = left.shape[:2]
-  if w > config.range_width:
-    left, right = (_downsample(x, w / config.range_width) for x in (left, right))
-    if left.shape[0] < config.census_height:
-      raise ValueError(f'a {h}x{w} image downsampled to MatcherConfig.range_width = '
-                       f'{config.range_width} is {left.shape[0]} px high, less than '
-                       f'MatcherConfig.census_height = {config.census_height}.')
-  small_width = left.shape[1]
-  scale = w / small_width
-  reach = min(small_width - 1, max(1, round(config.range_fraction * small_width)))
+  (left, right), scale, reach = range_copy((left, right), config)
+  if scale > 1 and left.shape[0] < config.census_height:
+    raise ValueError(f'a {h}x{w} image downsampled to MatcherConfig.range_width = '
+                     f'{config.range_width} is {left.shape[0]} px high, less than '
+                     f'MatcherConfig.census_height = {config.census_height}.')
   out = _full(left, right, -reach, reach, config)
-  found = out['disparity_left'][out['consistent_left']]
-  low, high = -reach, reach
-  counts = np.histogram(found, bins=np.arange(-reach, reach + 2))[0]
-  share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)
-  dense = np.nonzero((share >= config.range_density) & (counts > 0))[0]
-  if dense.size:
-    low = dense.min() - reach - config.range_margin
-    high = dense.max() - reach + config.range_margin
-  low = max(math.floor(low * scale), 1 - w)
-  high = min(math.ceil(high * scale), w - 1)
-  if low >= high:  # One disparity (range_margin 0): widen to two.
-    low, high = min(low, w - 2), min(low, w - 2) + 1
-  return low, high
+  return dense_range(out['disparity_left'][out['consistent_left']], reach, scale, w, config)

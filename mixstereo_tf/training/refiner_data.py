@@ -15,7 +15,7 @@ One example (`make_example`):
   5. the classical stage on it by inference's own route (`classical_stage`: the range
      planned by `steps.estimate_range`, then `steps.classical_unmix`), with the matcher
      pinned to one SGM strip (`ONE_STRIP`); with `base`, the shipped stage of that name
-     instead (`base_stage`: the solver serving runs, `shipped.stage_solver`), so a refiner
+     instead (`base_stage`: the stage as serving runs it, `shipped.stage`), so a refiner
      learns to correct the stage it will run on;
   6. for encodings that may mix the eyes unequally (`families.Family.weighted`: double
      images), with probability `weighted_probability` the mixture is a L + (1 - a) R
@@ -33,7 +33,7 @@ interrupted build resumes.
 
 import dataclasses
 import os
-from typing import Callable, Dict, Optional, Tuple, Union
+from typing import Dict, Optional, Tuple, Union
 
 import numpy as np
 import tensorflow as tf
@@ -52,7 +52,6 @@ from mixstereo_tf.unmixing import steps
 # One SGM strip: the matcher's strips otherwise follow the core count, and so would the
 # examples (the aggregation differs near strip borders).
 ONE_STRIP = hints.FrameHint(matcher_strips=1)
-Stage = Callable[..., Dict[str, object]]  # `shipped.stage_solver`'s solve(image, name, ...).
 KEYS = ('mixture', 'classical_left', 'classical_right', 'classical_disparity_left',
         'classical_disparity_right', 'left', 'right', 'disparity_left', 'disparity_right')
 
@@ -148,13 +147,13 @@ def _mix(name: str, left: np.ndarray, right: np.ndarray, weight: Optional[float]
   return image_range.signed_to_unit(mixed)
 
 
-def base_stage(config: ExampleConfig) -> Optional[Stage]:
-  """The solver of `config.base` (step 5), or None for the classical method."""
-  return shipped.stage_solver(pretrained.get(config.base)) if config.base else None
+def base_stage(config: ExampleConfig) -> Optional[shipped.Stage]:
+  """The shipped stage `config.base` (step 5), or None for the classical method."""
+  return shipped.stage(pretrained.get(config.base)) if config.base else None
 
 
 def make_example(index: int, config: ExampleConfig, textures: synthetic.TextureAtlas,
-                 stage: Optional[Stage] = None) -> Dict[str, np.ndarray]:
+                 stage: Optional[shipped.Stage] = None) -> Dict[str, np.ndarray]:
   """Example `index` (module docstring): uint8 images, float32 disparities, str 'name',
   bool 'clean' (whether the mixture was left undegraded). `stage`: `base_stage(config)`
   (built once by the caller; None: the classical method)."""
@@ -203,16 +202,16 @@ def _whole_example(index, name, window, fraction, clean, factor, config, texture
 
 
 def classical_stage(mixture: np.ndarray, name: str, weight: Union[None, float, str] = None,
-                    stage: Optional[Stage] = None) -> Dict[str, np.ndarray]:
+                    stage: Optional[shipped.Stage] = None) -> Dict[str, np.ndarray]:
   """The classical method's result on a uint8 mixture as inference computes it (the
-  range estimated from the image, `steps.estimate_range`; `steps.classical_unmix`, or
-  `stage` in its place), with the matcher pinned to one strip (`ONE_STRIP`); `weight`: a
-  double image's mixing weight (`hints.FrameHint.mixing_weight`: None 1/2, 'auto'
-  estimated, or a number)."""
+  range estimated from the image, `steps.estimate_range`; `steps.classical_unmix`; or
+  `stage`'s range planning and solver in their place), with the matcher pinned to one
+  strip (`ONE_STRIP`); `weight`: a double image's mixing weight
+  (`hints.FrameHint.mixing_weight`: None 1/2, 'auto' estimated, or a number)."""
   default = families.of(name).classical_range()
   hint = dataclasses.replace(ONE_STRIP, mixing_weight=weight)
-  search = steps.estimate_range(mixture, name, None, default, hint)
-  return (stage or steps.classical_unmix)(mixture, name, search, hint)
+  search = steps.estimate_range(mixture, name, None, default, hint, stage and stage.plan)
+  return (stage.solve if stage else steps.classical_unmix)(mixture, name, search, hint)
 
 
 def _shard_path(folder: str, shard: int) -> str:

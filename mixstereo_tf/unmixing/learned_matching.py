@@ -16,7 +16,11 @@ Images whose volume would pass `max_cells` cells are matched at 1/f scale (f a p
 area downsampling), and the upsampled result is the prior of the census matcher at full
 scale, which then searches only windows of ceil(f) + 2 px around it (`matcher.match`).
 A video frame with a prior (`hints.FrameHint.prior`) goes to the census matcher around it,
-as in the classical method.
+as in the classical method. `estimate_range` plans the range as the census matcher does
+(`matcher.estimate_range`: a full search on a small copy, the dense consistent
+disparities) with this stage's costs: on validation photo warps its colour-anaglyph
+ranges are tighter (1.30x the true width on average, 1.77x at most, against census's 1.53x
+and 3.61x) and cover more of the truth (99.7 against 99.1%).
 """
 
 import dataclasses
@@ -127,6 +131,20 @@ def match(descriptors: Descriptors, mixture01: np.ndarray, name: str, low: int, 
   fine = dataclasses.replace(matching, prior_radius=math.ceil(scale) + 2,
                              prior_spread=math.ceil(scale) + 1)
   return matcher.match(*anaglyph.eye_images(mixture01, name), low, high, fine, prior)
+
+
+def estimate_range(descriptors: Descriptors, image: np.ndarray, name: str,
+                   matching: matcher.MatcherConfig = matcher.MatcherConfig(),
+                   config: LearnedMatchConfig = LearnedMatchConfig()) -> Tuple[int, int]:
+  """The signed disparity range of uint8 anaglyph `image` (module docstring): the stage's
+  costs over +- matching.range_fraction of a copy matching.range_width px wide
+  (`matcher.range_copy`), then `matcher.dense_range` of its consistent disparities."""
+  mixture01 = image_range.u8_to_unit(image).astype(np.float32)
+  (small,), scale, reach = matcher.range_copy((mixture01,), matching)
+  out = _full_match(descriptors, small, name, -reach, reach, config,
+                    matching.thread_count(), (matching.census_height, matching.census_width))
+  return matcher.dense_range(out['disparity_left'][out['consistent_left']], reach, scale,
+                             image.shape[1], matching)
 
 
 def learned_unmix(descriptors: Descriptors, image: np.ndarray, name: str,

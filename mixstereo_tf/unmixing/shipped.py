@@ -2,7 +2,8 @@
   * 'joint': the paper's network, run like a trained run (`unmixer.model_unmixer`);
   * 'refiner': the classical method, then the refiner on its result (`steps.refiner_unmix`);
   * 'features': the learned matching stage of anaglyphs (`learned_matching`): learned
-    descriptors of both eyes, cosine costs, SGM, views restored from the encoding;
+    descriptors of both eyes, cosine costs, SGM, views restored from the encoding; it
+    plans its disparity range with the same costs (`Stage.plan`);
   * 'echo_features': the learned echo stage of double images (`learned_diplopia`): learned
     self-similarity costs, SGM, mixing weight, layer separation.
 A model that knows several encodings detects each image's when no mixture is given.
@@ -68,10 +69,34 @@ _SOLVERS: Dict[str, Callable[[tf.keras.Model, Optional[Solve]], Solve]] = {
                                        learned_diplopia.learned_unmix, 'learned echo stage')}
 
 
-def stage_solver(entry: pretrained.Pretrained, base: Optional[Solve] = None) -> Solve:
-  """The `steps.run` solver of a shipped stage (kind 'refiner', 'features' or
-  'echo_features'): `solve(image, name, search, hint)` -> outputs. Serving and the
-  refiner's training examples (`training/refiner_data.py`) both run stages through it.
+def _learned_range(model: tf.keras.Model) -> steps.Planner:
+  """The learned matching stage's own range planning (`learned_matching.estimate_range`)."""
+  function = learned_matching.descriptor_function(model)
+  return lambda image, name, hint: learned_matching.estimate_range(
+      function, image, name, families.of(name).matching(hint))
+
+
+# kind -> its own range planning; the other kinds plan as their base stage, else as the
+# family (`Family.estimate_range`).
+_PLANNERS: Dict[str, Callable[[tf.keras.Model], steps.Planner]] = {'features': _learned_range}
+
+
+@dataclasses.dataclass(frozen=True)
+class Stage:
+  """A shipped stage as serving and the refiner's training examples run it.
+
+  Attributes:
+    solve: the `steps.run` solver, `solve(image, name, search, hint)` -> outputs.
+    plan: its range planning (`steps.estimate_range`'s `plan`); None: the family's.
+  """
+  solve: Solve
+  plan: Optional[steps.Planner] = None
+
+
+def stage(entry: pretrained.Pretrained, base: Optional[Stage] = None) -> Stage:
+  """A shipped stage (kind 'refiner', 'features' or 'echo_features'), on `base` instead of
+  the classical method when given. Serving and the refiner's training examples
+  (`training/refiner_data.py`) both run stages through it.
 
   Raises:
     ValueError: a kind without such a solver ('joint').
@@ -79,7 +104,9 @@ def stage_solver(entry: pretrained.Pretrained, base: Optional[Solve] = None) -> 
   if entry.kind not in _SOLVERS:
     raise ValueError(f'{entry.name}: a {entry.kind} model is no stage of the classical '
                      f'route; stages: {", ".join(_SOLVERS)}.')
-  return _SOLVERS[entry.kind](pretrained.load_model(entry), base)
+  model = pretrained.load_model(entry)
+  plan = _PLANNERS[entry.kind](model) if entry.kind in _PLANNERS else base and base.plan
+  return Stage(_SOLVERS[entry.kind](model, base and base.solve), plan)
 
 
 def pretrained_unmixer(entry: pretrained.Pretrained,
@@ -107,14 +134,14 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
   if config.mixture is None and len(trained) > 1:  # Several encodings: detect each image's.
     config = dataclasses.replace(config, mixture=steps.AUTO)
   requested = unmixer.check_mixture(config, trained)
-  stage = stage_solver(entry, base and stage_solver(base))
+  built = stage(entry, base and stage(base))
 
   def solve(image, name, search, hint):
-    outputs = stage(image, name, search, hint)
+    outputs = built.solve(image, name, search, hint)
     outputs['info'] = dict(outputs.get('info', {}),
                            pretrained=entry.name + (f' on {base.name}' if base else ''))
     return outputs
 
   return unmixer.image_unmixer('model', requested, trained, config, unmixer.classical_range,
                                solve, unmixer.family_of(trained[0]).display_range(),
-                               any(families.of(m).restores_views for m in trained))
+                               any(families.of(m).restores_views for m in trained), built.plan)

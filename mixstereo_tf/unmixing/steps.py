@@ -53,6 +53,8 @@ REFINED_VIEW_WEIGHT = 0.25
 # A named encoding the detector contradicts with at least this confidence is warned about.
 WARN_CONFIDENCE = 0.9
 Range = Union[None, str, Tuple[int, int]]  # disparity_range.parse's values.
+# A method's own range planning: plan(uint8 image, encoding, hint) -> (min, max) pixels.
+Planner = Callable[[np.ndarray, str, Optional[hints.FrameHint]], Tuple[int, int]]
 
 
 def resolve_mixture(image: np.ndarray, requested: str,
@@ -95,14 +97,18 @@ def resolve_mixture(image: np.ndarray, requested: str,
 
 def estimate_range(image: np.ndarray, name: str, requested: Range,
                    default: Tuple[int, int],
-                   hint: Optional[hints.FrameHint] = None) -> Tuple[int, int]:
+                   hint: Optional[hints.FrameHint] = None,
+                   plan: Optional[Planner] = None) -> Tuple[int, int]:
   """The range asked for; the method's `default` for disparity_range.NETWORK; else the
-  family's plan (`Family.estimate_range`: an anaglyph's eye channels matched with the
+  method's own `plan(image, name, hint)` when it has one (the learned matching stage's),
+  or the family's (`Family.estimate_range`: an anaglyph's eye channels matched with the
   `hint`'s matcher options, a double image's self-matching, a monocular's `default`)."""
   if requested == disparity_range.NETWORK:
     return default
   if requested is not None:
     return requested
+  if plan is not None:
+    return plan(image, name, hint)
   return families.of(name).estimate_range(image, name, default, hint)
 
 
@@ -224,8 +230,9 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
         requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
         solve: Callable[..., Dict[str, object]],
         hint: Optional[hints.FrameHint] = None, swap_eyes=False,
-        mixing_weight=None) -> Dict[str, object]:
-  """Steps 1-3 for one image; `default_range(encoding)` is the method's own range;
+        mixing_weight=None, plan: Optional[Planner] = None) -> Dict[str, object]:
+  """Steps 1-3 for one image; `default_range(encoding)` is the method's own range, `plan`
+  its own range planning (`estimate_range`);
   `solve(image, name, range, hint)` is the method's step 3; `swap_eyes`: one of
   `eye_order.SWAP_EYES`. A `hint`'s mixture, eye order and range (a video shot's) replace
   steps 1 and 2; `solve` may use its prior; `mixing_weight` (double images) goes to the
@@ -243,7 +250,7 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
     image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)
   search = hint.disparity_range
   if search is None:
-    search = estimate_range(image, name, requested_range, default_range(name), hint)
+    search = estimate_range(image, name, requested_range, default_range(name), hint, plan)
   outputs = solve(image, name, search, hint)
   if swapped:
     outputs = eye_order.unmirror(outputs)

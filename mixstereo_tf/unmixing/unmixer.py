@@ -143,12 +143,14 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
 
 def image_unmixer(method: str, requested: str, allowed: Sequence[str],
                    config: PredictorConfig, default_range: Callable[[str], Tuple[int, int]],
-                   solve: Callable[..., Outputs], display: float, restore: bool) -> Unmixer:
-  """An Unmixer of mixture images: `steps.run`'s steps around `solve`."""
+                   solve: Callable[..., Outputs], display: float, restore: bool,
+                   plan: Optional[steps.Planner] = None) -> Unmixer:
+  """An Unmixer of mixture images: `steps.run`'s steps around `solve` (and the method's
+  own range planning `plan`, None: the family's)."""
   fn = lambda image, hint=None: steps.run(as_rgb(image), requested, allowed,
                                           config.disparity_range, default_range, method,
                                           solve, hint, config.swap_eyes,
-                                          config.mixing_weight)
+                                          config.mixing_weight, plan)
   return Unmixer(fn, method, requested, display, restore)
 
 

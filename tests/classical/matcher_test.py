@@ -176,6 +176,16 @@ def test_estimate_range_brackets_the_true_range(d_bg, d_fg, width, range_width):
       low, high)
 
 
+def test_dense_range_keeps_the_dense_disparities_widened_and_scaled():
+  config = matcher.MatcherConfig(range_density=0.05, range_margin=2.0)
+  # 200 matches on surfaces at 3..10 px of the copy, 4 scattered false ones.
+  found = np.concatenate([np.repeat(np.arange(3, 11), 25), [-30, -17, 22, 29]])
+  assert matcher.dense_range(found, 32, 1.0, 500, config) == (1, 12)
+  assert matcher.dense_range(found, 32, 2.5, 500, config) == (2, 30)  # floor / ceil of 2.5x.
+  assert matcher.dense_range(found, 32, 2.5, 20, config) == (2, 19)  # |d| <= W - 1.
+  assert matcher.dense_range(np.array([]), 32, 1.0, 500, config) == (-32, 32)  # None dense.
+
+
 def test_bad_ranges_and_configs_raise():
   left, right, _, _ = _layered(2, 5)
   for low, high in ((5, 5), (6, 2)):

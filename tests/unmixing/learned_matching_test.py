@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 import tensorflow as tf
 
+from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import photo_warps
@@ -69,6 +70,18 @@ def test_learned_unmix_restores_views_and_takes_a_video_prior(pair):
   again = learned_matching.learned_unmix(_patch_descriptors, image, 'gray', search, hint)
   assert set(again) == set(out)
   assert np.abs(again['disparity_left'] - out['disparity_left']).mean() < 2.0
+
+
+@pytest.mark.parametrize('range_width', [320, 80])  # As it is; a copy half as wide.
+def test_the_stage_plans_its_range_with_its_own_costs(pair, range_width):
+  image = np.rint(255 * _gray_anaglyph(pair)).astype(np.uint8)
+  config = matcher.MatcherConfig(range_width=range_width)
+  low, high = learned_matching.estimate_range(_patch_descriptors, image, 'gray', config)
+  truth = pair['disparity_left'][pair['nonocc_left']]
+  # The margin (3 px of the copy) and one bin of the copy, scaled, + 1 px of rounding.
+  slack = (3 + 1) * 160 / min(range_width, 160) + 1
+  assert truth.min() - slack <= low <= np.percentile(truth, 1), (low, truth.min())
+  assert np.percentile(truth, 99) <= high <= truth.max() + slack, (high, truth.max())
 
 
 def test_bad_config_and_range_are_refused():
