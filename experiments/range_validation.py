@@ -1,0 +1,88 @@
+"""The learned matching stage's range planning against the census matcher's, on validation
+pairs (the choice of `learned_matching.estimate_range`, docs/LEARNED_MATCHING.md).
+
+    python -m experiments.range_validation --photo_dir=photos/warps
+
+Validation pairs as experiments/matching_validation.py (the training photographs under new
+drawn disparity fields, seeds 10^9 on, 256 x 512, both signs), each made by FFmpeg into the
+colour, half-colour, Dubois, green-magenta half-colour and amber-blue Dubois anaglyphs. Per
+encoding and planner (census: `Family.estimate_range`; learned: the shipped stage's): the
+share of true left disparities inside the planned range (coverage) and the range's width
+over the true 0.5-99.5 percentile width (mean and largest).
+"""
+
+import sys
+import time
+
+from absl import app
+from absl import flags
+import numpy as np
+
+from mixstereo_tf.cli import startup  # pylint: disable=unused-import
+from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.evaluation import realworld
+from mixstereo_tf.unmixing import families
+from mixstereo_tf.unmixing import learned_matching
+
+from experiments import matching_validation
+from experiments import validation  # --photo_dir, the pairs.
+
+flags.DEFINE_integer('range_pairs', 12, 'Warped photo pairs (each in every encoding).')
+flags.DEFINE_string('range_output', 'experiments/results/range_validation.md',
+                    'Markdown report.')
+FLAGS = flags.FLAGS
+
+ENCODINGS = ('anaglyph', 'half_color', 'dubois_ffmpeg', 'green_magenta_half',
+             'amber_blue_dubois')
+
+
+def _assess(truth: np.ndarray, planned) -> tuple:
+  """(coverage, width ratio) of range `planned` for the true disparities `truth`."""
+  inside = np.mean((truth >= planned[0]) & (truth <= planned[1]))
+  width = np.percentile(truth, 99.5) - np.percentile(truth, 0.5)
+  return float(inside), (planned[1] - planned[0]) / max(1.0, float(width))
+
+
+def evaluate(count: int):
+  """{(encoding, planner): [(coverage, width ratio) per pair]}."""
+  descriptors = learned_matching.descriptor_function(
+      pretrained.load_model(pretrained.get('anaglyph_matching')))
+  planners = {'census': lambda image, name: families.of(name).estimate_range(
+                  image, name, (0, 0)),
+              'learned': lambda image, name: learned_matching.estimate_range(
+                  descriptors, image, name)}
+  rows = {}
+  pairs = validation.photo_pairs(matching_validation.WARP, count, validation.required_atlas())
+  for number, pair in enumerate(pairs):
+    truth = pair['disparity_left'].ravel()  # Exact at every left pixel.
+    for name in ENCODINGS:
+      image = realworld.make_anaglyph(pair, name, 'ffmpeg')
+      for label, plan in planners.items():
+        rows.setdefault((name, label), []).append(_assess(truth, plan(image, name)))
+    print(f'pair {number + 1}/{count}', file=sys.stderr, flush=True)
+  return rows
+
+
+def main(argv):
+  del argv
+  start = time.perf_counter()
+  rows = evaluate(FLAGS.range_pairs)
+  text = ['# Range planning on validation pairs', '',
+          f'Written by `python -m experiments.range_validation --photo_dir=...` in '
+          f'{time.perf_counter() - start:.0f} s on 2 CPU cores, {FLAGS.range_pairs} photo-warp '
+          'pairs (module docstring). coverage: share of true disparities inside the planned '
+          'range; width: planned width over the true 0.5-99.5 percentile width.', '',
+          '| encoding | planner | coverage (mean) | coverage (lowest) | width (mean) | '
+          'width (largest) |', '| --- ' * 6 + '|']
+  for (name, label), values in rows.items():
+    values = np.array(values)
+    text.append(f'| {name} | {label} | {100 * values[:, 0].mean():.1f}% | '
+                f'{100 * values[:, 0].min():.1f}% | {values[:, 1].mean():.2f}x | '
+                f'{values[:, 1].max():.2f}x |')
+  with open(FLAGS.range_output, 'w') as handle:
+    handle.write('\n'.join(text) + '\n')
+  print('\n'.join(text))
+
+
+if __name__ == '__main__':
+  app.run(main)
