@@ -7,8 +7,10 @@ Validation pairs as experiments/matching_validation.py (the training photographs
 drawn disparity fields, seeds 10^9 on, 256 x 512, both signs), each made by FFmpeg into the
 colour, half-colour, Dubois, green-magenta half-colour and amber-blue Dubois anaglyphs. Per
 encoding and planner (census: `Family.estimate_range`; learned: the shipped stage's): the
-share of true left disparities inside the planned range (coverage) and the range's width
-over the true 0.5-99.5 percentile width (mean and largest).
+share of true left disparities inside the planned range (coverage), the range's width
+over the true 0.5-99.5 percentile width (mean and largest), and the shipped learned stage
+run over that range (`learned_matching.learned_unmix`): bad-1 over the visible left pixels
+and the views' RGB PSNR.
 """
 
 import sys
@@ -36,15 +38,20 @@ ENCODINGS = ('anaglyph', 'half_color', 'dubois_ffmpeg', 'green_magenta_half',
              'amber_blue_dubois')
 
 
-def _assess(truth: np.ndarray, planned) -> tuple:
-  """(coverage, width ratio) of range `planned` for the true disparities `truth`."""
+def _assess(pair, image, name, planned, descriptors) -> tuple:
+  """(coverage, width ratio, bad-1, PSNR L, PSNR R) of range `planned` for `pair`."""
+  truth = pair['disparity_left'].ravel()  # Exact at every left pixel.
   inside = np.mean((truth >= planned[0]) & (truth <= planned[1]))
   width = np.percentile(truth, 99.5) - np.percentile(truth, 0.5)
-  return float(inside), (planned[1] - planned[0]) / max(1.0, float(width))
+  out = learned_matching.learned_unmix(descriptors, image, name, planned)
+  scores = validation.scores(out['disparity_left'], pair, pair['nonocc_left'],
+                             out['left'].astype(np.float64), out['right'].astype(np.float64))
+  return (float(inside), (planned[1] - planned[0]) / max(1.0, float(width)),
+          scores['bad1'], scores['psnr_left'], scores['psnr_right'])
 
 
 def evaluate(count: int):
-  """{(encoding, planner): [(coverage, width ratio) per pair]}."""
+  """{(encoding, planner): [`_assess` tuple per pair]}."""
   descriptors = learned_matching.descriptor_function(
       pretrained.load_model(pretrained.get('anaglyph_matching')))
   planners = {'census': lambda image, name: families.of(name).estimate_range(
@@ -54,11 +61,11 @@ def evaluate(count: int):
   rows = {}
   pairs = validation.photo_pairs(matching_validation.WARP, count, validation.required_atlas())
   for number, pair in enumerate(pairs):
-    truth = pair['disparity_left'].ravel()  # Exact at every left pixel.
     for name in ENCODINGS:
       image = realworld.make_anaglyph(pair, name, 'ffmpeg')
       for label, plan in planners.items():
-        rows.setdefault((name, label), []).append(_assess(truth, plan(image, name)))
+        rows.setdefault((name, label), []).append(
+            _assess(pair, image, name, plan(image, name), descriptors))
     print(f'pair {number + 1}/{count}', file=sys.stderr, flush=True)
   return rows
 
@@ -71,14 +78,17 @@ def main(argv):
           f'Written by `python -m experiments.range_validation --photo_dir=...` in '
           f'{time.perf_counter() - start:.0f} s on 2 CPU cores, {FLAGS.range_pairs} photo-warp '
           'pairs (module docstring). coverage: share of true disparities inside the planned '
-          'range; width: planned width over the true 0.5-99.5 percentile width.', '',
+          'range; width: planned width over the true 0.5-99.5 percentile width; bad-1 and '
+          'views: the shipped learned stage over the planned range (means).', '',
           '| encoding | planner | coverage (mean) | coverage (lowest) | width (mean) | '
-          'width (largest) |', '| --- ' * 6 + '|']
+          'width (largest) | bad-1 | views L / R (dB) |', '| --- ' * 8 + '|']
   for (name, label), values in rows.items():
     values = np.array(values)
-    text.append(f'| {name} | {label} | {100 * values[:, 0].mean():.1f}% | '
-                f'{100 * values[:, 0].min():.1f}% | {values[:, 1].mean():.2f}x | '
-                f'{values[:, 1].max():.2f}x |')
+    mean = values.mean(axis=0)
+    text.append(f'| {name} | {label} | {100 * mean[0]:.1f}% | '
+                f'{100 * values[:, 0].min():.1f}% | {mean[1]:.2f}x | '
+                f'{values[:, 1].max():.2f}x | {100 * mean[2]:.1f}% | '
+                f'{mean[3]:.2f} / {mean[4]:.2f} |')
   with open(FLAGS.range_output, 'w') as handle:
     handle.write('\n'.join(text) + '\n')
   print('\n'.join(text))
