@@ -27,60 +27,6 @@ from mixstereo_tf.unmixing import unmixer
 Solve = Callable[..., Dict[str, object]]
 
 
-def _refiner_solver(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
-  """`steps.refiner_unmix` with the model traced once per output it may leave out (None:
-  none). TensorFlow prunes what a left-out output alone needs: without a video frame's
-  right disparity the network takes 0.45 s instead of 0.68 s at 1280x720."""
-  signature = [tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)]
-  functions = {}
-
-  def network(skipped: Optional[str]):
-    if skipped not in functions:
-      functions[skipped] = tf.function(
-          lambda x: {k: v for k, v in model(x, training=False).items() if k != skipped},
-          input_signature=signature)
-    return functions[skipped]
-
-  return lambda image, name, search, hint: steps.refiner_unmix(
-      network, model.size_multiple, image, name, search, hint, base)
-
-
-def _replacing_solver(function_of: Callable, unmix: Callable, stage: str):
-  """The solver builder of a stage that replaces the classical matching: `function_of`
-  traces the model, `unmix(function, image, name, search, hint)` runs the stage."""
-
-  def build(model: tf.keras.Model, base: Optional[Solve] = None) -> Solve:
-    if base is not None:
-      raise ValueError(f'The {stage} replaces the classical matching; it cannot run on top '
-                       'of another stage.')
-    function = function_of(model)
-    return lambda image, name, search, hint: unmix(function, image, name, search, hint)
-
-  return build
-
-
-# kind -> the `steps.run` solver of a stage built on the classical method's range.
-# The optional second argument: the stage it runs on instead of the classical method.
-_SOLVERS: Dict[str, Callable[[tf.keras.Model, Optional[Solve]], Solve]] = {
-    'refiner': _refiner_solver,
-    'features': _replacing_solver(learned_matching.descriptor_function,
-                                  learned_matching.learned_unmix, 'learned matching stage'),
-    'echo_features': _replacing_solver(learned_diplopia.echo_function,
-                                       learned_diplopia.learned_unmix, 'learned echo stage')}
-
-
-def _learned_range(model: tf.keras.Model) -> steps.Planner:
-  """The learned matching stage's own range planning (`learned_matching.estimate_range`)."""
-  function = learned_matching.descriptor_function(model)
-  return lambda image, name, hint: learned_matching.estimate_range(
-      function, image, name, families.of(name).matching(hint))
-
-
-# kind -> its own range planning; the other kinds plan as their base stage, else as the
-# family (`Family.estimate_range`).
-_PLANNERS: Dict[str, Callable[[tf.keras.Model], steps.Planner]] = {'features': _learned_range}
-
-
 @dataclasses.dataclass(frozen=True)
 class Stage:
   """A shipped stage as serving and the refiner's training examples run it.
@@ -93,20 +39,73 @@ class Stage:
   plan: Optional[steps.Planner] = None
 
 
+def _refiner_stage(model: tf.keras.Model, base: Optional[Stage] = None) -> Stage:
+  """`steps.refiner_unmix` with the model traced once per output it may leave out (None:
+  none), planning as its base. TensorFlow prunes what a left-out output alone needs:
+  without a video frame's right disparity the network takes 0.45 s instead of 0.68 s at
+  1280x720."""
+  signature = [tf.TensorSpec([1, None, None, refiner.INPUT_CHANNELS], tf.float32)]
+  functions = {}
+
+  def network(skipped: Optional[str]):
+    if skipped not in functions:
+      functions[skipped] = tf.function(
+          lambda x: {k: v for k, v in model(x, training=False).items() if k != skipped},
+          input_signature=signature)
+    return functions[skipped]
+
+  base_solve = base.solve if base else None
+  return Stage(lambda image, name, search, hint: steps.refiner_unmix(
+      network, model.size_multiple, image, name, search, hint, base_solve),
+               base.plan if base else None)
+
+
+def _learned_range(descriptors: learned_matching.Descriptors) -> steps.Planner:
+  """The learned matching stage's own range planning (`learned_matching.estimate_range`)."""
+  return lambda image, name, hint: learned_matching.estimate_range(
+      descriptors, image, name, families.of(name).matching(hint))
+
+
+def _replacing_stage(function_of: Callable, unmix: Callable, stage_name: str,
+                     plan_of: Optional[Callable[[Callable], steps.Planner]] = None):
+  """The builder of a stage that replaces the classical matching: `function_of` traces the
+  model once, `unmix(function, image, name, search, hint)` runs the stage and
+  `plan_of(function)`, when given, is its own range planning (else the family's)."""
+
+  def build(model: tf.keras.Model, base: Optional[Stage] = None) -> Stage:
+    if base is not None:
+      raise ValueError(f'The {stage_name} replaces the classical matching; it cannot run on '
+                       'top of another stage.')
+    function = function_of(model)
+    return Stage(lambda image, name, search, hint: unmix(function, image, name, search, hint),
+                 plan_of(function) if plan_of else None)
+
+  return build
+
+
+# kind -> the builder of its Stage from the loaded model; the optional second argument:
+# the stage it runs on instead of the classical method (a refiner plans as its base).
+_STAGES: Dict[str, Callable[[tf.keras.Model, Optional[Stage]], Stage]] = {
+    'refiner': _refiner_stage,
+    'features': _replacing_stage(learned_matching.descriptor_function,
+                                 learned_matching.learned_unmix, 'learned matching stage',
+                                 _learned_range),
+    'echo_features': _replacing_stage(learned_diplopia.echo_function,
+                                      learned_diplopia.learned_unmix, 'learned echo stage')}
+
+
 def stage(entry: pretrained.Pretrained, base: Optional[Stage] = None) -> Stage:
   """A shipped stage (kind 'refiner', 'features' or 'echo_features'), on `base` instead of
   the classical method when given. Serving and the refiner's training examples
   (`training/refiner_data.py`) both run stages through it.
 
   Raises:
-    ValueError: a kind without such a solver ('joint').
+    ValueError: a kind without such a stage ('joint').
   """
-  if entry.kind not in _SOLVERS:
+  if entry.kind not in _STAGES:
     raise ValueError(f'{entry.name}: a {entry.kind} model is no stage of the classical '
-                     f'route; stages: {", ".join(_SOLVERS)}.')
-  model = pretrained.load_model(entry)
-  plan = _PLANNERS[entry.kind](model) if entry.kind in _PLANNERS else base and base.plan
-  return Stage(_SOLVERS[entry.kind](model, base and base.solve), plan)
+                     f'route; stages: {", ".join(_STAGES)}.')
+  return _STAGES[entry.kind](pretrained.load_model(entry), base)
 
 
 def pretrained_unmixer(entry: pretrained.Pretrained,

@@ -1,9 +1,10 @@
 """Fully convolutional networks on images of any size in bounded memory: overlapping tiles.
 
 An image of at most `tile` x `tile` pixels in area (1280x720 for the default 1024) runs in
-one pass (padded at the bottom / right to the network's multiple). A larger one is cut into cores of `tile - 2 overlap` pixels; each core is run with `overlap`
-pixels of context on every side (edge-replicated at the image border and padded at the
-bottom / right to the network's multiple), and only the core of each result is kept. With
+one pass (padded at the bottom / right to the network's multiple). A larger one is cut
+into cores of `tile - 2 overlap` pixels; each core is run with `overlap` pixels of
+context on every side (edge-replicated at the image border and padded at the bottom /
+right to the network's multiple), and only the core of each result is kept. With
 an overlap at least the network's receptive radius the result equals one pass over the
 whole image (up to the padding of the last tile).
 """
