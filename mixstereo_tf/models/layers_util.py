@@ -59,6 +59,21 @@ def tracked(owner: tf.keras.layers.Layer, name: str, layers):
   return layers
 
 
+FLOAT32_LAYERS = ('head',)  # Layers whose outputs are added to float32 tensors.
+
+
+def compute_in_bfloat16(model: tf.keras.layers.Layer, keep=FLOAT32_LAYERS) -> None:
+  """Makes every convolution of `model` compute in bfloat16 (variables stay float32)
+  except those named in `keep`, for inference (`core/precision.py`). A model's code casts
+  a bfloat16 result to float32 where it leaves the convolutions (`tf.cast`; a no-op in
+  float32), and its layers named in `keep` take bfloat16 inputs and compute in float32."""
+  convolutions = (tf.keras.layers.Conv2D, tf.keras.layers.Conv2DTranspose,
+                  tf.keras.layers.Conv3D, tf.keras.layers.Conv3DTranspose)
+  for layer in model._flatten_layers(include_self=False):  # pylint: disable=protected-access
+    if isinstance(layer, convolutions) and layer.name not in keep:
+      layer.dtype_policy = 'mixed_bfloat16'
+
+
 def check_size(image: tf.Tensor, multiple: int, what: str) -> None:
   """Raises ValueError when a static height or width is not a multiple of `multiple`."""
   height, width = image.shape[1], image.shape[2]

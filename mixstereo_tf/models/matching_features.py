@@ -112,7 +112,7 @@ class _Branch(tf.keras.layers.Layer):
     x = standardise(image)
     for conv in self.convs:
       x = conv(x)
-    return tf.math.l2_normalize(x, axis=-1)
+    return tf.math.l2_normalize(tf.cast(x, tf.float32), axis=-1)
 
 
 class _Features(tf.keras.Model):

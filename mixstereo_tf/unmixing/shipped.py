@@ -17,6 +17,8 @@ import tensorflow as tf
 from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.artifacts import runs
+from mixstereo_tf.core import precision
+from mixstereo_tf.models import layers_util
 from mixstereo_tf.models import refiner
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import learned_diplopia
@@ -96,7 +98,8 @@ _STAGES: Dict[str, Callable[[tf.keras.Model, Optional[Stage]], Stage]] = {
 
 def stage(entry: pretrained.Pretrained, base: Optional[Stage] = None) -> Stage:
   """A shipped stage (kind 'refiner', 'features' or 'echo_features'), on `base` instead of
-  the classical method when given. Serving and the refiner's training examples
+  the classical method when given, its convolutions in bfloat16 where the CPU has native
+  bfloat16 (`core/precision.py`). Serving and the refiner's training examples
   (`training/refiner_data.py`) both run stages through it.
 
   Raises:
@@ -105,7 +108,10 @@ def stage(entry: pretrained.Pretrained, base: Optional[Stage] = None) -> Stage:
   if entry.kind not in _STAGES:
     raise ValueError(f'{entry.name}: a {entry.kind} model is no stage of the classical '
                      f'route; stages: {", ".join(_STAGES)}.')
-  return _STAGES[entry.kind](pretrained.load_model(entry), base)
+  model = pretrained.load_model(entry)
+  if precision.inference_bfloat16():
+    layers_util.compute_in_bfloat16(model)
+  return _STAGES[entry.kind](model, base)
 
 
 def pretrained_unmixer(entry: pretrained.Pretrained,

@@ -56,3 +56,30 @@ def test_fused_batch_norm_inference_uses_the_moving_statistics():
   gamma, beta = np.linspace(0.5, 2.0, 2), np.linspace(-1, 1, 2)
   expected = (x.numpy() - 0.3) / np.sqrt(2.0 + 1e-3) * gamma + beta
   np.testing.assert_allclose(fused_bn(x, training=False).numpy(), expected, atol=1e-5)
+
+
+def test_bfloat16_convolutions_keep_the_heads_and_the_outputs_in_float32():
+  """The refiner with bfloat16 convolutions: its heads (added to float32 views and
+  disparities) stay float32, the outputs are float32 and within bfloat16's rounding of the
+  float32 model's (its heads made non-zero so that the networks matter)."""
+  from mixstereo_tf.models import refiner  # pylint: disable=import-outside-toplevel
+  config = refiner.RefinerConfig(view_widths=(8, 8), disparity_features=8, dilations=(1, 2))
+  model = refiner.build_refiner(config)
+  rng = np.random.default_rng(0)
+  model.set_weights([rng.normal(0, 0.1, w.shape).astype(np.float32)
+                     for w in model.get_weights()])
+  inputs = tf.constant(np.concatenate([rng.uniform(-0.9, 0.9, (1, 16, 32, 9)),
+                                       rng.uniform(0, 8, (1, 16, 32, 2))], -1), tf.float32)
+  expected = {k: v.numpy() for k, v in model(inputs).items()}
+  layers_util.compute_in_bfloat16(model)
+  dtypes = [(layer.name, layer.compute_dtype)
+            for layer in model._flatten_layers(include_self=False)  # pylint: disable=protected-access
+            if isinstance(layer, tf.keras.layers.Conv2D)]
+  assert {dtype for name, dtype in dtypes if name == 'head'} == {'float32'}
+  assert [name for name, dtype in dtypes if dtype == 'float32'] == ['head', 'head']
+  out = model(inputs)
+  for key, value in expected.items():
+    assert out[key].dtype == tf.float32
+    scale = np.abs(value).max()
+    np.testing.assert_allclose(out[key], value, atol=0.03 * scale)
+    assert np.abs(out[key].numpy() - value).max() > 0  # It did compute in bfloat16.

@@ -5,6 +5,7 @@ import pytest
 import tensorflow as tf
 
 from mixstereo_tf.artifacts import runs
+from mixstereo_tf.models import layers_util
 from mixstereo_tf.models import matching_features
 
 
@@ -90,3 +91,16 @@ def test_dilations_need_one_entry_per_layer():
     matching_features.FeatureConfig(layers=3, dilations=(1, 2))
   with pytest.raises(ValueError, match='dilations'):
     matching_features.FeatureConfig(layers=2, dilations=(1, 0))
+
+
+def test_bfloat16_convolutions_give_float32_unit_descriptors_close_to_float32():
+  model = matching_features.build_features(matching_features.FeatureConfig(width=8, layers=2))
+  rng = np.random.default_rng(1)
+  single, pair = (tf.constant(rng.random((1, 12, 20, c)), tf.float32) for c in (1, 2))
+  expected = [t.numpy() for t in model((single, pair))]
+  layers_util.compute_in_bfloat16(model)
+  for got, want in zip(model((single, pair)), expected):
+    assert got.dtype == tf.float32
+    np.testing.assert_allclose(np.linalg.norm(got, axis=-1), 1.0, atol=1e-5)
+    cosine = np.sum(got.numpy() * want, axis=-1)
+    assert cosine.min() > 0.999  # 1 - cosine < 1e-3: 0.03 of a cost unit at cost_scale 32.
