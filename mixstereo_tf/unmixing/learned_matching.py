@@ -94,8 +94,7 @@ def _full_match(descriptors: Descriptors, mixture01: np.ndarray, name: str, low:
     census = parallel_sgm.census_volume(*anaglyph.eye_images(mixture01, name), low,
                                         high - low + 1, census_window[0], census_window[1],
                                         threads)
-    volume = np.rint(config.census_weight * census.astype(np.float32) +
-                     (1 - config.census_weight) * volume).astype(np.uint8)
+    volume = feature_costs.blend(census, volume, config.census_weight, threads)
   return parallel_sgm.match_cost_volume(volume, low, config.p1, config.p2,
                                         config.lr_threshold)
 

@@ -68,3 +68,26 @@ def test_the_stored_census_volume_is_the_matchers_cost_bit_for_bit():
   got = parallel_sgm.match_cost_volume(volume, -6, config.p1, config.p2, config.lr_threshold)
   for key in ('disparity_left', 'disparity_right', 'consistent_left'):
     np.testing.assert_array_equal(got[key], expected[key])
+
+
+@pytest.mark.parametrize('weight', [0.5, 0.3, 0.0, 1.0])
+@pytest.mark.parametrize('threads', [1, 3])
+def test_blend_is_numpys_arithmetic_bit_for_bit(weight, threads):
+  rng = np.random.default_rng(7)
+  other = rng.integers(0, 256, (9, 11, 6), dtype=np.uint8)
+  volume = rng.integers(0, 256, (9, 11, 6), dtype=np.uint8)
+  volume[0, 0, :2], other[0, 0, :2] = (3, 4), (4, 3)  # Sums ending in .5: ties to even.
+  expected = np.rint(weight * other.astype(np.float32) + (1 - weight) * volume).astype(np.uint8)
+  out = feature_costs.blend(other, volume, weight, threads)
+  assert out is volume
+  np.testing.assert_array_equal(out, expected)
+
+
+def test_blend_refuses_mismatched_volumes_and_weights():
+  volume = np.zeros((2, 3, 4), np.uint8)
+  with pytest.raises(ValueError, match='blend'):
+    feature_costs.blend(np.zeros((2, 3, 5), np.uint8), volume, 0.5)
+  with pytest.raises(ValueError, match='blend'):
+    feature_costs.blend(volume.copy(), volume, 1.5)
+  with pytest.raises(ValueError, match='blend'):
+    feature_costs.blend(volume.astype(np.float32), volume, 0.5)
