@@ -67,8 +67,7 @@ def echo_costs(echo: Echo, config: EchoConfig = EchoConfig()) -> diplopia.Costs:
                                         threads=workers.usable_cpus())
     if config.zncc_weight:
       zncc = diplopia.zncc_costs(mixture01, diplopia_config)
-      volume = np.rint(config.zncc_weight * zncc.astype(np.float32) +
-                       (1 - config.zncc_weight) * volume).astype(np.uint8)
+      volume = feature_costs.blend(zncc, volume, config.zncc_weight, workers.usable_cpus())
     return volume
 
   return costs
