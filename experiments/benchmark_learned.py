@@ -37,8 +37,10 @@ def _video(method, checkout=''):
 
 
 def _photo(method):
+  # The working tree's package, not an installed copy that may be stale.
   out = subprocess.run([sys.executable, 'experiments/photo_12mp.py', *PHOTO[method]],
-                       capture_output=True, text=True, check=True).stdout
+                       capture_output=True, text=True, check=True,
+                       env=dict(os.environ, PYTHONPATH=os.getcwd())).stdout
   return out.strip().splitlines()[-1]
 
 

@@ -29,6 +29,8 @@ def measure(module: str, expression: str, checkout: str = ''):
   out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                        check=True, env=env, cwd=checkout or None).stdout
   package, value = json.loads(out.split('RESULT ', 1)[1])
-  if checkout and not os.path.abspath(package).startswith(os.path.abspath(checkout)):
-    raise RuntimeError(f'--before_checkout={checkout}: the package came from {package}.')
+  tree = os.path.abspath(checkout or os.getcwd())
+  if not os.path.abspath(package).startswith(tree + os.sep):
+    raise RuntimeError(f'{"--before_checkout=" + checkout if checkout else "the working tree"}'
+                       f': the package came from {package} (a stale install?).')
   return value

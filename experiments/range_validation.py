@@ -6,8 +6,8 @@ pairs (the choice of `learned_matching.estimate_range`, docs/LEARNED_MATCHING.md
 Validation pairs as experiments/matching_validation.py (the training photographs under new
 drawn disparity fields, seeds 10^9 on, 256 x 512, both signs), each made by FFmpeg into the
 colour, half-colour, Dubois, green-magenta half-colour and amber-blue Dubois anaglyphs. Per
-encoding and planner (census: `Family.estimate_range`; learned: the learned stage's own
-plan alone; both (shipped): their intersection, `learned_matching.estimate_range`): the
+encoding and planner (census: `Family.estimate_range`; learned (shipped): the learned
+stage's own, `learned_matching.estimate_range`; both: their intersection): the
 share of true left disparities inside the planned range (coverage), the range's width
 over the true 0.5-99.5 percentile width (mean and largest), and the shipped learned stage
 run over that range (`learned_matching.learned_unmix`): bad-1 over the visible left pixels
@@ -35,8 +35,8 @@ flags.DEFINE_string('range_output', 'experiments/results/range_validation.md',
                     'Markdown report.')
 FLAGS = flags.FLAGS
 
-# The learned plan without the census plan's intersection.
-LEARNED_ALONE = learned_matching.LearnedMatchConfig(intersect_census_range=False)
+# The learned plan intersected with the census plan's (`intersect_census_range`).
+INTERSECTED = learned_matching.LearnedMatchConfig(intersect_census_range=True)
 ENCODINGS = ('anaglyph', 'half_color', 'dubois_ffmpeg', 'green_magenta_half',
              'amber_blue_dubois')
 
@@ -59,10 +59,10 @@ def evaluate(count: int):
       pretrained.load_model(pretrained.get('anaglyph_matching')))
   planners = {'census': lambda image, name: families.of(name).estimate_range(
                   image, name, (0, 0)),
-              'learned': lambda image, name: learned_matching.estimate_range(
-                  descriptors, image, name, config=LEARNED_ALONE),
-              'both (shipped)': lambda image, name: learned_matching.estimate_range(
-                  descriptors, image, name)}
+              'learned (shipped)': lambda image, name: learned_matching.estimate_range(
+                  descriptors, image, name),
+              'both': lambda image, name: learned_matching.estimate_range(
+                  descriptors, image, name, config=INTERSECTED)}
   rows = {}
   pairs = validation.photo_pairs(matching_validation.WARP, count, validation.required_atlas())
   for number, pair in enumerate(pairs):

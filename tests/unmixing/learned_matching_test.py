@@ -89,3 +89,15 @@ def test_bad_config_and_range_are_refused():
     learned_matching.LearnedMatchConfig(cost_scale=0)
   with pytest.raises(ValueError, match='range'):
     learned_matching.match(_patch_descriptors, np.zeros((8, 8, 3), np.float32), 'gray', 9, 12)
+
+
+def test_the_intersection_with_the_census_plan_is_the_overlap_of_both(pair):
+  image = np.rint(255 * _gray_anaglyph(pair)).astype(np.uint8)
+  own = learned_matching.estimate_range(_patch_descriptors, image, 'gray')
+  census = matcher.estimate_range(image[..., :1].astype(np.float32),
+                                  image[..., 1:].astype(np.float32))
+  both = learned_matching.estimate_range(
+      _patch_descriptors, image, 'gray',
+      config=learned_matching.LearnedMatchConfig(intersect_census_range=True))
+  overlap = max(own[0], census[0]), min(own[1], census[1])
+  assert both == (overlap if overlap[0] < overlap[1] else own), (own, census, both)
