@@ -7,7 +7,9 @@ printed during the import is passed on unchanged. On a machine without a CUDA dr
 TensorFlow's C++ log level is also raised to errors-off, so no "failed call to cuInit"
 error is printed when the first op runs; with a driver present only INFO and WARNING lines
 are hidden (level 2). An explicit TF_CPP_MIN_LOG_LEVEL in the environment always wins.
-This package's own messages go through absl logging and are never filtered.
+This package's own messages go through absl logging and are never filtered. A run from a
+source checkout that imports another copy of the package (a stale installed one) is warned
+about: its results would not be the checkout's.
 """
 
 import ctypes
@@ -61,4 +63,17 @@ def _import_tensorflow_quietly() -> None:
       sys.stderr.flush()
 
 
+def shadowing_warning(directory: str) -> str:
+  """A warning when `directory` holds a mixstereo_tf source tree that is not the imported
+  package (e.g. a stale non-editable install shadows the checkout); '' otherwise."""
+  local = os.path.join(directory, 'mixstereo_tf')
+  imported = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+  if (not os.path.isfile(os.path.join(local, '__init__.py')) or
+      os.path.realpath(local) == os.path.realpath(imported)):
+    return ''
+  return (f'WARNING: running the mixstereo_tf installed at {imported}, not the source tree '
+          f'{local}; reinstall it (pip install -e .) or set PYTHONPATH={directory}.\n')
+
+
+sys.stderr.write(shadowing_warning(os.getcwd()))
 _import_tensorflow_quietly()

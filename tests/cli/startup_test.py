@@ -40,3 +40,13 @@ def test_cuda_registration_errors_are_hidden_other_errors_are_not():
                                'GPU libraries.')
   assert startup._is_noise('I0000 00:00:1731.5 77 cpu_feature_guard.cc:210] This TensorFlow '
                            'binary is optimized')
+
+
+def test_a_checkout_shadowed_by_another_copy_of_the_package_is_warned_about(tmp_path):
+  from mixstereo_tf.cli import startup  # pylint: disable=import-outside-toplevel
+  assert startup.shadowing_warning(str(tmp_path)) == ''  # No source tree here.
+  (tmp_path / 'mixstereo_tf').mkdir()
+  (tmp_path / 'mixstereo_tf' / '__init__.py').write_text('')
+  assert str(tmp_path / 'mixstereo_tf') in startup.shadowing_warning(str(tmp_path))
+  imported_root = os.path.dirname(os.path.dirname(os.path.dirname(startup.__file__)))
+  assert startup.shadowing_warning(imported_root) == ''  # The imported tree itself.
