@@ -31,6 +31,6 @@ def measure(module: str, expression: str, checkout: str = ''):
   package, value = json.loads(out.split('RESULT ', 1)[1])
   tree = os.path.abspath(checkout or os.getcwd())
   if not os.path.abspath(package).startswith(tree + os.sep):
-    raise RuntimeError(f'{"--before_checkout=" + checkout if checkout else "the working tree"}'
-                       f': the package came from {package} (a stale install?).')
+    where = f'--before_checkout={checkout}' if checkout else 'the working tree'
+    raise RuntimeError(f'{where}: the package came from {package} (a stale install?).')
   return value
