@@ -77,25 +77,25 @@ def _taps(d_right: np.ndarray, wide: int):
 
 
 def _conjugate_gradient(taps, weight: float, config: LayerConfig, rhs: np.ndarray,
-                        start: np.ndarray, blocks, threads: int) -> np.ndarray:
+                        solution: np.ndarray, blocks, threads: int) -> np.ndarray:
   """Jacobi-preconditioned CG for A u = rhs ([H, E, C] float64; A of `layers_kernel`,
-  every channel with its own step sizes), from `start`, until each channel's residual is
-  below config.cg_tolerance |rhs| or config.cg_iterations steps; the kernels run on the
-  row `blocks` in `threads` threads (`parallel_sgm.run_blocks`)."""
+  every channel with its own step sizes), from `solution` (updated in place and returned),
+  until each channel's residual is below config.cg_tolerance |rhs| or
+  config.cg_iterations steps; the kernels run on the row `blocks` in `threads` threads
+  (`parallel_sgm.run_blocks`)."""
   run = lambda kernel, *arguments, partial=0: parallel_sgm.run_blocks(
       kernel, blocks, threads, *arguments, partial=partial)
   channels = rhs.shape[2]
   operator = (*taps, weight, config.smoothness, config.fidelity)
   inverse_diagonal = np.empty(rhs.shape[:2])
   run(layers_kernel.diagonal_rows, *operator, inverse_diagonal)
-  inverse_diagonal = 1.0 / inverse_diagonal
-  solution, product = start.copy(), np.empty_like(rhs)
+  np.divide(1.0, inverse_diagonal, out=inverse_diagonal)
+  product, residual, direction = (np.empty_like(rhs) for _ in range(3))
   run(layers_kernel.normal_rows, solution, *operator, product, partial=channels)
-  residual = rhs - product
-  direction = inverse_diagonal[..., None] * residual
-  rz = np.einsum('ijk,ijk->k', residual, direction)
-  norms = np.sqrt(np.einsum('ijk,ijk->k', residual, residual))
-  target = config.cg_tolerance * np.sqrt(np.einsum('ijk,ijk->k', rhs, rhs))
+  sums = run(layers_kernel.start_rows, rhs, product, inverse_diagonal, residual, direction,
+             partial=3 * channels)
+  rz, norms = sums[:channels], np.sqrt(sums[channels:2 * channels])
+  target = config.cg_tolerance * np.sqrt(sums[2 * channels:])
   preconditioned = np.empty_like(rhs)
   for _ in range(config.cg_iterations):
     if np.all(norms <= target):
@@ -135,14 +135,14 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
   rhs = np.empty_like(start)
   threads = workers.usable_cpus(0)
   blocks = parallel_sgm.row_blocks(h, 4 * threads)
-  parallel_sgm.run_blocks(layers_kernel.transpose_rows, blocks, threads,
-                          np.asarray(mixture01, np.float64), x0, frac, weight, rhs)
+  run = lambda kernel, *arguments: parallel_sgm.run_blocks(kernel, blocks, threads,
+                                                          *arguments)
+  run(layers_kernel.transpose_rows, np.asarray(mixture01, np.float64), x0, frac, weight, rhs)
   rhs += config.fidelity * start
   wide = _conjugate_gradient((x0, frac), weight, config, rhs, start, blocks, threads)
-  gather = lambda cols: np.take_along_axis(wide, cols[..., None], axis=1)
-  right = (1 - frac[..., None]) * gather(x0) + frac[..., None] * gather(x0 + 1)
-  return {'left': np.clip(wide[:, :w], 0, 1).astype(np.float32),
-          'right': np.clip(right, 0, 1).astype(np.float32)}
+  left, right = (np.empty((h, w, channels), np.float32) for _ in range(2))
+  run(layers_kernel.views_rows, wide, x0, frac, left, right)
+  return {'left': left, 'right': right}
 
 
 def _lagged(values: np.ndarray, lag: np.ndarray):

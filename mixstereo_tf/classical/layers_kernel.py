@@ -93,6 +93,25 @@ def normal_rows(y0, y1, u, x0, frac, weight, smoothness, fidelity, out, dots):
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
+def start_rows(y0, y1, rhs, product, inverse_diagonal, residual, direction, sums):
+  """CG's start on rows [y0, y1): residual = rhs - product (product = A u0), direction =
+  residual * inverse_diagonal; per channel c, sums[c] += <residual, direction>,
+  sums[C + c] += |residual|^2 and sums[2 C + c] += |rhs|^2."""
+  channels = rhs.shape[2]
+  for y in range(y0, y1):
+    for column in range(rhs.shape[1]):
+      for c in range(channels):
+        target = rhs[y, column, c]
+        value = target - product[y, column, c]
+        residual[y, column, c] = value
+        scaled = value * inverse_diagonal[y, column]
+        direction[y, column, c] = scaled
+        sums[c] += value * scaled
+        sums[channels + c] += value * value
+        sums[2 * channels + c] += target * target
+
+
+@numba.njit(nogil=True, cache=True, error_model='numpy')
 def step_rows(y0, y1, alpha, solution, residual, direction, product, inverse_diagonal,
               preconditioned, sums):
   """One CG step on rows [y0, y1): solution += alpha direction, residual -= alpha
@@ -119,3 +138,17 @@ def direction_rows(y0, y1, beta, preconditioned, direction):
       for c in range(direction.shape[2]):
         direction[y, column, c] = (preconditioned[y, column, c] +
                                    beta[c] * direction[y, column, c])
+
+
+@numba.njit(nogil=True, cache=True, error_model='numpy')
+def views_rows(y0, y1, wide, x0, frac, left, right):
+  """The views of rows [y0, y1) from the solved left layer `wide` ([H, E, C]), clipped to
+  [0, 1]: left[y, x] = wide[y, x] and right[y, x] = (1 - f) wide[y, x0] + f wide[y, x0 + 1]
+  (the right pixel shows the left layer at x + d_R; `left`, `right` [H, W, C])."""
+  for y in range(y0, y1):
+    for x in range(left.shape[1]):
+      a, b, f = x0[y, x], x0[y, x] + 1, frac[y, x]
+      for c in range(left.shape[2]):
+        left[y, x, c] = min(max(wide[y, x, c], 0.0), 1.0)
+        value = (1.0 - f) * wide[y, a, c] + f * wide[y, b, c]
+        right[y, x, c] = min(max(value, 0.0), 1.0)
