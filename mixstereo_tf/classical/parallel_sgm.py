@@ -15,7 +15,6 @@ A stored cost volume (`match_volume`) runs in one strip by default, so it reprod
 overlap rule.
 """
 
-import concurrent.futures
 from typing import Tuple
 
 import numpy as np
@@ -24,16 +23,13 @@ from mixstereo_tf.classical import census_costs
 from mixstereo_tf.classical import census_sgm
 from mixstereo_tf.classical import fast_postprocess
 from mixstereo_tf.classical import sgm
+from mixstereo_tf.core import workers
 
 
 def run_tasks(fn, tasks, threads: int) -> None:
-  """fn(task) for every task, on `threads` threads (in this thread when threads == 1)."""
-  if threads == 1 or len(tasks) == 1:
-    for task in tasks:
-      fn(task)
-    return
-  with concurrent.futures.ThreadPoolExecutor(min(threads, len(tasks))) as pool:
-    list(pool.map(fn, tasks))
+  """fn(task) for every task, on `threads` threads (`workers.run_tasks`: a lasting pool; in
+  this thread when threads == 1)."""
+  workers.run_tasks(fn, tasks, threads)
 
 
 def row_blocks(height: int, threads: int):

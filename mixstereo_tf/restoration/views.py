@@ -28,7 +28,6 @@ left pixel x matches the right pixel x - d_L, the right pixel x matches the left
 NumPy, OpenCV and numba only: this runs on every video frame.
 """
 
-import concurrent.futures
 import dataclasses
 from typing import Dict, Optional, Tuple
 
@@ -137,11 +136,7 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
   blocks = list(zip(bounds[:-1], bounds[1:]))
   solve = lambda block: kernel.solve_rows(int(block[0]), int(block[1]),
                                                      *arguments)
-  if len(blocks) == 1 or threads == 1:
-    solve((0, height))
-  else:
-    with concurrent.futures.ThreadPoolExecutor(threads) as pool:
-      list(pool.map(solve, blocks))
+  workers.run_tasks(solve, blocks, threads)
   return left, right
 
 
@@ -154,10 +149,8 @@ def _gray_priors(mixture, spec):
 def _per_view(config, fn, *arguments) -> Tuple[np.ndarray, np.ndarray]:
   """(fn(left's arguments), fn(right's)): in two threads when config allows (OpenCV and
   large NumPy operations release the GIL)."""
-  if workers.usable_cpus(config.threads) == 1:
-    return tuple(fn(*args) for args in zip(*arguments))
-  with concurrent.futures.ThreadPoolExecutor(2) as pool:
-    return tuple(pool.map(fn, *arguments))
+  threads = min(2, workers.usable_cpus(config.threads))
+  return tuple(workers.run_tasks(lambda args: fn(*args), list(zip(*arguments)), threads))
 
 
 def _classical_solve(mixture, spec, d_left, d_right, consistent, config):

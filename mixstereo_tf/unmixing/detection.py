@@ -40,7 +40,6 @@ Dubois matrices of `mixtures` differ by < 0.03 per coefficient, which an image c
 apart.
 """
 
-import concurrent.futures
 import dataclasses
 from typing import Dict, Optional, Tuple
 
@@ -49,6 +48,7 @@ import numpy as np
 
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.core import workers
 from mixstereo_tf.restoration import dubois_leak
 
 # The channel each family's odd eye owns (red-cyan: R alone is the left eye).
@@ -139,8 +139,7 @@ def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
   match_pair = lambda pair: _match(small[..., pair[0]], small[..., pair[1]], reach)
   # The pairs in threads: each match is one strip (the same result on any machine) and
   # numba releases the GIL.
-  with concurrent.futures.ThreadPoolExecutor(len(_PAIRS)) as pool:
-    outs = list(pool.map(match_pair, _PAIRS))
+  outs = workers.run_tasks(match_pair, _PAIRS, len(_PAIRS))
   displaced = {}
   for pair, out in zip(_PAIRS, outs):
     moved = out['consistent_left'] & (np.abs(out['disparity_left']) >= 1.5)
