@@ -8,9 +8,11 @@ learned stages train on, never an evaluation scene) under drawn disparity fields
 (`photo_warps.warped_pair`, seeds 10^9 on, which training never draws; 256 x 512, depth
 range 96, positive disparities as double images are ordered), mixed as I = (L + R) / 2
 and rounded to 8 bits. Each variant is the shipped `DiplopiaConfig` with some fields
-replaced (`field=value`, joined by `@`; `p1` and `p2` are those of its SGM), run by
+replaced (`field=value`, joined by `@`; `p1` and `p2` are those of its SGM, the fields of
+`diplopia_layers.LayerConfig` those of its layer solve, e.g. `cg_tolerance`), run by
 `diplopia.unmix_diplopia` over [1, true maximum + 3]. Scores: bad-1 over the visible
-pixels with a true disparity of at least 1 px, and both views' RGB PSNR.
+pixels with a true disparity of at least 1 px, both views' RGB PSNR, and the seconds of one
+pair's `unmix_diplopia` (one run on the machine at hand).
 """
 
 import dataclasses
@@ -25,6 +27,7 @@ import numpy as np
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.data import photo_warps
 
 from experiments import validation  # --photo_dir, the pairs, their scores.
@@ -51,12 +54,15 @@ def parse_variant(item: str) -> Tuple[str, diplopia.DiplopiaConfig]:
   if not sep or not label or not rest:
     raise ValueError(f'--diplopia_variants: {item!r} is not label=field=value[@...].')
   base = diplopia.DiplopiaConfig()
-  types = dict(validation.numeric_fields(diplopia.DiplopiaConfig),
+  layer_fields = validation.numeric_fields(diplopia_layers.LayerConfig)
+  types = dict(validation.numeric_fields(diplopia.DiplopiaConfig), **layer_fields,
                **{field: int for field in MATCHING_FIELDS})
   values = validation.field_values('--diplopia_variants', item, rest.split('@'), types)
   matching = {field: values.pop(field) for field in MATCHING_FIELDS if field in values}
+  layers = {field: values.pop(field) for field in layer_fields if field in values}
   return label, dataclasses.replace(
-      base, matching=dataclasses.replace(base.matching, **matching), **values)
+      base, matching=dataclasses.replace(base.matching, **matching),
+      layers=dataclasses.replace(base.layers, **layers), **values)
 
 
 def evaluate(variants, atlas, count: int) -> Dict[str, List[Dict[str, float]]]:
@@ -67,9 +73,11 @@ def evaluate(variants, atlas, count: int) -> Dict[str, List[Dict[str, float]]]:
     scored = pair['nonocc_left'] & (truth >= 1)
     image = np.round((pair['left'].astype(np.float32) + pair['right']) / 2).astype(np.uint8)
     for label, config in variants:
+      start = time.perf_counter()
       out = diplopia.unmix_diplopia(image, (1, int(np.ceil(truth.max())) + 3), config)
-      rows[label].append(validation.scores(out['disparity_left'], pair, scored,
-                                           out['left'], out['right']))
+      seconds = time.perf_counter() - start
+      rows[label].append(dict(validation.scores(out['disparity_left'], pair, scored,
+                                                out['left'], out['right']), seconds=seconds))
     print(f'pair {number + 1}/{count}', file=sys.stderr, flush=True)
   return rows
 
@@ -80,11 +88,11 @@ def main(argv):
   variants = [('shipped', diplopia.DiplopiaConfig())] + validation.parse_all(
       FLAGS.diplopia_variants, parse_variant)
   rows = evaluate(variants, validation.required_atlas(), FLAGS.diplopia_pairs)
-  lines = ['| variant | bad-1 | views L / R (dB) |', '| --- | --- | --- |']
+  lines = ['| variant | bad-1 | views L / R (dB) | seconds a pair |', '| --- | --- | --- | --- |']
   for label, _ in variants:
     mean = lambda key: np.mean([r[key] for r in rows[label]])  # pylint: disable=cell-var-from-loop
     lines.append(f"| {label} | {100 * mean('bad1'):.1f}% | "
-                 f"{mean('psnr_left'):.2f} / {mean('psnr_right'):.2f} |")
+                 f"{mean('psnr_left'):.3f} / {mean('psnr_right'):.3f} | {mean('seconds'):.3f} |")
   text = ['# Classical de-diplopia: choices on validation pairs', '',
           f'Written by `python -m experiments.diplopia_validation` in '
           f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores, '

@@ -186,6 +186,9 @@ def test_diplopia_validation_variants_parse_and_bad_ones_name_the_flag():
   assert (label, config.window_radius, config.matching.p1, config.matching.p2) == (
       'wide', 9, 12, 120)
   assert config.matching.min_disparity == 1  # The rest is the shipped config's.
-  for bad in ('nolabel', 'a=', 'a=matching=3', 'a=window_radius=x', 'a=p1'):
+  _, config = diplopia_validation.parse_variant('loose=cg_tolerance=0.001@smoothness=0.02')
+  assert (config.layers.cg_tolerance, config.layers.smoothness) == (0.001, 0.02)
+  assert config.layers.fidelity == diplopia_validation.diplopia.DiplopiaConfig().layers.fidelity
+  for bad in ('nolabel', 'a=', 'a=matching=3', 'a=window_radius=x', 'a=p1', 'a=layers=1'):
     with pytest.raises(ValueError, match='--diplopia_variants'):
       diplopia_validation.parse_variant(bad)
