@@ -48,6 +48,10 @@ def zncc_rows(y0, y1, high, energy, lags, radius, scale, out, sums):
   size = 2 * radius + 1
   norm = 1.0 / (size * size)
   column = np.empty(width, np.float64)
+  # The columns entering and leaving the horizontal window after column x (reflect-101).
+  enter, leave = np.empty(width, np.int64), np.empty(width, np.int64)
+  for x in range(width):
+    enter[x], leave[x] = _reflect(x + radius + 1, width), _reflect(x - radius, width)
   for i in range(lags.shape[0]):
     d = min(lags[i], width)
     # Vertical sums of the zero-padded product over the first row's window, then rolled
@@ -57,20 +61,19 @@ def zncc_rows(y0, y1, high, energy, lags, radius, scale, out, sums):
     for dy in range(-radius, radius + 1):
       _add_product(column, high, _reflect(y0 + dy, height), d, 1.0)
     for y in range(y0, y1):
-      for x in range(d):
-        out[y, x, i] = scale
       # Horizontal window sums (reflect-101 at both ends), normalised.
       total = 0.0
       for dx in range(-radius, radius + 1):
         total += column[_reflect(dx, width)]
-      for x in range(width):
-        if x >= d:
-          denominator = np.sqrt(energy[y, x] * energy[y, x - d] + np.float32(1e-6))
-          cost = np.float32((1.0 - total * norm / denominator) * scale)
-          out[y, x, i] = cost
-          sums[i] += cost
-        total += column[_reflect(x + radius + 1, width)] - column[_reflect(x - radius,
-                                                                            width)]
+      for x in range(d):
+        out[y, x, i] = scale
+        total += column[enter[x]] - column[leave[x]]
+      for x in range(d, width):
+        denominator = np.sqrt(energy[y, x] * energy[y, x - d] + np.float32(1e-6))
+        cost = np.float32((1.0 - total * norm / denominator) * scale)
+        out[y, x, i] = cost
+        sums[i] += cost
+        total += column[enter[x]] - column[leave[x]]
       if y + 1 < y1:
         _add_product(column, high, _reflect(y - radius, height), d, -1.0)
         _add_product(column, high, _reflect(y + radius + 1, height), d, 1.0)
