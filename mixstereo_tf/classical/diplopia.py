@@ -126,9 +126,9 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
   costs = np.empty((height, width, lags.size), np.float32)
   threads = workers.usable_cpus(0)
   blocks = parallel_sgm.row_blocks(height, 4 * threads)
-  sums = parallel_sgm.run_blocks(zncc_kernel.zncc_rows, blocks, threads, high, energy, lags,
-                                 config.window_radius, np.float32(config.cost_scale), costs,
-                                 partial=lags.size)
+  sums = parallel_sgm.run_blocks(zncc_kernel.zncc_rows, blocks, threads, high, energy,
+                                 int(lags[0]), lags.size, config.window_radius,
+                                 np.float32(config.cost_scale), costs, partial=lags.size)
   envelope = np.maximum.accumulate(sums / (height * (width - lags)))  # Mean cost per lag.
   penalty = (envelope.max() - envelope).astype(np.float32)
   volume = np.empty(costs.shape, np.uint8)

@@ -11,8 +11,9 @@ product gives; tests/classical/zncc_kernel_test.py transcribes it so); columns x
 the cost `scale`. Rows are independent given their window, so row blocks run in Python
 threads (the kernel releases the GIL) and stay in cache. Within a block the window's
 vertical sums roll from row to row (one row in, one out: 2 products per pixel and lag
-instead of 2r + 1), in float64 so that the rolling adds no drift. Values float32; lags and radii in
-pixels.
+instead of 2r + 1), in float64 so that the rolling adds no drift; all lags are carried
+side by side, the innermost loop over the lags (independent sums, and out's last axis
+written in order). Values float32; lags and radii in pixels.
 """
 
 import numba
@@ -30,14 +31,20 @@ def _reflect(index, size):
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
-def zncc_rows(y0, y1, high, energy, lags, radius, scale, out, sums):
-  """Costs of rows [y0, y1) for every lag, into out[y, x, i] (float32 [H, W, D]).
+def zncc_rows(y0, y1, high, energy, first_lag, count, radius, scale, out, sums):
+  """Costs of rows [y0, y1) for the lags d_i = first_lag + i, i < count, into out[y, x, i]
+  (float32 [H, W, D]).
+
+  Every lag's window sums are kept side by side ([W, D] vertical sums, [D] horizontal
+  running sums), so the innermost loop runs over the lags: independent running sums and
+  writes along out's last axis. Each lag's sums take the same steps in the same order as
+  one lag at a time would.
 
   Args:
     y0, y1: the row block.
     high: float32 [H, W], the high-passed image.
     energy: float32 [H, W], box(high^2) (OpenCV's boxFilter, normalised).
-    lags: int64 [D], the lags d_i >= 1.
+    first_lag, count: the lags, first_lag >= 1.
     radius: window radius r.
     scale: cost units per unit of (1 - zncc).
     out: float32 [H, W, D], written for rows [y0, y1): `scale` at columns x < d_i.
@@ -47,43 +54,52 @@ def zncc_rows(y0, y1, high, energy, lags, radius, scale, out, sums):
   height, width = high.shape
   size = 2 * radius + 1
   norm = 1.0 / (size * size)
-  column = np.empty(width, np.float64)
+  column = np.zeros((width, count), np.float64)
+  total = np.empty(count, np.float64)
   # The columns entering and leaving the horizontal window after column x (reflect-101).
   enter, leave = np.empty(width, np.int64), np.empty(width, np.int64)
   for x in range(width):
     enter[x], leave[x] = _reflect(x + radius + 1, width), _reflect(x - radius, width)
-  for i in range(lags.shape[0]):
-    d = min(lags[i], width)
-    # Vertical sums of the zero-padded product over the first row's window, then rolled
-    # down the block: the next window drops row reflect(y - r) and adds reflect(y + r + 1)
-    # (as multisets of rows, reflect-101 included).
-    column[:] = 0.0
-    for dy in range(-radius, radius + 1):
-      _add_product(column, high, _reflect(y0 + dy, height), d, 1.0)
-    for y in range(y0, y1):
-      # Horizontal window sums (reflect-101 at both ends), normalised.
-      total = 0.0
-      for dx in range(-radius, radius + 1):
-        total += column[_reflect(dx, width)]
-      for x in range(d):
-        out[y, x, i] = scale
-        total += column[enter[x]] - column[leave[x]]
-      for x in range(d, width):
-        denominator = np.sqrt(energy[y, x] * energy[y, x - d] + np.float32(1e-6))
-        cost = np.float32((1.0 - total * norm / denominator) * scale)
+  every = min(first_lag + count - 1, width)  # From this column on every lag is inside.
+  # Vertical sums of the zero-padded products over the first row's window, then rolled
+  # down the block: the next window drops row reflect(y - r) and adds reflect(y + r + 1)
+  # (as multisets of rows, reflect-101 included).
+  for dy in range(-radius, radius + 1):
+    _add_products(column, high, _reflect(y0 + dy, height), first_lag, 1.0)
+  for y in range(y0, y1):
+    # Horizontal window sums (reflect-101 at both ends), normalised.
+    total[:] = 0.0
+    for dx in range(-radius, radius + 1):
+      start = _reflect(dx, width)
+      for i in range(count):
+        total[i] += column[start, i]
+    for x in range(width):
+      entering, leaving, here = enter[x], leave[x], energy[y, x]
+      # Lags i < inside have d_i <= x (all of them from column `every` on: no branch).
+      inside = count if x >= every else max(0, min(count, x - first_lag + 1))
+      for i in range(inside):
+        denominator = np.sqrt(here * energy[y, x - first_lag - i] + np.float32(1e-6))
+        cost = np.float32((1.0 - total[i] * norm / denominator) * scale)
         out[y, x, i] = cost
         sums[i] += cost
-        total += column[enter[x]] - column[leave[x]]
-      if y + 1 < y1:
-        _add_product(column, high, _reflect(y - radius, height), d, -1.0)
-        _add_product(column, high, _reflect(y + radius + 1, height), d, 1.0)
+        total[i] += column[entering, i] - column[leaving, i]
+      for i in range(inside, count):
+        out[y, x, i] = scale
+        total[i] += column[entering, i] - column[leaving, i]
+    if y + 1 < y1:
+      _add_products(column, high, _reflect(y - radius, height), first_lag, -1.0)
+      _add_products(column, high, _reflect(y + radius + 1, height), first_lag, 1.0)
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
-def _add_product(column, high, row, d, sign):
-  """column[x] += sign * high[row, x] * high[row, x - d] for x >= d (float64 sums)."""
-  for x in range(d, high.shape[1]):
-    column[x] += sign * (np.float64(high[row, x]) * np.float64(high[row, x - d]))
+def _add_products(column, high, row, first_lag, sign):
+  """column[x, i] += sign * high[row, x] * high[row, x - d_i] for x >= d_i = first_lag + i
+  (float64 sums)."""
+  count = column.shape[1]
+  for x in range(high.shape[1]):
+    value = np.float64(high[row, x])
+    for i in range(min(count, x - first_lag + 1)):
+      column[x, i] += sign * (value * np.float64(high[row, x - first_lag - i]))
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')

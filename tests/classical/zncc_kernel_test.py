@@ -39,3 +39,13 @@ def test_the_kernel_equals_the_definition():
   # float32 sums in another order: a rounding tie may go the other way.
   assert difference.max() <= 1 and np.mean(difference > 0) < 1e-3
   assert np.argmin(got[:, 40:].astype(int).sum(axis=(0, 1))) == 7 - 2
+
+
+def test_lags_up_to_the_image_width_and_windows_wider_than_it():
+  rng = np.random.default_rng(1)
+  gray = rng.uniform(0, 255, (9, 12)).astype(np.float32)
+  config = diplopia.DiplopiaConfig(window_radius=7,
+                                   matching=sgm.SgmConfig(min_disparity=1, max_disparity=40))
+  got, want = diplopia.self_matching_volume(gray, config), _reference(gray, config)
+  assert got.shape == want.shape == (9, 12, 11)  # Lags 1..11: the width minus one.
+  assert np.abs(got.astype(int) - want).max() <= 1
