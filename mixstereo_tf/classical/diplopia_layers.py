@@ -138,13 +138,14 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
   extra = int(np.ceil(max(float(d_right.max()), 0.0))) + 2
   x0, frac = _taps(d_right, w + extra)
   # The mixture itself, edge-extended: CG's start and the target of the fidelity prior.
-  start = np.pad(mixture01, ((0, 0), (0, extra), (0, 0)), mode='edge').astype(np.float64)
+  start = np.empty((h, w + extra, channels))
+  start[:, :w], start[:, w:] = mixture01, np.asarray(mixture01)[:, -1:]
   rhs = np.empty_like(start)
   threads = workers.usable_cpus(0)
   blocks = parallel_sgm.row_blocks(h, 4 * threads)
   run = lambda kernel, *arguments: parallel_sgm.run_blocks(kernel, blocks, threads,
                                                           *arguments)
-  run(layers_kernel.transpose_rows, np.asarray(mixture01, np.float64), x0, frac, weight, rhs)
+  run(layers_kernel.transpose_rows, np.ascontiguousarray(mixture01), x0, frac, weight, rhs)
   rhs += config.fidelity * start
   wide = _conjugate_gradient((x0, frac), weight, config, rhs, start, blocks, threads)
   left, right = (np.empty((h, w, channels), np.float32) for _ in range(2))

@@ -14,7 +14,6 @@ their own: row blocks run in Python threads (the kernels release the GIL). float
 """
 
 import numba
-import numpy as np
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')

@@ -60,8 +60,10 @@ def signed_to_u8(image):
   """
   if _is_tensor(image):
     return tf.cast(tf.round(tf.clip_by_value((image + 1.0) * 127.5, 0.0, 255.0)), tf.uint8)
-  image = np.asarray(image, dtype=np.float64)
-  return np.clip(np.round((image + 1.0) * 127.5), 0, 255).astype(np.uint8)
+  scaled = np.add(image, 1.0, dtype=np.float64)  # One new array, then in place.
+  scaled *= 127.5
+  np.round(scaled, out=scaled)
+  return np.clip(scaled, 0.0, 255.0, out=scaled).astype(np.uint8)
 
 
 def as_unit_float(image, name: str = 'image') -> np.ndarray:

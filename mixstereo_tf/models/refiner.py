@@ -37,10 +37,12 @@ INPUT_CHANNELS = 11
 
 def network_input(mixture, left, right, d_left, d_right) -> np.ndarray:
   """The refiner's [..., H, W, 11] float32 input from uint8 images and float disparities."""
-  images = [image_range.u8_to_signed(np.asarray(i)).astype(np.float32)
-            for i in (mixture, left, right)]
-  disparities = [np.asarray(d, np.float32)[..., None] for d in (d_left, d_right)]
-  return np.concatenate(images + disparities, axis=-1)
+  mixture = np.asarray(mixture)
+  out = np.empty(mixture.shape[:-1] + (INPUT_CHANNELS,), np.float32)
+  for start, image in zip((0, 3, 6), (mixture, left, right)):
+    out[..., start:start + 3] = image_range.u8_to_signed(image)
+  out[..., 9], out[..., 10] = d_left, d_right
+  return out
 
 
 

@@ -17,8 +17,13 @@ Network = Callable[[np.ndarray], Dict[str, np.ndarray]]
 
 
 def _padded(array: np.ndarray, multiple: int) -> np.ndarray:
+  """[1, h, w, C] float32: `array` edge-padded at the bottom / right to the multiple (no
+  copy when it is float32 and needs no padding)."""
   height, width = array.shape[:2]
-  return np.pad(array, ((0, -height % multiple), (0, -width % multiple), (0, 0)), mode='edge')
+  if height % multiple or width % multiple:
+    array = np.pad(array, ((0, -height % multiple), (0, -width % multiple), (0, 0)),
+                   mode='edge')
+  return array[None].astype(np.float32, copy=False)
 
 
 def apply(network: Network, image: np.ndarray, multiple: int, tile: int = 1024,
@@ -41,7 +46,7 @@ def apply(network: Network, image: np.ndarray, multiple: int, tile: int = 1024,
     raise ValueError(f'tile ({tile}) must exceed twice the overlap ({overlap}).')
   height, width = image.shape[:2]
   if height * width <= tile * tile:  # Same memory as one tile; no tile overheads.
-    outputs = network(_padded(image, multiple)[None].astype(np.float32))
+    outputs = network(_padded(image, multiple))
     return {key: np.asarray(value)[0, :height, :width].astype(np.float32)
             for key, value in outputs.items()}
   core = tile - 2 * overlap
@@ -51,7 +56,7 @@ def apply(network: Network, image: np.ndarray, multiple: int, tile: int = 1024,
       y0, x0 = max(0, y - overlap), max(0, x - overlap)
       y1, x1 = min(height, y + core + overlap), min(width, x + core + overlap)
       crop = image[y0:y1, x0:x1]
-      outputs = network(_padded(crop, multiple)[None].astype(np.float32))
+      outputs = network(_padded(crop, multiple))
       for key, value in outputs.items():
         value = np.asarray(value)[0]
         if key not in result:
