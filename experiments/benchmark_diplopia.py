@@ -34,6 +34,7 @@ from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.core import hints
 from mixstereo_tf.core import workers
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.unmixing import learned_diplopia
@@ -68,7 +69,9 @@ def video_fps(method, path, count, per_shot=False):
   or `per_shot` (`temporal.TemporalConfig.enabled`)."""
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(mixture='diplopia',
                                                                 **METHODS[method]))
-  unmixer(frames(1)[0])  # Warm-up: numba's cache, tracing.
+  # Warm-up: numba's cache, and tracing the network as video frames run it (their right
+  # disparity unread, `unmix_files`).
+  unmixer(frames(1)[0], hint=hints.FrameHint(unread='disparity_right'))
   output_dir = tempfile.mkdtemp()
   try:
     report = unmix_files.unmix_inputs(unmixer, path, output_dir, media.OutputOptions(
