@@ -120,8 +120,8 @@ def _cost_ablation(echo, data, base):
   search = diplopia.estimate_range(image)
   rows = []
   for share in ZNCC_SHARES:
-    costs = learned_diplopia.echo_costs(echo, learned_diplopia.EchoConfig(zncc_weight=share))
-    out = diplopia.unmix_diplopia(image, search, costs=costs)
+    out = learned_diplopia.learned_unmix(echo, image, 'diplopia', search,
+                                         config=learned_diplopia.EchoConfig(zncc_weight=share))
     rows.append(dict(base, part=4, method=f'zncc share {share}', weight=0.5,
                      **score(data, out)))
   return rows

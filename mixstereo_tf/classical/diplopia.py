@@ -38,6 +38,10 @@ from mixstereo_tf.core import image_range
 from mixstereo_tf.core import workers
 
 Costs = Callable[[np.ndarray, 'DiplopiaConfig'], np.ndarray]
+# The SGM penalties (P1, P2) of `estimate_range`, those its density threshold was chosen
+# with: the matching's 16 / 160 left one of 16 validation double images with a bound
+# below the true 99.5th percentile (0.98x), 8 / 64 none.
+RANGE_PENALTIES = (8, 64)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,17 +50,21 @@ class DiplopiaConfig:
 
   Attributes:
     matching: SGM parameters of the self-matching (min_disparity >= 1; the census
-      fields are unused).
+      fields are unused). Penalties P1 16, P2 160 (8 and 64 before), chosen on validation
+      double images (`diplopia_validation.md`: bad-1 38.7 -> 35.0%, views +0.25 / +0.31
+      dB; 24/240 and 32/320 gave bad-1 33.8% and 33.7% but lower views, 48/480 34.2% and
+      views lower still); `estimate_range` keeps its own (`RANGE_PENALTIES`).
     window_radius: ZNCC window radius, pixels: 7 (a 15 x 15 window; 3 before), chosen on
-      validation double images (`experiments/results/diplopia_validation.md`: bad-1
-      47.8% at 3, 41.4% at 5, 38.7% at 7, 38.2% at 9, the views 0.4-0.5 dB higher): the
+      validation double images (`experiments/results/diplopia_validation.md`, with P 8 /
+      64 then: bad-1 47.8% at 3, 41.4% at 5, 38.7% at 7, 38.2% at 9, the views 0.4-0.5 dB
+      higher; with 16 / 160: 40.8%, 36.3%, 35.0%, 35.1%): the
       echo shares only half of each window's signal, so it needs a larger window than a
       stereo pair. The rolled sums of `zncc_kernel` cost the same at any radius.
     highpass_sigma: Gaussian sigma of the high-pass applied before ZNCC, pixels.
     cost_scale: cost units per unit of (1 - zncc).
     layers: prior weights and solver of the layer separation.
   """
-  matching: sgm.SgmConfig = sgm.SgmConfig(min_disparity=1, p1=8, p2=64)
+  matching: sgm.SgmConfig = sgm.SgmConfig(min_disparity=1, p1=16, p2=160)
   window_radius: int = 7
   highpass_sigma: float = 1.0
   cost_scale: float = 32.0
@@ -162,7 +170,8 @@ def estimate_range(mixture, config: Optional[DiplopiaConfig] = None, width: int 
   `matcher.estimate_range` does for anaglyphs). `density` 2 %, not the anaglyphs' 1 %: a
   double image's self-matching leaves more false consistent matches; on 12 photo-warp
   pairs (training data, 640 px wide, true maxima 67-85 px) the bound over the true 99.5th
-  percentile had median 1.95x (up to 3.2x) at 1 % and 1.11x (0.93x-2.65x) at 2 %.
+  percentile had median 1.95x (up to 3.2x) at 1 % and 1.11x (0.93x-2.65x) at 2 %. The
+  matching runs with `RANGE_PENALTIES`, whatever `config`'s.
 
   Returns:
     (min, max) ints with 1 <= min < max: the whole search when nothing is consistent.
@@ -176,7 +185,8 @@ def estimate_range(mixture, config: Optional[DiplopiaConfig] = None, width: int 
                       interpolation=cv2.INTER_AREA)
   reach = max(2, round(fraction * gray.shape[1]))
   config = dataclasses.replace(config, matching=dataclasses.replace(
-      config.matching, min_disparity=1, max_disparity=reach))
+      config.matching, min_disparity=1, max_disparity=reach, p1=RANGE_PENALTIES[0],
+      p2=RANGE_PENALTIES[1]))
   matched = parallel_sgm.match_volume(self_matching_volume(gray, config), config.matching)
   found = matched['disparity_left'][matched['consistent_left']]
   counts = np.histogram(found, bins=np.arange(1, reach + 2))[0]  # counts[i]: lag i + 1.

@@ -49,12 +49,13 @@ class LayerConfig:
     cg_iterations: conjugate-gradient iteration cap.
     cg_tolerance: relative residual at which CG stops.
   cg_tolerance 3e-3 (1e-4 before) was chosen on validation double images
-  (`experiments/results/diplopia_validation.md`): views +0.03 / +0.03 dB (stopping early
-  keeps the layer nearer the mixture, as more fidelity does; 1e-2: +0.03 / -0.01, 3e-2:
-  -0.2 / -0.35) and 4 CG steps instead of 12 on a 720p frame (0.12 s instead of 0.27).
-  fidelity 0.1 gave the classical views +0.16 / +0.03 dB there and +0.1 to +0.4 dB on the
-  evaluation scenes, but the shipped refiners, trained on layers made with 0.05, then lost
-  up to 0.14 dB (Motorcycle): it waits for a retraining of the refiners.
+  (`experiments/results/diplopia_validation.md`): views +0.03 / +0.03 dB with the SGM
+  penalties of then (8 / 64), +0.02 / +0.01 with today's (stopping early keeps the layer
+  nearer the mixture, as more fidelity does; 1e-2: 0.00 / -0.06, 3e-2: -0.3 / -0.4), and
+  4 CG steps instead of 12 on a 720p frame (0.12 s instead of 0.27). fidelity 0.1 gave
+  the classical views +0.12 / 0.00 dB there (+0.16 / +0.03 with 8 / 64) and +0.1 to +0.4
+  dB on the evaluation scenes, but the shipped refiners, trained on layers made with
+  0.05, then lost up to 0.14 dB (Motorcycle): it waits for a retraining of the refiners.
   """
   smoothness: float = 0.01
   fidelity: float = 0.05

@@ -118,8 +118,8 @@ def test_a_noisy_echo_is_found_by_the_shipped_window_and_missed_by_7x7():
     return np.mean(np.abs(out['disparity_left'][:, 30:] - lag) <= 1)
 
   assert diplopia.DiplopiaConfig().window_radius == 7
-  assert found(diplopia.DiplopiaConfig()) > 0.95  # 0.976 on 2 cores.
-  assert found(diplopia.DiplopiaConfig(window_radius=3)) < 0.9  # 0.827.
+  assert found(diplopia.DiplopiaConfig()) > 0.98  # 0.995 on 2 cores (0.976 at P 8 / 64).
+  assert found(diplopia.DiplopiaConfig(window_radius=3)) < 0.95  # 0.918 (0.827).
 
 
 def test_diplopia_layers_with_true_shift_beat_the_mixture():

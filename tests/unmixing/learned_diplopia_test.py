@@ -61,3 +61,18 @@ def test_bad_configs_are_refused():
   for bad in (dict(cost_scale=0.0), dict(zncc_weight=1.0)):
     with pytest.raises(ValueError, match='EchoConfig'):
       learned_diplopia.EchoConfig(**bad)
+
+
+def test_the_stage_aggregates_with_its_own_penalties_not_the_classical_ones():
+  rng = np.random.default_rng(3)
+  image = rng.integers(0, 256, (24, 48, 3), dtype=np.uint8)
+  config = learned_diplopia.EchoConfig(zncc_weight=0.5, penalties=(8, 64))
+  out = learned_diplopia.learned_unmix(_column_echo, image, 'diplopia', (1, 12), None, config)
+  costs = learned_diplopia.echo_costs(_column_echo, config)
+  for p1, p2, same in ((8, 64, True), (diplopia.DiplopiaConfig().matching.p1,
+                                        diplopia.DiplopiaConfig().matching.p2, False)):
+    classical = diplopia.DiplopiaConfig()
+    run = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(
+        min_disparity=1, max_disparity=classical.matching.max_disparity, p1=p1, p2=p2))
+    reference = diplopia.unmix_diplopia(image, (1, 12), run, costs=costs)
+    assert np.array_equal(out['disparity_left'], reference['disparity_left']) == same
