@@ -14,6 +14,7 @@ import numpy as np
 
 from mixstereo_tf.classical import census_costs
 from mixstereo_tf.classical import parallel_sgm
+from mixstereo_tf.core import workers
 
 
 @numba.njit(fastmath=True, **census_costs.JIT)
@@ -60,9 +61,9 @@ def cosine_costs(left: np.ndarray, right: np.ndarray, min_disparity: int,
                      f'{num_disparities} and {outside}.')
   h = left.shape[0]
   out = np.empty((h, left.shape[1], num_disparities), np.uint8)
-  parallel_sgm.run_tasks(lambda t: _rows(left, right, t[0], t[1], int(min_disparity),
-                                         np.float32(scale), np.uint8(outside), out),
-                         parallel_sgm.row_blocks(h, max(1, threads)), max(1, threads))
+  workers.run_tasks(lambda t: _rows(left, right, t[0], t[1], int(min_disparity),
+                                    np.float32(scale), np.uint8(outside), out),
+                    parallel_sgm.row_blocks(h, max(1, threads)), max(1, threads))
   return out
 
 
@@ -94,7 +95,7 @@ def blend(other: np.ndarray, volume: np.ndarray, weight: float, threads: int = 1
     raise ValueError(f'blend needs two uint8 volumes of one shape (the second C-contiguous) '
                      f'and a weight in [0, 1]; got {other.dtype}{other.shape}, '
                      f'{volume.dtype}{volume.shape} and {weight}.')
-  parallel_sgm.run_tasks(lambda t: _blend_rows(other, volume, t[0], t[1], float(weight)),
-                         parallel_sgm.row_blocks(volume.shape[0], max(1, threads)),
-                         max(1, threads))
+  workers.run_tasks(lambda t: _blend_rows(other, volume, t[0], t[1], float(weight)),
+                    parallel_sgm.row_blocks(volume.shape[0], max(1, threads)),
+                    max(1, threads))
   return volume

@@ -26,15 +26,9 @@ from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import workers
 
 
-def run_tasks(fn, tasks, threads: int) -> None:
-  """fn(task) for every task, on `threads` threads (`workers.run_tasks`: a lasting pool; in
-  this thread when threads == 1)."""
-  workers.run_tasks(fn, tasks, threads)
-
-
 def row_blocks(height: int, threads: int):
   """(start, stop) row ranges cutting `height` rows into min(height, threads) near-equal
-  blocks, one task each for `run_tasks`."""
+  blocks, one task each for `workers.run_tasks`."""
   bounds = np.linspace(0, height, min(height, max(1, threads)) + 1).round().astype(int)
   return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
 
@@ -46,7 +40,7 @@ def run_blocks(kernel, blocks, threads: int, *arguments, partial: int = 0) -> np
   sums = np.zeros((len(blocks), partial))
   call = ((lambda k: kernel(*blocks[k], *arguments, sums[k])) if partial else
           (lambda k: kernel(*blocks[k], *arguments)))
-  run_tasks(call, list(range(len(blocks))), threads)
+  workers.run_tasks(call, list(range(len(blocks))), threads)
   return sums.sum(axis=0)
 
 
@@ -67,8 +61,8 @@ def census_codes(channels: np.ndarray, height: int, width: int,
   out = np.empty((k, h, w), np.uint64)
   padded = [np.pad(channels[..., c], ((ry, ry), (rx, rx)), mode='reflect') for c in range(k)]
   tasks = [(c, a, b) for c in range(k) for a, b in row_blocks(h, threads)]
-  run_tasks(lambda t: census_costs.census_rows(padded[t[0]][t[1]:t[2] + 2 * ry], height,
-                                               width, out[t[0], t[1]:t[2]]), tasks, threads)
+  workers.run_tasks(lambda t: census_costs.census_rows(
+      padded[t[0]][t[1]:t[2] + 2 * ry], height, width, out[t[0], t[1]:t[2]]), tasks, threads)
   return out
 
 
@@ -88,9 +82,9 @@ def census_volume(left: np.ndarray, right: np.ndarray, min_disparity: int,
   h, w = left.shape[:2]
   out = np.empty((h, w, num_disparities), np.uint8)
   oob = np.uint8((height * width - 1) // 2)
-  run_tasks(lambda t: census_costs.volume_rows(codes_left, codes_right, int(min_disparity),
-                                               t[0], t[1], oob, out),
-            row_blocks(h, threads), threads)
+  workers.run_tasks(lambda t: census_costs.volume_rows(
+      codes_left, codes_right, int(min_disparity), t[0], t[1], oob, out),
+                    row_blocks(h, threads), threads)
   return out
 
 
@@ -139,7 +133,7 @@ def disparities(codes_left: np.ndarray, codes_right: np.ndarray, lo: np.ndarray,
                          min(h, b + overlap), a, b, p1, p2, np.uint8(out_of_image_cost),
                          dl, dr)
 
-  run_tasks(strip, list(range(len(bounds) - 1)), threads)
+  workers.run_tasks(strip, list(range(len(bounds) - 1)), threads)
   return dl, dr
 
 
@@ -185,10 +179,10 @@ def match_cost_volume(volume: np.ndarray, min_disparity: int, p1: int, p2: int,
   d_left = np.empty((h, w), np.float32)
   d_right = np.empty((h, w), np.float32)
   volume = np.ascontiguousarray(volume, np.uint8)
-  run_tasks(lambda block: census_sgm.volume_sgm(
+  workers.run_tasks(lambda block: census_sgm.volume_sgm(
       volume, int(min_disparity), int(p1), int(p2), d_left, d_right,
       (max(0, block[0] - overlap), min(h, block[1] + overlap), *block)),
-            row_blocks(h, threads), threads)
+                    row_blocks(h, threads), threads)
   d_right[np.isnan(d_right)] = np.float32(
       min_disparity - 1e4 if unreached is None else unreached)
   return fast_postprocess.postprocess(d_left, d_right, lr_threshold)
