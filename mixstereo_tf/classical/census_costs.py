@@ -55,7 +55,9 @@ def census_rows(padded, height, width, out):
 def cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
   """out[x, i] (uint8 [W, >= widths]) = mean Hamming cost of left (y, x) against right
   (y, x - lo - i). The right codes are reversed (rev[b, k] = cr[b, y, W-1-k]) so the loop
-  over i reads consecutive words and vectorises; 1x1, 1x2 and 2x1 channel pairs (plain and
+  over i reads consecutive words and vectorises (indexed by unsigned ints: numba wraps
+  negative signed indices, a branch that kept LLVM from vectorising; 720p x 96 lags of
+  one row block: 0.12 -> 0.06 s); 1x1, 1x2 and 2x1 channel pairs (plain and
   colour anaglyphs) have their own loops."""
   kl, _, w = cl.shape
   kr = cr.shape[0]
@@ -77,16 +79,19 @@ def cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
     ca = cl[0, y, x]
     if pairs == 1:
       for i in range(ia, ib):
-        out[x, i] = np.uint8(_popcount(ca ^ rev[0, k0 + i]))
+        k = np.uint64(k0 + i)
+        out[x, i] = np.uint8(_popcount(ca ^ rev[0, k]))
     elif kl == 1 and kr == 2:
       for i in range(ia, ib):
-        out[x, i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k0 + i])) +
-                              np.uint32(_popcount(ca ^ rev[1, k0 + i])) + one) >> one)
+        k = np.uint64(k0 + i)
+        out[x, i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k])) +
+                              np.uint32(_popcount(ca ^ rev[1, k])) + one) >> one)
     elif kl == 2 and kr == 1:
       cb = cl[1, y, x]
       for i in range(ia, ib):
-        out[x, i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k0 + i])) +
-                              np.uint32(_popcount(cb ^ rev[0, k0 + i])) + one) >> one)
+        k = np.uint64(k0 + i)
+        out[x, i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k])) +
+                              np.uint32(_popcount(cb ^ rev[0, k])) + one) >> one)
     else:
       for i in range(ia, ib):
         acc[i] = 0
@@ -94,7 +99,7 @@ def cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
         ca = cl[a, y, x]
         for b in range(kr):
           for i in range(ia, ib):
-            acc[i] += np.uint32(_popcount(ca ^ rev[b, k0 + i]))
+            acc[i] += np.uint32(_popcount(ca ^ rev[b, np.uint64(k0 + i)]))
       for i in range(ia, ib):
         out[x, i] = np.uint8((acc[i] + half) // np.uint32(pairs))
 

@@ -104,29 +104,36 @@ def _winners(s, offsets, lo, nds, y, dl, dr, best):
   """Left winners of the row's aggregated costs and right winners along the diagonal.
 
   s: int32 flat costs (>= 0), pixel x at offsets[x] + [0, nds[y, x]); best: int64 [W]
-  scratch. Right pixels no left pixel reaches get NaN.
+  scratch. Right pixels no left pixel reaches get NaN. Both searches take the least
+  (cost << 32 | index) key, which keeps the first of equal costs as a running minimum
+  would, in branch-free loops over unsigned indices: numba wraps negative signed indices,
+  and that branch kept LLVM from vectorising them (0.100 -> 0.034 s for the winners of a
+  1280 x 720 x 60 volume on one core).
   """
   w = dl.shape[1]
   for x in range(w):
     base, nd = offsets[x], nds[y, x]
-    bi, bv = 0, s[base]  # The first minimum, its cost kept in a register.
-    for i in range(1, nd):
-      v = s[base + i]
-      bi = i if v < bv else bi
-      bv = v if v < bv else bv
+    least = _NONE
+    for i in range(nd):
+      key = (np.int64(s[np.uint64(base + i)]) << 32) | i
+      least = key if key < least else least
+    bi = np.int64(least & 0xFFFFFFFF) if nd > 0 else 0
     if 0 < bi < nd - 1:
       dl[y, x] = _refined(lo[y, x] + bi, s[base + bi - 1], s[base + bi], s[base + bi + 1])
     else:
       dl[y, x] = lo[y, x] + bi
-  # Right winners: per right pixel the least (cost, left column), packed in one int64 so
-  # that ties go to the first candidate in column order as a plain running minimum would.
+  # Right winners: per right pixel the least (cost, left column) key.
   best[:] = _NONE
   for x in range(w):
     base = offsets[x]
     xr0 = x - lo[y, x]  # Right pixel of window position 0; position i -> xr0 - i.
-    for i in range(max(0, xr0 - w + 1), min(nds[y, x], xr0 + 1)):
-      key = (np.int64(s[base + i]) << 32) | x
-      best[xr0 - i] = min(best[xr0 - i], key)
+    first, stop = max(0, xr0 - w + 1), min(nds[y, x], xr0 + 1)
+    low_right = xr0 - stop + 1  # Right pixels [low_right, xr0 - first], ascending.
+    for k in range(stop - first):
+      xr = np.uint64(low_right + k)
+      key = (np.int64(s[np.uint64(base + stop - 1 - k)]) << 32) | x
+      kept = best[xr]
+      best[xr] = key if key < kept else kept
   for xr in range(w):
     if best[xr] == _NONE:
       dr[y, xr] = np.nan
@@ -176,8 +183,8 @@ def _down_row(crow, lo, nds, y, first, pen1, pen2, hor, vprev, vcur, vpm, t12, t
       pm = _step(t12, 1 - now, pm, lo[y, x] - lo[y, x + 1], nds[y, x + 1], crow, x, t12,
                  now, nds[y, x], pen1, pen2, tmp)
     base = base_offsets[x]
-    for i in range(nds[y, x]):
-      total[base + i] = np.uint16(t12[now, i + 1] + hor[x, i + 1] + vcur[x, i + 1])
+    for i in range(nds[y, x]):  # Unsigned indices vectorise (`_winners`).
+      total[np.uint64(base + i)] = np.uint16(t12[now, i + 1] + hor[x, i + 1] + vcur[x, i + 1])
 
 
 @numba.njit(**_JIT)
@@ -194,8 +201,8 @@ def _up_row(crow, lo, nds, y, first, pen1, pen2, vprev, vcur, vpm, total, base_o
                      vcur, x, nds[y, x], pen1, pen2, tmp)
     base, row_base = base_offsets[x], row_offsets[x]
     row_offsets[x + 1] = row_base + nds[y, x]
-    for i in range(nds[y, x]):
-      srow[row_base + i] = np.int32(total[base + i]) + vcur[x, i + 1]
+    for i in range(nds[y, x]):  # Unsigned indices vectorise (`_winners`).
+      srow[np.uint64(row_base + i)] = np.int32(total[np.uint64(base + i)]) + vcur[x, i + 1]
 
 
 @numba.njit(**_JIT)

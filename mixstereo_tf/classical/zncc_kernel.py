@@ -13,7 +13,9 @@ threads (the kernel releases the GIL) and stay in cache. Within a block the wind
 vertical sums roll from row to row (one row in, one out: 2 products per pixel and lag
 instead of 2r + 1), in float64 so that the rolling adds no drift; all lags are carried
 side by side, the innermost loop over the lags (independent sums, and out's last axis
-written in order). Values float32; lags and radii in pixels.
+written in order). Reads at x - d use unsigned indices: numba wraps negative signed
+indices, and that branch kept LLVM from vectorising the lag loops (0.145 -> 0.074 s on
+one core for a 720p frame and 60 lags). Values float32; lags and radii in pixels.
 """
 
 import numba
@@ -78,7 +80,8 @@ def zncc_rows(y0, y1, high, energy, first_lag, count, radius, scale, out, sums):
       # Lags i < inside have d_i <= x (all of them from column `every` on: no branch).
       inside = count if x >= every else max(0, min(count, x - first_lag + 1))
       for i in range(inside):
-        denominator = np.sqrt(here * energy[y, x - first_lag - i] + np.float32(1e-6))
+        back = np.uint64(x - first_lag - i)  # >= 0 here; unsigned: see the module docstring.
+        denominator = np.sqrt(here * energy[y, back] + np.float32(1e-6))
         cost = np.float32((1.0 - total[i] * norm / denominator) * scale)
         out[y, x, i] = cost
         sums[i] += cost
@@ -99,7 +102,7 @@ def _add_products(column, high, row, first_lag, sign):
   for x in range(high.shape[1]):
     value = np.float64(high[row, x])
     for i in range(min(count, x - first_lag + 1)):
-      column[x, i] += sign * (value * np.float64(high[row, x - first_lag - i]))
+      column[x, i] += sign * (value * np.float64(high[row, np.uint64(x - first_lag - i)]))
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
