@@ -56,6 +56,27 @@ def psnr(pred_u8, gt_u8, mask=None, max_db: Optional[float] = 100.0) -> float:
   return value if max_db is None else min(value, float(max_db))
 
 
+def view_difference_agreement(left, right, true_left, true_right) -> float:
+  """Cosine between the difference of two restored views and that of the true views,
+  <L' - R', L - R> / (|L' - R'| |L - R|), over every pixel and channel: > 0 where the
+  eyes are in order, < 0 where they are swapped (the difference flips sign). Unlike
+  comparing L' with L and with R, it does not count a weak separation of an unequal mix
+  I = a L + (1 - a) R as swapped: there both views stay near the mixture, which is
+  nearer to the heavier eye, but their small difference still points one way.
+
+  Args:
+    left, right, true_left, true_right: [H, W, C] (or [H, W]) on one scale (e.g. uint8).
+
+  Returns:
+    A value in [-1, 1]; NaN when either difference is zero everywhere.
+  """
+  views = [np.asarray(v, dtype=np.float64) for v in (left, right, true_left, true_right)]
+  _check_shapes(left=views[0], right=views[1], true_left=views[2], true_right=views[3])
+  ours, truth = (views[0] - views[1]).ravel(), (views[2] - views[3]).ravel()
+  norm = float(np.linalg.norm(ours) * np.linalg.norm(truth))
+  return float(np.dot(ours, truth) / norm) if norm > 0 else float('nan')
+
+
 def _check_shapes(**arrays: np.ndarray) -> None:
   shapes = {name: np.shape(a) for name, a in arrays.items()}
   if len(set(shapes.values())) != 1:

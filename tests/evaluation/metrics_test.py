@@ -191,3 +191,21 @@ def test_depth_caps_differ_exactly_where_points_lie_beyond_50_m():
   for name in metrics.DEPTH_METRIC_NAMES:
     assert with_far50[name] == pytest.approx(without[name], rel=1e-12), name
     assert with_far80[name] != pytest.approx(with_far50[name], rel=1e-6), name
+
+
+def test_view_difference_agreement_tells_order_where_psnr_to_each_eye_does_not():
+  rng = np.random.default_rng(0)
+  left, right = rng.uniform(0, 255, (2, 8, 12, 3))
+  assert metrics.view_difference_agreement(left, right, left, right) == pytest.approx(1.0)
+  assert metrics.view_difference_agreement(right, left, left, right) == pytest.approx(-1.0)
+  # A weak separation of 0.3 L + 0.7 R: both views near the mixture, their difference a
+  # tenth of the true one. Its left view is nearer to the true right view than to the
+  # true left one, yet the eyes are in order.
+  mixture = 0.3 * left + 0.7 * right
+  weak_left, weak_right = mixture + 0.05 * (left - right), mixture - 0.05 * (left - right)
+  assert metrics.psnr(weak_left, right) > metrics.psnr(weak_left, left)
+  assert metrics.view_difference_agreement(weak_left, weak_right, left,
+                                           right) == pytest.approx(1.0)
+  assert math.isnan(metrics.view_difference_agreement(mixture, mixture, left, right))
+  with pytest.raises(ValueError, match='Shape mismatch'):
+    metrics.view_difference_agreement(left, right[:4], left, right)
