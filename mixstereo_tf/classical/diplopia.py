@@ -133,7 +133,7 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
   lags = np.arange(matching.min_disparity, max_disparity + 1, dtype=np.int64)
   costs = np.empty((height, width, lags.size), np.float32)
   threads = workers.usable_cpus(0)
-  blocks = parallel_sgm.row_blocks(height, 4 * threads)
+  blocks = workers.row_blocks(height, 4 * threads)
   sums = parallel_sgm.run_blocks(zncc_kernel.zncc_rows, blocks, threads, high, energy,
                                  int(lags[0]), lags.size, config.window_radius,
                                  np.float32(config.cost_scale), costs, partial=lags.size)

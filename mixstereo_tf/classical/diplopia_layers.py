@@ -143,7 +143,7 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
   start[:, :w], start[:, w:] = mixture01, np.asarray(mixture01)[:, -1:]
   rhs = np.empty_like(start)
   threads = workers.usable_cpus(0)
-  blocks = parallel_sgm.row_blocks(h, 4 * threads)
+  blocks = workers.row_blocks(h, 4 * threads)
   run = lambda kernel, *arguments: parallel_sgm.run_blocks(kernel, blocks, threads,
                                                           *arguments)
   run(layers_kernel.transpose_rows, np.ascontiguousarray(mixture01), x0, frac, weight, rhs)

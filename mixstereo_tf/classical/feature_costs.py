@@ -13,7 +13,6 @@ import numba
 import numpy as np
 
 from mixstereo_tf.classical import census_costs
-from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.core import workers
 
 
@@ -63,7 +62,7 @@ def cosine_costs(left: np.ndarray, right: np.ndarray, min_disparity: int,
   out = np.empty((h, left.shape[1], num_disparities), np.uint8)
   workers.run_tasks(lambda t: _rows(left, right, t[0], t[1], int(min_disparity),
                                     np.float32(scale), np.uint8(outside), out),
-                    parallel_sgm.row_blocks(h, max(1, threads)), max(1, threads))
+                    workers.row_blocks(h, max(1, threads)), max(1, threads))
   return out
 
 
@@ -96,6 +95,6 @@ def blend(other: np.ndarray, volume: np.ndarray, weight: float, threads: int = 1
                      f'and a weight in [0, 1]; got {other.dtype}{other.shape}, '
                      f'{volume.dtype}{volume.shape} and {weight}.')
   workers.run_tasks(lambda t: _blend_rows(other, volume, t[0], t[1], float(weight)),
-                    parallel_sgm.row_blocks(volume.shape[0], max(1, threads)),
+                    workers.row_blocks(volume.shape[0], max(1, threads)),
                     max(1, threads))
   return volume

@@ -26,15 +26,8 @@ from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import workers
 
 
-def row_blocks(height: int, threads: int):
-  """(start, stop) row ranges cutting `height` rows into min(height, threads) near-equal
-  blocks, one task each for `workers.run_tasks`."""
-  bounds = np.linspace(0, height, min(height, max(1, threads)) + 1).round().astype(int)
-  return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
-
-
 def run_blocks(kernel, blocks, threads: int, *arguments, partial: int = 0) -> np.ndarray:
-  """kernel(y0, y1, *arguments[, sums]) on every row block of `blocks` (`row_blocks`), on
+  """kernel(y0, y1, *arguments[, sums]) on every row block of `blocks` (`workers.row_blocks`), on
   `threads` threads; with `partial` C > 0 each block gets its own float64 [C] sums (the
   kernel's last argument), returned added up."""
   sums = np.zeros((len(blocks), partial))
@@ -60,7 +53,7 @@ def census_codes(channels: np.ndarray, height: int, width: int,
   ry, rx = height // 2, width // 2
   out = np.empty((k, h, w), np.uint64)
   padded = [np.pad(channels[..., c], ((ry, ry), (rx, rx)), mode='reflect') for c in range(k)]
-  tasks = [(c, a, b) for c in range(k) for a, b in row_blocks(h, threads)]
+  tasks = [(c, a, b) for c in range(k) for a, b in workers.row_blocks(h, threads)]
   workers.run_tasks(lambda t: census_costs.census_rows(
       padded[t[0]][t[1]:t[2] + 2 * ry], height, width, out[t[0], t[1]:t[2]]), tasks, threads)
   return out
@@ -84,7 +77,7 @@ def census_volume(left: np.ndarray, right: np.ndarray, min_disparity: int,
   oob = np.uint8((height * width - 1) // 2)
   workers.run_tasks(lambda t: census_costs.volume_rows(
       codes_left, codes_right, int(min_disparity), t[0], t[1], oob, out),
-                    row_blocks(h, threads), threads)
+                    workers.row_blocks(h, threads), threads)
   return out
 
 
@@ -182,7 +175,7 @@ def match_cost_volume(volume: np.ndarray, min_disparity: int, p1: int, p2: int,
   workers.run_tasks(lambda block: census_sgm.volume_sgm(
       volume, int(min_disparity), int(p1), int(p2), d_left, d_right,
       (max(0, block[0] - overlap), min(h, block[1] + overlap), *block)),
-                    row_blocks(h, threads), threads)
+                    workers.row_blocks(h, threads), threads)
   d_right[np.isnan(d_right)] = np.float32(
       min_disparity - 1e4 if unreached is None else unreached)
   return fast_postprocess.postprocess(d_left, d_right, lr_threshold)

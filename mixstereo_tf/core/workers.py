@@ -13,6 +13,8 @@ import os
 import threading
 from typing import Callable, Dict, Sequence
 
+import numpy as np
+
 _POOLS: Dict[int, concurrent.futures.ThreadPoolExecutor] = {}
 _POOLS_LOCK = threading.Lock()
 _LOCAL = threading.local()
@@ -57,3 +59,10 @@ def run_tasks(fn: Callable[[object], object], tasks: Sequence[object], threads: 
   if threads == 1 or len(tasks) <= 1 or getattr(_LOCAL, 'worker', False):
     return [fn(task) for task in tasks]
   return list(_pool(min(threads, len(tasks))).map(fn, tasks))
+
+
+def row_blocks(height: int, blocks: int):
+  """(start, stop) row ranges cutting `height` rows into min(height, blocks) near-equal
+  blocks, one task each for `run_tasks`."""
+  bounds = np.linspace(0, height, min(height, max(1, blocks)) + 1).round().astype(int)
+  return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]

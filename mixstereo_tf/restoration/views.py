@@ -132,11 +132,8 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
                contiguous(priors, np.float32), matrices, tuple(inverses), tuple(copied),
                weights, bool(spec.clip), left, right)
   height, threads = mixture.shape[0], workers.usable_cpus(config.threads)
-  bounds = np.linspace(0, height, min(height, 4 * threads) + 1).astype(int)
-  blocks = list(zip(bounds[:-1], bounds[1:]))
-  solve = lambda block: kernel.solve_rows(int(block[0]), int(block[1]),
-                                                     *arguments)
-  workers.run_tasks(solve, blocks, threads)
+  workers.run_tasks(lambda block: kernel.solve_rows(*block, *arguments),
+                    workers.row_blocks(height, 4 * threads), threads)
   return left, right
 
 

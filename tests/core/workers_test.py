@@ -60,3 +60,13 @@ def test_a_forked_child_starts_its_own_pool():
     os.kill(child, signal.SIGKILL)
   os.waitpid(child, 0)
   assert ready and os.read(read, 16) == b'ok'
+
+
+def test_row_blocks_cover_every_row_once_in_near_equal_blocks():
+  assert workers.row_blocks(10, 3) == [(0, 3), (3, 7), (7, 10)]
+  assert workers.row_blocks(2, 8) == [(0, 1), (1, 2)]  # No empty block.
+  assert workers.row_blocks(5, 0) == [(0, 5)]
+  blocks = workers.row_blocks(721, 8)
+  assert blocks[0][0] == 0 and blocks[-1][1] == 721
+  assert all(a[1] == b[0] for a, b in zip(blocks, blocks[1:]))
+  assert {b - a for a, b in blocks} <= {90, 91}
