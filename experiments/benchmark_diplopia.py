@@ -7,7 +7,8 @@ panned 4 px per frame, mixed as I = (L + R) / 2, written as an H.264 MP4 and unm
 `unmix_files.unmix_inputs` as `mixstereo-unmix --mixture=diplopia --layout=sbs` does
 (decoding, unmixing, encoding), after one warm-up frame: per frame (`--notemporal`: the
 encoding and the range are found again on every frame) and per shot (the default: found at
-the shot's first frame; double images take no disparity prior). Frames/s of the whole call
+the shot's first frame, and the previous frame's disparity is a soft prior,
+`diplopia.add_prior`). Frames/s of the whole call
 and inside the unmixer, per method (`METHODS`);
 then one frame's stages timed apart (range, cost volume, SGM and post-processing, mixing
 weight, layers, seconds) for the classical method and the learned echo stage. Each

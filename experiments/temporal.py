@@ -2,6 +2,8 @@ r"""Temporal consistency of video unmixing, measured on a synthetic anaglyph cli
 ground truth (issue 16): flicker, accuracy and speed with and without the per-shot state.
 
     PYTHONPATH=. python experiments/temporal.py [--frames_per_shot=20] [--speed_frames=3]
+    PYTHONPATH=. python experiments/temporal.py --temporal_mixture=diplopia \
+        --temporal_output=experiments/results/temporal_diplopia.md
 
 The clip: two procedural scenes of `data/synthetic.py` (held-out textures), each seen by a
 camera panning right (2 px per frame over scene A, 1 px over scene B, integer shifts so the
@@ -21,7 +23,10 @@ on pixels whose ground-truth disparity and clean colour do not change and whose 
 inside both frames. Accuracy: bad-1 (%) and EPE (px) against the ground truth on the
 non-occluded pixels of every frame. Speed: frames/s of the unmixer alone on the first
 `--speed_frames` frames of scene A upscaled (bicubic) to 1280x720 and 1920x1080.
-Writes experiments/results/temporal.md.
+Writes experiments/results/temporal.md. With --temporal_mixture=diplopia the same clip is
+mixed as double images I = (L + R) / 2 and unmixed with `--mixture=diplopia` (the double
+images' prior: `diplopia.add_prior`, a penalty on lags outside the window around the
+previous frame's disparity).
 """
 
 import os
@@ -41,6 +46,8 @@ from mixstereo_tf.video import temporal
 FLAGS = flags.FLAGS
 flags.DEFINE_integer('frames_per_shot', 20, 'Frames of each of the two shots.')
 flags.DEFINE_integer('speed_frames', 3, 'Frames timed at each large size.')
+flags.DEFINE_enum('temporal_mixture', 'anaglyph', ['anaglyph', 'diplopia'],
+                  'How the clip is mixed (and named to the unmixer: auto for anaglyphs).')
 flags.DEFINE_string('temporal_output', os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                            'results', 'temporal.md'), 'Report path.')
 
@@ -58,14 +65,14 @@ METHODS = ('classical', 'model')  # The model runs the TIMED variants only.
 SIZES = ((1280, 720), (1920, 1080))
 
 
-def make_clip(frames_per_shot: int):
+def make_clip(frames_per_shot: int, mixture_name: str = 'anaglyph'):
   """[(mixture u8, gt disparity, nonocc, clean left, shot, pan)] of the two shots."""
   clip, rng = [], np.random.RandomState(0)
   for shot, (seed, pan) in enumerate(SHOTS):
     config = synthetic.SceneConfig(max_disparity=MAX_DISPARITY, height=HEIGHT,
                                    width=WIDTH + pan * (frames_per_shot - 1))
     scene = synthetic.render_scene(seed, config, synthetic.load_textures('heldout'))
-    mixed = mixtures.mix('anaglyph', image_range.u8_to_signed(scene['left']),
+    mixed = mixtures.mix(mixture_name, image_range.u8_to_signed(scene['left']),
                          image_range.u8_to_signed(scene['right']))
     mixture = image_range.signed_to_u8(mixed.numpy()).astype(np.float32)
     columns = np.arange(WIDTH, dtype=np.float32)
@@ -129,12 +136,13 @@ def speed(unmixer, frames, config, size):
 def main(argv):
   del argv
   start = time.perf_counter()
-  clip = make_clip(FLAGS.frames_per_shot)
+  clip = make_clip(FLAGS.frames_per_shot, FLAGS.temporal_mixture)
+  named = 'auto' if FLAGS.temporal_mixture == 'anaglyph' else FLAGS.temporal_mixture
   frames = [c[0] for c in clip]
   planted = FLAGS.frames_per_shot
   rows = []
   for method in METHODS:
-    unmixer = predictors.build_unmixer(predictors.PredictorConfig(method, mixture='auto'))
+    unmixer = predictors.build_unmixer(predictors.PredictorConfig(method, mixture=named))
     unmix_clip(unmixer, frames[:2], temporal.TemporalConfig())  # Compiles the kernels.
     for timed, (name, config) in enumerate(VARIANTS):
       if method == 'model' and timed not in TIMED:
@@ -149,10 +157,11 @@ def main(argv):
       print(row, 'encodings', detected, 'shot starts', state.shot_starts, flush=True)
   cuts = temporal.find_cuts(frames)
   lines = [
-      '# Temporal consistency (synthetic anaglyph clip)', '',
+      f'# Temporal consistency (synthetic {FLAGS.temporal_mixture} clip)', '',
       f'`PYTHONPATH=. python experiments/temporal.py --frames_per_shot={FLAGS.frames_per_shot}'
-      f' --speed_frames={FLAGS.speed_frames}`; classical method and shipped model, '
-      '`--mixture=auto`. Two '
+      f' --speed_frames={FLAGS.speed_frames}'
+      + ('' if named == 'auto' else f' --temporal_mixture={FLAGS.temporal_mixture}') +
+      f'`; classical method and shipped model, `--mixture={named}`. Two '
       f'procedural scenes (held-out textures), {WIDTH}x{HEIGHT}, disparities up to '
       f'{synthetic.SceneConfig(MAX_DISPARITY).near_limit:.1f} px, '
       f'{FLAGS.frames_per_shot} frames each (camera '

@@ -114,3 +114,19 @@ def quantize_rows(y0, y1, costs, penalty, out):
       for i in range(costs.shape[2]):
         value = np.rint(costs[y, x, i] + penalty[i])
         out[y, x, i] = np.uint8(min(max(value, np.float32(0.0)), np.float32(255.0)))
+
+
+@numba.njit(nogil=True, cache=True, error_model='numpy')
+def prior_rows(y0, y1, lo, widths, first_lag, weight, cap, volume):
+  """volume[y, x, i] += min(weight * (distance of the lag first_lag + i to the window
+  lo[y, x] + [0, widths[y, x])), cap), saturating at 255, for rows [y0, y1) (a temporal
+  prior's penalty; uint8 [H, W, D] volume, int32 [H, W] windows, weight and cap in cost
+  units per pixel and cost units)."""
+  for y in range(y0, y1):
+    for x in range(volume.shape[1]):
+      low = np.int32(lo[y, x] - first_lag)  # The window in lag indices.
+      high = np.int32(low + widths[y, x] - 1)
+      for i in range(volume.shape[2]):
+        distance = max(low - i, np.int32(0), i - high)
+        added = min(np.int32(weight) * distance, np.int32(cap))
+        volume[y, x, i] = np.uint8(min(np.int32(volume[y, x, i]) + added, np.int32(255)))

@@ -159,10 +159,11 @@ class Diplopia(Family):
 
   def classical(self, image, name, search=None, hint=None):
     """`diplopia.unmix_diplopia` over `search` (None: its configured range) with the
-    hint's mixing weight (None: 1/2)."""
-    del name  # No prior: each frame is matched alone.
-    return diplopia.unmix_diplopia(image, search,
-                                   weight=hint.mixing_weight if hint else None)
+    hint's mixing weight (None: 1/2) and its prior (a video frame's), in its window."""
+    del name
+    hint = hint or hints.FrameHint()
+    return diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
+                                   prior=hint.prior, prior_window=hint.prior_window or (1, 2))
 
   def display_range(self):
     """The self-matching's largest configured lag."""

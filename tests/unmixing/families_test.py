@@ -120,3 +120,17 @@ def test_a_new_family_is_one_class_and_its_registration(monkeypatch):
     families.register(Stills())
   with pytest.raises(ValueError, match="'hologram'"):
     families.register(type('Holograms', (families.Family,), {'names': ('hologram',)})())
+
+
+def test_double_images_take_a_frames_prior_and_its_window(monkeypatch):
+  seen = {}
+  monkeypatch.setattr(diplopia, 'unmix_diplopia',
+                      lambda image, search, **kwargs: seen.update(kwargs) or {})
+  prior = np.full((4, 6), 3.0, np.float32)
+  double = families.of('diplopia')
+  double.classical(np.zeros((4, 6, 3), np.uint8), 'diplopia', (1, 9),
+                   hints.FrameHint(prior=prior, prior_window=(2, 3), mixing_weight=0.4))
+  assert seen['prior'] is prior and seen['prior_window'] == (2, 3)
+  assert seen['weight'] == 0.4
+  double.classical(np.zeros((4, 6, 3), np.uint8), 'diplopia', (1, 9))
+  assert seen['prior'] is None and seen['weight'] is None  # A still image: no prior.
