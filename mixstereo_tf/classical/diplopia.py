@@ -236,7 +236,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
                    config: Optional[DiplopiaConfig] = None,
                    weight: Union[None, float, str] = None,
                    costs: Optional[Costs] = None, prior: Optional[np.ndarray] = None,
-                   prior_window: Tuple[int, int] = (1, 2)) -> Dict[str, object]:
+                   prior_window: Optional[Tuple[int, int]] = None) -> Dict[str, object]:
   """Separates a double image I = a L + (1 - a) R into two views and disparities.
 
   Args:
@@ -249,8 +249,9 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     costs: (mixture float [H, W, 3] in [0, 1], config) -> the uint8 [H, W, D] self-matching
       volume over config.matching's lags (None: `zncc_costs`; a learned stage's otherwise).
     prior: float [H, W], the previous video frame's left disparity (NaN: none there), or
-      None; prior_window: (radius, spread) of `search_windows.around_prior`. Lags outside
-      the window are penalised (`add_prior`), not excluded.
+      None; prior_window: (radius, spread) of `search_windows.around_prior` (None: 1, 2,
+      the anaglyph matcher's video window). Lags outside the window are penalised
+      (`add_prior`), not excluded.
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
@@ -271,7 +272,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
   image = image_range.as_unit_float(mixture, 'mixture')
   volume = (costs or zncc_costs)(image, config)
   if prior is not None:
-    add_prior(volume, config, prior, prior_window)
+    add_prior(volume, config, prior, prior_window or (1, 2))
   matched = parallel_sgm.match_volume(volume, config.matching,
                                      threads=workers.usable_cpus(0))
   weight = diplopia_layers.resolve_weight(weight, image, matched['disparity_left'],

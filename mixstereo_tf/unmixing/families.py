@@ -163,7 +163,7 @@ class Diplopia(Family):
     del name
     hint = hint or hints.FrameHint()
     return diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
-                                   prior=hint.prior, prior_window=hint.prior_window or (1, 2))
+                                   prior=hint.prior, prior_window=hint.prior_window)
 
   def display_range(self):
     """The self-matching's largest configured lag."""

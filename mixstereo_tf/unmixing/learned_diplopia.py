@@ -91,7 +91,8 @@ def learned_unmix(echo: Echo, image: np.ndarray, name: str, search: Tuple[int, i
   matching = dataclasses.replace(classical.matching, p1=int(p1), p2=int(p2))
   out = diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
                                 config=dataclasses.replace(classical, matching=matching),
-                                costs=echo_costs(echo, config))
+                                costs=echo_costs(echo, config), prior=hint.prior,
+                                prior_window=hint.prior_window)
   outputs = {key: out[key] for key in _KEYS}
   outputs['info'] = {'mixing_weight': round(out['mixing_weight'], 3)}
   return outputs

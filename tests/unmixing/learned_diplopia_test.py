@@ -6,6 +6,7 @@ import tensorflow as tf
 
 from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import sgm
+from mixstereo_tf.core import hints
 from mixstereo_tf.models import matching_features
 from mixstereo_tf.unmixing import learned_diplopia
 
@@ -47,6 +48,18 @@ def test_the_stage_finds_the_lag_its_costs_say_and_reports_the_weight():
   out = learned_diplopia.learned_unmix(_column_echo, image, 'diplopia', (1, 12), None, config)
   assert np.median(out['disparity_left'][:, _D + 2:]) == pytest.approx(_D)
   assert out['left'].shape == image.shape and out['info'] == {'mixing_weight': 0.5}
+
+
+def test_a_video_frames_prior_reaches_the_self_matching(monkeypatch):
+  seen = {}
+  def spy(image, search, **kwargs):
+    seen.update(kwargs)
+    return {key: None for key in learned_diplopia._KEYS} | {'mixing_weight': 0.5}  # pylint: disable=protected-access
+  monkeypatch.setattr(diplopia, 'unmix_diplopia', spy)
+  prior = np.full((_H, _W), 9.0, np.float32)
+  learned_diplopia.learned_unmix(_column_echo, np.zeros((_H, _W, 3), np.uint8), 'diplopia',
+                                 (1, 12), hints.FrameHint(prior=prior, prior_window=(0, 1)))
+  assert seen['prior'] is prior and seen['prior_window'] == (0, 1)
 
 
 def test_a_trained_kind_runs_end_to_end():
