@@ -184,10 +184,10 @@ def classical_unmix(image: np.ndarray, name: str, search: Range,
   """The training-free method, the family's `classical` stage: the route of inference and
   of the refiner's training examples. A `hint`'s prior: a left disparity to search around
   in its prior_window (anaglyphs; double images penalise lags outside that window; NaN:
-  no prior there); its full_search_cells: the
-  matcher's coarse-to-fine threshold (a shot's first frame); its matcher_strips: the
-  matcher's SGM strips. Anaglyphs also give 'consistent_left', the matcher's left-right
-  check (`temporal.VideoState` drops the prior where it failed)."""
+  no prior there); its full_search_cells: the matcher's coarse-to-fine threshold (a
+  shot's first frame); its matcher_strips: the matcher's SGM strips. Anaglyphs also give
+  'consistent_left', the matcher's left-right check (`temporal.VideoState` drops the prior
+  where it failed)."""
   out = families.of(name).classical(image, name, search, hint)
   keys = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
   outputs = {key: out[key] for key in keys if key in out}

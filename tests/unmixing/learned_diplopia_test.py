@@ -53,8 +53,10 @@ def test_the_stage_finds_the_lag_its_costs_say_and_reports_the_weight():
 def test_a_video_frames_prior_reaches_the_self_matching(monkeypatch):
   seen = {}
   def spy(image, search, **kwargs):
+    del image, search
     seen.update(kwargs)
-    return {key: None for key in learned_diplopia._KEYS} | {'mixing_weight': 0.5}  # pylint: disable=protected-access
+    return dict(dict.fromkeys(('left', 'right', 'disparity_left', 'disparity_right')),
+                mixing_weight=0.5)
   monkeypatch.setattr(diplopia, 'unmix_diplopia', spy)
   prior = np.full((_H, _W), 9.0, np.float32)
   learned_diplopia.learned_unmix(_column_echo, np.zeros((_H, _W, 3), np.uint8), 'diplopia',
