@@ -192,3 +192,23 @@ def test_diplopia_validation_variants_parse_and_bad_ones_name_the_flag():
   for bad in ('nolabel', 'a=', 'a=matching=3', 'a=window_radius=x', 'a=p1', 'a=layers=1'):
     with pytest.raises(ValueError, match='--diplopia_variants'):
       diplopia_validation.parse_variant(bad)
+
+
+def test_camera_difference_finds_a_known_gain_and_what_it_costs_the_views():
+  from experiments import camera_difference  # pylint: disable=import-outside-toplevel
+  left = np.random.default_rng(0).integers(10, 240, (12, 40, 3)).astype(np.uint8)
+  right = np.zeros_like(left)
+  right[:, :-3] = left[:, 3:]  # The left x matches the right x - 3,
+  right[..., 1] += 5  # and the right camera is 5 levels brighter in green.
+  pair = {'left': left, 'right': right, 'disparity_left': np.full((12, 40), 3.0, np.float32),
+          'valid_left': np.ones((12, 40), bool)}
+  out = camera_difference.camera_difference(pair)
+  assert out['pixels'] == 12 * 37  # Columns 0-2 match outside the right image.
+  np.testing.assert_allclose(out['bias'], [0, -5, 0], atol=1e-4)
+  np.testing.assert_allclose(out['rms'], [0, 5, 0], atol=1e-4)
+  # The left view's green and blue come from the right camera: MSE 25 / 3 over channels.
+  assert out['psnr_left'] == pytest.approx(10 * np.log10(255 ** 2 * 3 / 25), abs=1e-3)
+  assert out['psnr_right'] == out['psnr_left_unbiased'] == np.inf  # Red is equal.
+  pair['valid_left'][:] = False
+  with pytest.raises(ValueError, match='no valid ground truth'):
+    camera_difference.camera_difference(pair)
