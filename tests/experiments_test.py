@@ -212,3 +212,29 @@ def test_camera_difference_finds_a_known_gain_and_what_it_costs_the_views():
   pair['valid_left'][:] = False
   with pytest.raises(ValueError, match='no valid ground truth'):
     camera_difference.camera_difference(pair)
+
+
+def test_colouriser_prototype_inputs_and_copied_channels():
+  from experiments import colouriser_prototype as proto  # pylint: disable=import-outside-toplevel
+  rng = np.random.default_rng(1)
+  left, right = (rng.integers(0, 256, (6, 20, 3)).astype(np.uint8) for _ in range(2))
+  disparity = np.full((6, 20), 2.0, np.float32)
+  consistent = np.zeros((6, 20), bool)
+  consistent[:, 5:] = True
+  x = proto.features(left, right, disparity, consistent, 'left')
+  assert x.shape == (6, 20, 10)
+  np.testing.assert_allclose(x[..., :3], left / 255 - 0.5, atol=1e-6)
+  # The right view warped by the left disparity: the left x sees the right x - 2.
+  np.testing.assert_allclose(x[:, 2:, 3:6], right[:, :-2] / 255 - 0.5, atol=1e-5)
+  np.testing.assert_array_equal(x[0, 0, 6:9], [1, 0, 0])  # The colour anaglyph keeps red.
+  np.testing.assert_array_equal(x[..., 9], consistent)
+  right_x = proto.features(right, left, disparity, consistent, 'right')
+  np.testing.assert_array_equal(right_x[0, 0, 6:9], [0, 1, 1])
+  model = proto.Colouriser()
+  out = model(x[None]).numpy()[0]  # Zero head: the restored view itself.
+  np.testing.assert_allclose(out, left / 255, atol=1e-6)
+  for weight in model.head.weights:
+    weight.assign(tf.ones_like(weight))
+  out = model(x[None]).numpy()[0]
+  np.testing.assert_allclose(out[..., 0], left[..., 0] / 255, atol=1e-6)  # Copied: kept.
+  assert np.abs(out[..., 1:] - left[..., 1:] / 255).max() > 0.01
