@@ -202,8 +202,9 @@ def main(argv):
           f'{FLAGS.photo_dir} --shared_dir={FLAGS.shared_dir}` in '
           f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores; '
           f'{FLAGS.colouriser_pairs} training pairs, {FLAGS.colouriser_steps} steps. '
-          'See the module docstring. Runs vary by a few hundredths of a dB (threaded '
-          'TensorFlow sums).', ''] + lines
+          'See the module docstring. A rerun of this command was not timed or compared; '
+          'scratch runs of the recipe on other draws of training pairs differed by up to '
+          '0.16 dB a view (docs/LEARNED_MATCHING.md).', ''] + lines
   with open(FLAGS.colouriser_output, 'w') as handle:
     handle.write('\n'.join(text) + '\n')
   print('\n'.join(text))
