@@ -33,6 +33,7 @@ import tensorflow as tf
 from experiments import same_channel  # Scenes, unmixers; also defines --shared_dir.
 from experiments import validation  # --photo_dir and the validation warps.
 from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import photo_warps
 from mixstereo_tf.evaluation import metrics
@@ -91,10 +92,9 @@ def stage_views(descriptors, pair, image):
   matched = learned_matching.match(descriptors, mixture, NAME, low, high)
   restored = families.of(NAME).restore(mixture, NAME, matched['disparity_left'],
                                        matched['disparity_right'])
-  as_u8 = lambda v: (v * 255).round().astype(np.uint8)
   return ((matched['disparity_left'], matched['disparity_right']),
           (restored['consistent_left'], restored['consistent_right']),
-          (as_u8(restored['left']), as_u8(restored['right'])))
+          (image_range.unit_to_u8(restored['left']), image_range.unit_to_u8(restored['right'])))
 
 
 def both_inputs(disparities, consistent, restored):
