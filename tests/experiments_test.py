@@ -238,3 +238,22 @@ def test_colouriser_prototype_inputs_and_copied_channels():
   out = model(x[None]).numpy()[0]
   np.testing.assert_allclose(out[..., 0], left[..., 0] / 255, atol=1e-6)  # Copied: kept.
   assert np.abs(out[..., 1:] - left[..., 1:] / 255).max() > 0.01
+
+
+def test_same_channel_scores_a_pair_without_ground_truth_on_its_views_alone():
+  from experiments import same_channel  # pylint: disable=import-outside-toplevel
+  from mixstereo_tf.evaluation import realworld  # pylint: disable=import-outside-toplevel
+  rng = np.random.default_rng(2)
+  left = cv2.GaussianBlur(rng.integers(0, 256, (40, 96, 3)).astype(np.uint8), (3, 3), 0)
+  right = np.roll(left, -6, axis=1)  # The left x matches the right x - 6 everywhere.
+  data = same_channel.views_only_scene(left, right)
+  inner = data['valid_left'][:, 20:80]
+  assert inner.mean() > 0.8
+  np.testing.assert_allclose(data['disparity_left'][:, 20:80][inner], 6, atol=0.5)
+  assert realworld.window_align(data, 0.3)['shift'] == 6  # Every disparity is 6.
+  rows = [dict(group='g', encoding=name, method='classical', bad1=np.nan, bad3=np.nan,
+               epe=np.nan, psnr_left=30.0, psnr_right=31.0)
+          for name in same_channel.ENCODINGS]
+  table = same_channel._table(rows)  # pylint: disable=protected-access
+  assert '| g | anaglyph | classical | - | - | - | 30.00 / 31.00 | - |' in table
+  assert '| g | gray | classical | - | - | - | 30.00 / 31.00 | - |' in table

@@ -10,7 +10,8 @@ Window alignment (anaglyph makers place the zero-parallax plane inside the scene
 fraction (hi - lo)), the left view keeps columns [s, W) and the right view [0, W - s)
 (s >= 0; for s < 0 the other way round), so every disparity becomes d - s: a `fraction` of
 the range is negative (in front of the screen). Luma PSNR compares Y = 0.299 R + 0.587 G +
-0.114 B (`mixtures.LUMA`), the one thing a gray anaglyph transmits.
+0.114 B (`mixtures.LUMA`), the one thing a gray anaglyph transmits. A pair without ground
+truth gets its window from `estimated_disparities`.
 """
 
 import os
@@ -18,6 +19,7 @@ from typing import Dict, Iterator, Optional, Tuple
 
 import numpy as np
 
+from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import image_io
@@ -50,6 +52,15 @@ def window_shift(disparity: np.ndarray, valid: np.ndarray, fraction: float) -> i
   """s (pixels) such that `fraction` of the valid disparity range lies below zero."""
   low, high = np.percentile(disparity[valid], [1.0, 99.0])
   return int(round(low + fraction * (high - low)))
+
+
+def estimated_disparities(left: np.ndarray, right: np.ndarray) -> Dict[str, np.ndarray]:
+  """`window_align`'s data for a pair without ground truth: 'disparity_left' and
+  'valid_left' are the census matcher's left-right consistent disparities of the pair's
+  luma over [0, W / 4] px, good enough to place a window, not to score."""
+  found = matcher.match(luma(left), luma(right), 0, left.shape[1] // 4)
+  return {'left': left, 'right': right, 'disparity_left': found['disparity_left'],
+          'valid_left': found['consistent_left']}
 
 
 def window_align(data: Dict[str, np.ndarray], fraction: float) -> Dict[str, np.ndarray]:
