@@ -32,10 +32,12 @@ Two questions, each answered by a physical property of the encodings (`mixtures`
      at the same pixel, the second coefficient is that leak (0 for colour, gray,
      half-colour; `dubois_leak`). Its projection on a Dubois encoding's expected leak, as
      a fraction of it, chooses the Dubois encoding at >= ghost_fraction and rules it
-     out below; the colour samples then choose among the others.
+     out below; the colour samples then choose among the others. The leak is a pixel-scale
+     signal: it is measured on its own copy, up to DetectConfig.ghost_width px wide.
 Confidence: the family's margin through a logistic, times the variant's: the explained
-share's distance to its threshold through a logistic of scale share_softness (1 for gray
-and Dubois decisions). Dubois red-cyan images are reported as 'dubois_ffmpeg': the two
+share's distance to its threshold through a logistic of scale share_softness (1 for gray),
+and for a decision read from the ghost, the leak's distance to ghost_fraction through one
+of scale ghost_softness. Dubois red-cyan images are reported as 'dubois_ffmpeg': the two
 Dubois matrices of `mixtures` differ by < 0.03 per coefficient, which an image cannot tell
 apart.
 """
@@ -73,12 +75,23 @@ class DetectConfig:
       it, each costing this many nats (step 2).
     share_softness: the logistic's scale on the explained share's margin.
     samples: at most this many colour samples.
-    ghost_sigma: the Gaussian high-pass of the ghost regression, pixels of the copy.
+    ghost_width: the ghost regression's copy is area-downsampled to at most this width
+      (matched anew there). 960 (320, the width of the other steps, before), chosen on
+      FFmpeg anaglyphs of training photo warps (24 pairs, 1024 x 368, half window-aligned,
+      seeds 2.5e9 on): over their colour and Dubois encodings of the three families (144)
+      the colour encodings' leak reached 0.60 / 0.43 / 0.40 / 0.21 of the expected at
+      widths 320 / 480 / 640 / 960, and 6 / 5 / 5 / 3 were misread at ghost_fraction; with
+      the half-colour ones too (216), `detect` told Dubois from the rest wrongly on 6 at
+      320 and 2 at 960 (2 more refused either way), in 0.15 and 0.38 s an image.
+    ghost_sigma: the Gaussian high-pass of the ghost regression, pixels of its copy.
     ghost_correlation: ... over pixels matched with at least this correlation ...
     ghost_min_shift: ... at least this many pixels of displacement ...
     ghost_collinearity: ... and regressors correlated by less than this (`dubois_leak`).
     ghost_fraction: a Dubois encoding is chosen when at least this fraction of its
       expected leak is observed.
+    ghost_softness: the logistic's scale on the leak's distance to ghost_fraction: 0.08,
+      the standard deviation of the colour encodings' leaks above (0.083; a Dubois
+      decision claimed confidence 1 before, whatever its leak).
   """
   width: int = 320
   reach_fraction: float = 0.2
@@ -89,11 +102,13 @@ class DetectConfig:
   outside_penalty: float = 40.0
   share_softness: float = 0.01
   samples: int = 20000
+  ghost_width: int = 960
   ghost_sigma: float = 2.0
   ghost_correlation: float = 0.85
   ghost_min_shift: int = 3
   ghost_collinearity: float = 0.3
   ghost_fraction: float = 0.3
+  ghost_softness: float = 0.08
 
 
 @dataclasses.dataclass(frozen=True)
@@ -129,8 +144,10 @@ def _small(image: np.ndarray, width: int) -> np.ndarray:
   return np.ascontiguousarray(image)
 
 
-def _match(a: np.ndarray, b: np.ndarray, reach: int) -> dict:
-  return matcher.match(a, b, -reach, reach, matcher.MatcherConfig(threads=1))
+def _match(a: np.ndarray, b: np.ndarray, reach: int, span=None, strips: int = 1) -> dict:
+  """`matcher.match` in `strips` strips, one thread each: the same result on any machine."""
+  low, high = span or (-reach, reach)
+  return matcher.match(a, b, low, high, matcher.MatcherConfig(threads=strips, strips=strips))
 
 
 def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
@@ -152,12 +169,15 @@ def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
   return scores
 
 
-def eye_match(small: np.ndarray, odd: int, config: DetectConfig) -> Tuple[np.ndarray, ...]:
+def eye_match(small: np.ndarray, odd: int, config: DetectConfig,
+              span: Optional[Tuple[int, int]] = None,
+              strips: int = 1) -> Tuple[np.ndarray, ...]:
   """(ys, xs, xr): the odd channel's left-right consistent pixels (y, x) and the columns xr
-  = x - d where the mean of the other channels sees the same surface."""
+  = x - d where the mean of the other channels sees the same surface; d searched over
+  `span` (min, max) px, or +- config.reach_fraction of the width; `strips`: `_match`'s."""
   others = [c for c in range(3) if c != odd]
   reach = max(2, round(config.reach_fraction * small.shape[1]))
-  out = _match(small[..., odd], small[..., others].mean(axis=2), reach)
+  out = _match(small[..., odd], small[..., others].mean(axis=2), reach, span, strips)
   ys, xs = np.nonzero(out['consistent_left'])
   xr = np.rint(xs - out['disparity_left'][ys, xs]).astype(int)
   keep = (xr >= 0) & (xr < small.shape[1])
@@ -248,6 +268,23 @@ def choose_variant(small: np.ndarray, obs: np.ndarray, names, config: DetectConf
   return ordered[-1], _logistic(-closest), shares
 
 
+def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
+               config: DetectConfig) -> np.ndarray:
+  """`dubois_leak.observed` (step 3) on a copy of `image` up to config.ghost_width px wide,
+  its eyes matched anew there (in 2 strips) over the dense range of `matched`'s disparities
+  (`matcher.dense_range`, as the range planning) scaled to it; on `small` and its `matched`
+  pixels when that copy is no wider."""
+  wide = _small(image, config.ghost_width)
+  if wide.shape[1] > small.shape[1]:
+    reach = max(2, round(config.reach_fraction * small.shape[1]))
+    span = matcher.dense_range(matched[1] - matched[2], reach,
+                               wide.shape[1] / small.shape[1], wide.shape[1])
+    small, matched = wide, eye_match(wide, odd, config, span, strips=2)
+  return dubois_leak.observed(small, odd, matched, config.ghost_sigma,
+                              config.ghost_correlation, config.ghost_min_shift,
+                              config.ghost_collinearity)
+
+
 def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
   """The anaglyph encoding of an [H, W, 3] RGB image (uint8, or float in [0, 1])."""
   small = _small(image, config.width)
@@ -271,9 +308,7 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   gray = {n: explained_share(small, obs, n, config) for n in names
           if not mixtures.get_mixture(n).transmits_colour}
   scores.update({n: round(v, 4) for n, v in gray.items()})
-  ghost = dubois_leak.observed(small, odd, matched, config.ghost_sigma,
-                               config.ghost_correlation, config.ghost_min_shift,
-                               config.ghost_collinearity)
+  ghost = ghost_leak(image, small, odd, matched, config)
   expected = {n: dubois_leak.expected(n, odd) for n in names}
   leaky = {n: float(ghost @ e / (e @ e)) for n, e in expected.items() if np.abs(e).max() > 0.01}
   scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})
@@ -287,6 +322,9 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
     else:
       names = [n for n in names if n not in leaky and n not in gray]
     name, variant_confidence, shares = choose_variant(small, obs, names, config)
+    if leaky:
+      variant_confidence *= _logistic(abs(max(leaky.values()) - config.ghost_fraction)
+                                      / config.ghost_softness)
     scores.update({n: round(v, 4) for n, v in shares.items()})
     largest = max(names, key=_size)
     also_fits = largest if name != largest else None

@@ -158,3 +158,30 @@ def test_small_or_malformed_images_are_errors():
     detection.detect(np.zeros((40, 40), np.uint8))
   with pytest.raises(ValueError, match='16x16'):
     detection.detect(np.zeros((8, 8, 3), np.uint8))
+
+
+@pytest.mark.parametrize('name, low, high', [('dubois_ffmpeg', 0.6, 1.3), ('anaglyph', -0.15, 0.15)])
+def test_the_leak_is_measured_on_a_copy_up_to_ghost_width(name, low, high):
+  left, right, _ = _pair(height=120, width=720)
+  image = _ours(name, left, right)
+  config = detection.DetectConfig()
+  small = detection._small(image, config.width)  # pylint: disable=protected-access
+  matched = detection.eye_match(small, 0, config)
+  ghost = detection.ghost_leak(image, small, 0, matched, config)
+  expected = detection.dubois_leak.expected('dubois_ffmpeg', 0)
+  assert low < ghost @ expected / (expected @ expected) < high
+  # The copy is the image itself here (720 <= ghost_width): at 320 px the leak differs.
+  narrow = detection.ghost_leak(image, small, 0, matched,
+                                detection.DetectConfig(ghost_width=config.width))
+  assert not np.allclose(ghost, narrow)
+
+
+def test_a_dubois_decision_is_as_sure_as_its_leak_is_far_from_the_threshold():
+  left, right, _ = _pair()
+  image = _ours('dubois_ffmpeg', left, right)
+  found = detection.detect(image)
+  leak = found.scores['ghost:dubois_ffmpeg']
+  assert found.name == 'dubois_ffmpeg' and found.confidence > 0.9, found
+  at_threshold = detection.detect(image, detection.DetectConfig(ghost_fraction=leak - 1e-3))
+  assert at_threshold.name == 'dubois_ffmpeg'
+  assert at_threshold.confidence == pytest.approx(found.confidence / 2, abs=0.05)
