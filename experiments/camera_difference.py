@@ -95,7 +95,7 @@ def main(argv):
   start = time.perf_counter()
   lines = ['| scene | median L - R, R / G / B (grey levels) | RMS R / G / B | oracle copy '
            'views L / R (dB) | bias removed L / R (dB) |', '| --- ' * 5 + '|']
-  for scene, data in same_channel.scenes(FLAGS.shared_dir):
+  for scene, data in same_channel.scenes(FLAGS.shared_dir, views_only=True):
     pair = realworld.window_align(data, same_channel.FRACTION)
     label = f'{scene} (estimated)' if data.get('views_only') else scene
     lines.append(_row(label, camera_difference(pair)))

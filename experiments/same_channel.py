@@ -115,13 +115,15 @@ def views_only_scene(left, right):
   return dict(realworld.estimated_disparities(left, right), views_only=True)
 
 
-def scenes(shared_dir):
-  """(name, data) of every scene of the module docstring, those without ground truth
-  last."""
+def scenes(shared_dir, views_only=False):
+  """(name, data) of every scene with ground truth (module docstring); with `views_only`,
+  then the frames without (`views_only_scene`, data['views_only'] set)."""
   yield from realworld.scenes(shared_dir)
   folder = os.path.join(shared_dir or '', KITTI_FRAME)
   if shared_dir and os.path.isdir(folder):
     yield KITTI_FRAME, kitti_velodyne_scene(folder)
+  if not views_only:
+    return
   folder, left, right = KITTI_2015_FRAME
   folder = os.path.join(shared_dir or '', folder)
   if shared_dir and os.path.isdir(folder):
@@ -154,7 +156,7 @@ def true_disparity_views(pair, image, name, learned):
 
 def _evaluate(shared_dir):
   rows = []
-  for scene, data in scenes(shared_dir):
+  for scene, data in scenes(shared_dir, views_only=True):
     pair = realworld.window_align(data, FRACTION)
     if data.get('views_only'):
       pair['valid_left'] = np.zeros_like(pair['valid_left'])

@@ -257,3 +257,18 @@ def test_same_channel_scores_a_pair_without_ground_truth_on_its_views_alone():
   table = same_channel._table(rows)  # pylint: disable=protected-access
   assert '| g | anaglyph | classical | - | - | - | 30.00 / 31.00 | - |' in table
   assert '| g | gray | classical | - | - | - | 30.00 / 31.00 | - |' in table
+
+
+def test_same_channel_scenes_without_ground_truth_only_when_asked(tmp_path, monkeypatch):
+  from experiments import same_channel  # pylint: disable=import-outside-toplevel
+  monkeypatch.setattr(same_channel.realworld, 'scenes', lambda shared_dir: iter(()))
+  folder = tmp_path / same_channel.KITTI_2015_FRAME[0]
+  folder.mkdir()
+  image = cv2.GaussianBlur(np.random.default_rng(4).integers(0, 256, (40, 96, 3)).astype(
+      np.uint8), (3, 3), 0)
+  for name in same_channel.KITTI_2015_FRAME[1:]:
+    cv2.imwrite(str(folder / name), image)
+  names = lambda **kw: [n for n, _ in same_channel.scenes(str(tmp_path), **kw)]
+  # Other experiments read the scenes as ground truth: the estimated one stays out of them.
+  assert not names()
+  assert names(views_only=True) == [same_channel.KITTI_2015_FRAME[0]]
