@@ -48,10 +48,10 @@ from typing import Dict, Optional, Tuple
 import cv2
 import numpy as np
 
-from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.core import workers
 from mixstereo_tf.restoration import dubois_leak
+from mixstereo_tf.unmixing import channel_matching
 
 # The channel each family's odd eye owns (red-cyan: R alone is the left eye).
 FAMILY_ODD_CHANNEL = {'red_cyan': 0, 'green_magenta': 1, 'amber_blue': 2}
@@ -76,14 +76,9 @@ class DetectConfig:
     share_softness: the logistic's scale on the explained share's margin.
     samples: at most this many colour samples.
     ghost_width: the ghost regression's copy is area-downsampled to at most this width
-      (matched anew there). 960 (320, the width of the other steps, before), chosen on
-      FFmpeg anaglyphs of training photo warps (24 pairs, 1024 x 368, half window-aligned,
-      seeds 2.5e9 on): over their colour and Dubois encodings of the three families (144)
-      the colour encodings' leak reached 0.60 / 0.43 / 0.40 / 0.21 of the expected at
-      widths 320 / 480 / 640 / 960, and 6 / 5 / 5 / 3 were misread at ghost_fraction; with
-      the half-colour ones too (216), `detect` told Dubois from the rest wrongly on 6 at
-      320 and 2 at 960 (2 more refused either way), in 0.15 and 0.38 s an image. On 216
-      more, drawn after the choice (seeds 2.6e9 on): 18 at 320, 11 at 960 (2 refused).
+      (matched anew there): 960 (320 before), chosen on FFmpeg anaglyphs of training photo
+      warps, where the colour encodings' leak reached 0.60 / 0.43 / 0.40 / 0.21 of the
+      expected at 320 / 480 / 640 / 960 px (DESIGN.md, unmixing: the misreads).
     ghost_sigma: the Gaussian high-pass of the ghost regression, pixels of its copy.
     ghost_correlation: ... over pixels matched with at least this correlation ...
     ghost_min_shift: ... at least this many pixels of displacement ...
@@ -132,29 +127,11 @@ class Detection:
   also_fits: Optional[str] = None
 
 
-def _small(image: np.ndarray, width: int) -> np.ndarray:
-  """float32 [h, w, 3] on 0..255, area-downsampled to at most `width` columns."""
-  image = np.asarray(image)
-  if image.ndim != 3 or image.shape[2] != 3:
-    raise ValueError(f'detect needs an [H, W, 3] RGB image, got shape {image.shape}.')
-  image = image.astype(np.float32) * (1.0 if image.dtype == np.uint8 else 255.0)
-  h, w = image.shape[:2]
-  if w > width:
-    image = cv2.resize(image, (width, max(1, round(h * width / w))),
-                       interpolation=cv2.INTER_AREA)
-  return np.ascontiguousarray(image)
-
-
-def _match(a: np.ndarray, b: np.ndarray, reach: int, span=None, strips: int = 1) -> dict:
-  """`matcher.match` in `strips` strips, one thread each: the same result on any machine."""
-  low, high = span or (-reach, reach)
-  return matcher.match(a, b, low, high, matcher.MatcherConfig(threads=strips, strips=strips))
-
-
 def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
   """{family: score} (step 1 of the module docstring) of a 0..255 image."""
-  reach = max(2, round(config.reach_fraction * small.shape[1]))
-  match_pair = lambda pair: _match(small[..., pair[0]], small[..., pair[1]], reach)
+  search = channel_matching.span(small, config.reach_fraction)
+  match_pair = lambda pair: channel_matching.match(small[..., pair[0]], small[..., pair[1]],
+                                                   search)
   # The pairs in threads: each match is one strip (the same result on any machine) and
   # numba releases the GIL.
   outs = workers.run_tasks(match_pair, _PAIRS, len(_PAIRS))
@@ -170,22 +147,7 @@ def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
   return scores
 
 
-def eye_match(small: np.ndarray, odd: int, config: DetectConfig,
-              span: Optional[Tuple[int, int]] = None,
-              strips: int = 1) -> Tuple[np.ndarray, ...]:
-  """(ys, xs, xr): the odd channel's left-right consistent pixels (y, x) and the columns xr
-  = x - d where the mean of the other channels sees the same surface; d searched over
-  `span` (min, max) px, or +- config.reach_fraction of the width; `strips`: `_match`'s."""
-  others = [c for c in range(3) if c != odd]
-  reach = max(2, round(config.reach_fraction * small.shape[1]))
-  out = _match(small[..., odd], small[..., others].mean(axis=2), reach, span, strips)
-  ys, xs = np.nonzero(out['consistent_left'])
-  xr = np.rint(xs - out['disparity_left'][ys, xs]).astype(int)
-  keep = (xr >= 0) & (xr < small.shape[1])
-  return ys[keep], xs[keep], xr[keep]
-
-
-def colour_samples(small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
+def colour_samples(small: np.ndarray, odd: int, matched: channel_matching.Matched,
                    config: DetectConfig) -> np.ndarray:
   """[N, 3] colours o in [0, 1] (step 2): the odd channel at x, the others at x - d."""
   others = [c for c in range(3) if c != odd]
@@ -269,18 +231,18 @@ def choose_variant(small: np.ndarray, obs: np.ndarray, names, config: DetectConf
   return ordered[-1], _logistic(-closest), shares
 
 
-def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int, matched: Tuple[np.ndarray, ...],
-               config: DetectConfig) -> np.ndarray:
+def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int,
+               matched: channel_matching.Matched, config: DetectConfig) -> np.ndarray:
   """`dubois_leak.observed` (step 3) on a copy of `image` up to config.ghost_width px wide,
   its eyes matched anew there (in 2 strips) over the dense range of `matched`'s disparities
-  (`matcher.dense_range`, as the range planning) scaled to it; on `small` and its `matched`
-  pixels when that copy is no wider."""
-  wide = _small(image, config.ghost_width)
+  scaled to it (`channel_matching.rescaled_search`); on `small` and its `matched` pixels
+  when that copy is no wider."""
+  wide = channel_matching.downsampled(image, config.ghost_width)
   if wide.shape[1] > small.shape[1]:
-    reach = max(2, round(config.reach_fraction * small.shape[1]))
-    span = matcher.dense_range(matched[1] - matched[2], reach,
-                               wide.shape[1] / small.shape[1], wide.shape[1])
-    small, matched = wide, eye_match(wide, odd, config, span, strips=2)
+    search = channel_matching.rescaled_search(
+        matched, channel_matching.span(small, config.reach_fraction),
+        wide.shape[1] / small.shape[1], wide.shape[1])
+    small, matched = wide, channel_matching.eye_match(wide, odd, search, strips=2)
   return dubois_leak.observed(small, odd, matched, config.ghost_sigma,
                               config.ghost_correlation, config.ghost_min_shift,
                               config.ghost_collinearity)
@@ -288,7 +250,7 @@ def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int, matched: Tuple[np
 
 def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
   """The anaglyph encoding of an [H, W, 3] RGB image (uint8, or float in [0, 1])."""
-  small = _small(image, config.width)
+  small = channel_matching.downsampled(image, config.width)
   if min(small.shape[:2]) < 16:
     raise ValueError(f'detect needs an image of at least 16x16 px after downsampling to '
                      f'{config.width} px wide; got {small.shape[1]}x{small.shape[0]}.')
@@ -303,7 +265,8 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
                      f'no colour channel is displaced against the others (best family '
                      f'{family}: {families[family]:.3f} < {config.min_family_score})', scores)
   odd = FAMILY_ODD_CHANNEL[family]
-  matched = eye_match(small, odd, config)
+  matched = channel_matching.eye_match(small, odd,
+                                       channel_matching.span(small, config.reach_fraction))
   obs = colour_samples(small, odd, matched, config)
   names = [n for n in CANDIDATES if mixtures.get_mixture(n).family == family]
   gray = {n: explained_share(small, obs, n, config) for n in names

@@ -10,6 +10,8 @@ import pytest
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import sample
+from mixstereo_tf.restoration import dubois_leak
+from mixstereo_tf.unmixing import channel_matching
 from mixstereo_tf.unmixing import detection
 
 # FFmpeg stereo3d output modes (from a left-first side-by-side input) -> our encodings.
@@ -165,10 +167,11 @@ def test_the_leak_is_measured_on_a_copy_up_to_ghost_width(name, low, high):
   left, right, _ = _pair(height=120, width=720)
   image = _ours(name, left, right)
   config = detection.DetectConfig()
-  small = detection._small(image, config.width)  # pylint: disable=protected-access
-  matched = detection.eye_match(small, 0, config)
+  small = channel_matching.downsampled(image, config.width)
+  matched = channel_matching.eye_match(small, 0,
+                                       channel_matching.span(small, config.reach_fraction))
   ghost = detection.ghost_leak(image, small, 0, matched, config)
-  expected = detection.dubois_leak.expected('dubois_ffmpeg', 0)
+  expected = dubois_leak.expected('dubois_ffmpeg', 0)
   assert low < ghost @ expected / (expected @ expected) < high
   # The copy is the image itself here (720 <= ghost_width): at 320 px the leak differs.
   narrow = detection.ghost_leak(image, small, 0, matched,
