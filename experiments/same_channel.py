@@ -12,9 +12,9 @@ consistent disparities of the pair's luma (`views_only_scene`). Each pair is win
 at 30 % (`realworld.window_align`, as experiments/realworld.py) and made into anaglyphs by
 FFmpeg: the colour ('anaglyph'), 'half_color' and 'dubois_ffmpeg' encodings and the gray
 anaglyph ('gray'), whose two eyes carry the same luminance channel: the same-channel
-reference. Scored: classical on each,
-the 'sgbm' peer baseline on the colour and the gray anaglyph; bad-1 / bad-3 / EPE over the
-valid ground truth, views' RGB PSNR, and each bad-1 over the same method's on 'gray'.
+reference. Scored: classical on each, the 'sgbm' peer baseline on the colour and the gray
+anaglyph; bad-1 / bad-3 / EPE over the valid ground truth, views' RGB PSNR, and each bad-1
+over the same method's on 'gray'.
 Row 'true disparity' (scenes with dense ground truth): the shipped restoration on the true
 left disparity and the right one forward-warped from it (`eye_order.right_from_left`;
 the learned stage's where either is unknown): what the views would be with perfect
@@ -266,9 +266,9 @@ def main(argv):
           '--shared_dir (`kitti2015_aanet_000151`) has none: views only, its window placed '
           "by the census matcher's consistent disparities of the pair's luma. true "
           'disparity (scenes with dense ground truth): the shipped restoration on the true '
-          'left disparity and the '
-          'right one forward-warped from it (the learned stage\'s where unknown): the views '
-          'that perfect matching would give with this restoration.', '', *_table(rows), '']
+          "left disparity and the right one forward-warped from it (the learned stage's "
+          'where unknown): the views that perfect matching would give with this '
+          'restoration.', '', *_table(rows), '']
   with open(FLAGS.same_channel_output, 'w') as handle:
     handle.write('\n'.join(text))
   print('\n'.join(text))
