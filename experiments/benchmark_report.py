@@ -71,8 +71,18 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
   lines += ['Times: median of the timed repeats after one warm-up call (min-max in '
             'brackets); "first" = the first call, tracing / XLA compilation included. '
             'Peak = VmHWM of the measurement\'s own process.', '']
+  for section in (_training_sections, _module_sections, _kernel_sections):
+    lines += section(run, baseline, baseline_label, label)
+  lines += _layer_sections(run)
+  lines += _matcher_section(run)
+  if any(key.startswith('video/') for key in run['results']):
+    lines += benchmark_video.render_section(run, baseline, baseline_label, label)
+  return '\n'.join(lines) + '\n'
 
-  lines += ['## 1. Machine limit', ''] + _header('kernel', baseline, baseline_label, label)
+
+def _training_sections(run, baseline, baseline_label: str, label: str) -> list:
+  """Sections 1-3: the machine's limit, train steps, FLOPs and throughput fraction."""
+  lines = ['## 1. Machine limit', ''] + _header('kernel', baseline, baseline_label, label)
   gflops = lambda r: ('not run' if r is None else f'FAILED: {r["error"]}' if 'error' in r
                       else f'{r["gflop_per_s"]:.1f} GFLOP/s ({r["gflop"]:.1f} GFLOP in '
                       f'{r["median"]:.3f} s)')
@@ -106,7 +116,12 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
                f'| {_fraction(baseline, key)} | {_fraction(run, key)} |')
       lines.append(f'| {config}, XLA {"on" if jit else "off"}: achieved ' + cells)
 
-  lines += ['', '## 4. Per-module forward+backward time (paper configuration)', '',
+  return lines
+
+
+def _module_sections(run, baseline, baseline_label: str, label: str) -> list:
+  """Sections 4-6: per-module times, the input pipeline, SavedModel inference."""
+  lines = ['', '## 4. Per-module forward+backward time (paper configuration)', '',
             'Each part timed alone (its own tf.function, XLA off) at the shapes it has in the '
             'paper-configuration step, gradients w.r.t. its variables and inputs; the '
             'stereo parts see the batch of 2 (direct + mirrored pass).', '']
@@ -124,10 +139,7 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
   pipe = _get(run, 'pipeline') or {}
   step = _get(run, 'train/paper/jit=False')
   for name in [k for k in pipe if k not in ('peak_gib', 'load', 'error')]:
-    def cell(r, name=name, step_key='train/paper/jit=False', source=None):
-      if r is None or name not in r:
-        return 'n/a'
-      return f'{r[name]:.1f} pairs/s'
+    cell = lambda r, name=name: 'n/a' if r is None or name not in r else f'{r[name]:.1f} pairs/s'
     ratio = ('' if not step or 'error' in step else
              f' = {pipe[name] * step["median"]:.0f}x the paper step\'s consumption')
     lines.append(f'| {name} ' + _cells(run, baseline, 'pipeline', cell)[:-1] + ratio + ' |')
@@ -146,7 +158,12 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
   for key in keys:
     lines.append(f'| {key.split("/")[1]} ' + _cells(run, baseline, key, infer))
 
-  lines += ['', '## 7. Warp: forward+backward on [2, 256, 512, 3]', '']
+  return lines
+
+
+def _kernel_sections(run, baseline, baseline_label: str, label: str) -> list:
+  """Sections 7-10: the warp, stride-2 3D convolutions, the forward pass, classical."""
+  lines = ['', '## 7. Warp: forward+backward on [2, 256, 512, 3]', '']
   lines += _header('implementation', baseline, baseline_label, label)
   for name in ('warp.sample_horizontal', 'gather reference'):
     cell = lambda r, name=name: _time(None if r is None or name not in r else r[name])
@@ -179,11 +196,7 @@ def render(run: dict, baseline: Optional[dict], baseline_label: str,
                                  if 'error' in r else f'{r[name]["first"]:.2f} s per '
                                  f'{r["size"]} frame')
     lines.append(f'| {name} ' + _cells(run, baseline, 'classical', cell))
-  lines += _layer_sections(run)
-  lines += _matcher_section(run)
-  if any(key.startswith('video/') for key in run['results']):
-    lines += benchmark_video.render_section(run, baseline, baseline_label, label)
-  return '\n'.join(lines) + '\n'
+  return lines
 
 
 def _matcher_section(run) -> list:
