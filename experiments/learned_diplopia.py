@@ -137,7 +137,17 @@ def _mean(rows, key):
 
 
 def tables(rows):
-  """Markdown of parts 1-3."""
+  """Markdown of parts 1-4."""
+  lines = _part1(rows) + _part2([r for r in rows if r['part'] == 2]) + _part3(rows)
+  lines += ['',
+            '## 4. Ablation: the ZNCC share of the learned stage\'s cost, I = (L + R) / 2', '',
+            *same_channel.method_table([r for r in rows if r['part'] == 4],
+                                       [f'zncc share {s}' for s in ZNCC_SHARES], 'cost'), '']
+  return lines
+
+
+def _part1(rows):
+  """Part 1 (a = 1/2): every method beside classical, per group."""
   lines = ['## 1. I = (L + R) / 2', '',
            '| scenes | method | bad-1 | bad-3 | D1 | RGB PSNR L / R (dB) | bad-1 / classical |'
            ' views - classical L / R (dB) | seconds |', '| --- ' * 9 + '|']
@@ -157,13 +167,17 @@ def tables(rows):
                    f"{_mean(got, 'psnr_left'):.2f} / {_mean(got, 'psnr_right'):.2f} | "
                    f"{_mean(got, 'bad1') / _mean(classical, 'bad1'):.2f}x | "
                    f'{gain[0]:+.2f} / {gain[1]:+.2f} | {_mean(got, "seconds"):.1f} |')
-  lines += ['', '## 2. The mixing weight: I = a L + (1 - a) R, classical method, '
+  return lines
+
+
+def _part2(part2):
+  """Part 2: the weight's estimate and the views with it, per group and weight."""
+  lines = ['', '## 2. The mixing weight: I = a L + (1 - a) R, classical method, '
             '`--mixing_weight=auto`', '',
             '| scenes | a | estimated a (mean) | mean abs error | views L / R, estimated a | '
             'views L / R, true a | views L / R, a = 1/2 | refiner trained on a = 1/2, '
             'estimated a | default (refiner trained on any a), estimated a |',
             '| --- ' * 9 + '|']
-  part2 = [r for r in rows if r['part'] == 2]
   for name in dict.fromkeys(r['group'] for r in part2):
     for weight in WEIGHTS:
       got = [r for r in part2 if r['group'] == name and r['weight'] == weight]
@@ -177,7 +191,12 @@ def tables(rows):
                    f"{_mean(got, 'default_psnr_left'):.2f} / "
                    f"{_mean(got, 'default_psnr_right'):.2f} |")
   lines += ['', *_weighted_gains(part2)]
-  lines += ['', '## 3. Eye order', '', 'Share of runs in order by two criteria. "Nearer": '
+  return lines
+
+
+def _part3(rows):
+  """Part 3: the share of runs whose eyes come out in order, by two criteria."""
+  lines = ['', '## 3. Eye order', '', 'Share of runs in order by two criteria. "Nearer": '
             'the left view is nearer (RGB PSNR) to the true left view than to the true right '
             'one; for a != 1/2 it also fails when a weak separation leaves the mixture, '
             'which then resembles the heavier eye. "Difference": the restored views\' '
@@ -194,10 +213,6 @@ def tables(rows):
       got = [r[key] for r in rows if key in r and chosen(r['weight'])]
       cells.append(f'{np.mean(got):.1%} of {len(got)}')
     lines.append(f'| {label} | ' + ' | '.join(cells) + ' |')
-  lines += ['',
-            '## 4. Ablation: the ZNCC share of the learned stage\'s cost, I = (L + R) / 2', '',
-            *same_channel.method_table([r for r in rows if r['part'] == 4],
-                                       [f'zncc share {s}' for s in ZNCC_SHARES], 'cost'), '']
   return lines
 
 
