@@ -38,6 +38,7 @@ from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import workers
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.unmixing import learned_diplopia
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import streams
@@ -60,7 +61,7 @@ METHODS = {'classical': dict(method='classical'),
 def frames(count):
   """uint8 [720, 1280, 3] double images of the panning scene."""
   config = synthetic.SceneConfig(max_disparity=64, height=HEIGHT, width=WIDTH + PAN * count)
-  scene = synthetic.render_scene(3, config, synthetic.load_textures('heldout'))
+  scene = synthetic.render_scene(3, config, texture_atlas.load_textures('heldout'))
   both = (scene['left'].astype(np.float32) + scene['right']) / 2
   return [np.rint(both[:, PAN * i:PAN * i + WIDTH]).astype(np.uint8) for i in range(count)]
 

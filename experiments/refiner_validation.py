@@ -34,7 +34,7 @@ import numpy as np
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.artifacts import pretrained
-from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.training import refiner_data
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import predictors
@@ -74,7 +74,7 @@ def _unmixers(name, runs, folder, weight):
 def main(argv):
   del argv
   start = time.perf_counter()
-  textures = synthetic.load_textures('train')
+  textures = texture_atlas.load_textures('train')
   lines = ['| scenes | model | bad-1 | views L / R (dB) |', '| --- | --- | --- | --- |']
   with tempfile.TemporaryDirectory() as folder:
     weights = (False, True) if families.of(FLAGS.refiner_mixture).weighted else (False,)

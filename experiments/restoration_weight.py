@@ -31,7 +31,7 @@ from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import photo_warps
-from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.restoration import views
@@ -77,7 +77,7 @@ def _scores(name: str, large: float, count: int, field: str
   encoding and scale."""
   config = refiner_data.ExampleConfig(mixtures=name, clean_probability=CLEAN_SHARE,
                                       large_probability=large)
-  textures = synthetic.load_textures('train')  # As the refiner's examples (no texture_dir).
+  textures = texture_atlas.load_textures('train')  # As the refiner's examples (no texture_dir).
   out = collections.defaultdict(list)
   for index in range(FIRST_INDEX, FIRST_INDEX + count):
     example = refiner_data.make_example(index, config, textures)
@@ -141,7 +141,7 @@ def main(argv):
       lines.append(_row(name, weighted))
     sections.append('\n'.join(lines))
   if FLAGS.photo_dir:
-    atlas = synthetic.load_texture_dir(FLAGS.photo_dir)
+    atlas = texture_atlas.load_texture_dir(FLAGS.photo_dir)
     count = max(1, round(FLAGS.examples / 2))
     lines = [f'## 192x384 photo warps, {count} clean examples per encoding', '', header, rule]
     for name in mixtures.parse_names('anaglyphs'):

@@ -40,6 +40,7 @@ import numpy as np
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import temporal
 
@@ -71,7 +72,7 @@ def make_clip(frames_per_shot: int, mixture_name: str = 'anaglyph'):
   for shot, (seed, pan) in enumerate(SHOTS):
     config = synthetic.SceneConfig(max_disparity=MAX_DISPARITY, height=HEIGHT,
                                    width=WIDTH + pan * (frames_per_shot - 1))
-    scene = synthetic.render_scene(seed, config, synthetic.load_textures('heldout'))
+    scene = synthetic.render_scene(seed, config, texture_atlas.load_textures('heldout'))
     mixed = mixtures.mix(mixture_name, image_range.u8_to_signed(scene['left']),
                          image_range.u8_to_signed(scene['right']))
     mixture = image_range.signed_to_u8(mixed.numpy()).astype(np.float32)

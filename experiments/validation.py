@@ -16,7 +16,7 @@ import numpy as np
 
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.data import photo_warps
-from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.evaluation import metrics
 
 flags.DEFINE_string('photo_dir', '', 'Photographs of the warped validation pairs '
@@ -28,17 +28,17 @@ Parsed = TypeVar('Parsed')
 
 
 def photo_pairs(config: photo_warps.WarpConfig, count: int,
-                atlas: synthetic.TextureAtlas) -> Iterator[Dict[str, np.ndarray]]:
+                atlas: texture_atlas.TextureAtlas) -> Iterator[Dict[str, np.ndarray]]:
   """The first `count` validation pairs of `config` (`photo_warps.warped_pair`'s dicts)."""
   for seed in range(PHOTO_SEED, PHOTO_SEED + count):
     yield photo_warps.warped_pair(seed, config, atlas)
 
 
-def required_atlas() -> synthetic.TextureAtlas:
+def required_atlas() -> texture_atlas.TextureAtlas:
   """The photographs of --photo_dir; a usage error naming the flag when it is empty."""
   if not FLAGS.photo_dir:
     raise app.UsageError('--photo_dir is required (experiments/get_photos.sh).')
-  return synthetic.load_texture_dir(FLAGS.photo_dir)
+  return texture_atlas.load_texture_dir(FLAGS.photo_dir)
 
 
 def parse_all(items: Sequence[str], parse: Callable[[str], Parsed]) -> List[Parsed]:

@@ -29,6 +29,7 @@ import numpy as np
 
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 
 # Names of the project's evaluation images: KITTI frames (000151_10.png), Motorcycle and
 # the SceneFlow frames of the real-world set, besides `middlebury.is_evaluation_scene`.
@@ -84,7 +85,7 @@ def refuse_evaluation_photos(folder: str) -> None:
                        'is never training data: remove it from the photographs.')
 
 
-def _photo_layers(rng, layers, atlas: synthetic.TextureAtlas, config: WarpConfig,
+def _photo_layers(rng, layers, atlas: texture_atlas.TextureAtlas, config: WarpConfig,
                   width: int):
   """The layers re-textured with one photograph (step 2), others for objects sometimes."""
   zoom = float(np.exp(rng.uniform(*np.log(config.zoom_range))))
@@ -106,7 +107,7 @@ def _photo_layers(rng, layers, atlas: synthetic.TextureAtlas, config: WarpConfig
 
 
 def warped_pair(seed: int, config: WarpConfig,
-                atlas: synthetic.TextureAtlas) -> Dict[str, np.ndarray]:
+                atlas: texture_atlas.TextureAtlas) -> Dict[str, np.ndarray]:
   """Pair `seed` (module docstring), deterministic in seed.
 
   Returns:

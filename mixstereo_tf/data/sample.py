@@ -29,6 +29,7 @@ from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import records
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 
 SPLITS = ('train', 'heldout')
 DEFAULT_TRAIN_SCENES = 2000
@@ -135,9 +136,9 @@ def load_virtual(sample: records.StereoSample) -> Dict[str, np.ndarray]:
     config = synthetic.SceneConfig(height=query['h'], width=query['w'],
                                    max_disparity=query['d'], realistic=bool(query.get('r')))
     if 'tex' in query:
-      textures = synthetic.load_texture_dir(query['tex'], config.texture_sigma)
+      textures = texture_atlas.load_texture_dir(query['tex'], config.texture_sigma)
     else:
-      textures = synthetic.load_textures(netloc, config.texture_sigma)
+      textures = texture_atlas.load_textures(netloc, config.texture_sigma)
     scene = synthetic.render_scene(scene_seed(netloc, int(path)), config, textures)
     full = np.ones(scene['nonocc_left'].shape, bool)
     scene.update(valid_left=full, valid_right=full.copy(), disc_left=np.zeros_like(full))

@@ -32,7 +32,7 @@ from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import degrade
 from mixstereo_tf.data import photo_warps
-from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.models import matching_features
 from mixstereo_tf.training import resumable
 
@@ -118,7 +118,7 @@ def window_probability(names: str) -> float:
   return photo_warps.WarpConfig.window_probability
 
 
-def textures(config: FeatureTrainConfig) -> synthetic.TextureAtlas:
+def textures(config: FeatureTrainConfig) -> texture_atlas.TextureAtlas:
   """The photographs of the warps (long side at most 1024 px, blurred by sigma 1).
 
   Raises:
@@ -126,8 +126,8 @@ def textures(config: FeatureTrainConfig) -> synthetic.TextureAtlas:
   """
   if config.texture_dir:
     photo_warps.refuse_evaluation_photos(config.texture_dir)
-    return synthetic.load_texture_dir(config.texture_dir, 1.0, 1024)
-  return synthetic.load_textures('train')
+    return texture_atlas.load_texture_dir(config.texture_dir, 1.0, 1024)
+  return texture_atlas.load_textures('train')
 
 
 def _mix(rng, config: FeatureTrainConfig, pair) -> Tuple[np.ndarray, str]:

@@ -45,6 +45,7 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import degrade
 from mixstereo_tf.data import photo_warps
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import shipped
 from mixstereo_tf.unmixing import steps
@@ -111,11 +112,11 @@ class ExampleConfig:
                          f'{getattr(self, field)}.')
 
 
-def _textures(config: ExampleConfig) -> synthetic.TextureAtlas:
+def _textures(config: ExampleConfig) -> texture_atlas.TextureAtlas:
   if config.texture_dir:
     photo_warps.refuse_evaluation_photos(config.texture_dir)
-    return synthetic.load_texture_dir(config.texture_dir)
-  return synthetic.load_textures('train')
+    return texture_atlas.load_texture_dir(config.texture_dir)
+  return texture_atlas.load_textures('train')
 
 
 def _window_aligned(scene: Dict[str, np.ndarray], shift: int, width: int):
@@ -152,7 +153,7 @@ def base_stage(config: ExampleConfig) -> Optional[shipped.Stage]:
   return shipped.stage(pretrained.get(config.base)) if config.base else None
 
 
-def make_example(index: int, config: ExampleConfig, textures: synthetic.TextureAtlas,
+def make_example(index: int, config: ExampleConfig, textures: texture_atlas.TextureAtlas,
                  stage: Optional[shipped.Stage] = None) -> Dict[str, np.ndarray]:
   """Example `index` (module docstring): uint8 images, float32 disparities, str 'name',
   bool 'clean' (whether the mixture was left undegraded). `stage`: `base_stage(config)`

@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.data import photo_warps
-from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 
 
 @pytest.fixture(scope='module')
 def atlas():
-  return synthetic.load_textures('train')
+  return texture_atlas.load_textures('train')
 
 
 def _warp_error(pair):

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.ops import warp
 
 _SMALL = synthetic.SceneConfig(height=32, width=64, max_disparity=16)
@@ -12,7 +13,7 @@ _MEDIUM = synthetic.SceneConfig(height=64, width=128, max_disparity=32)
 
 @pytest.fixture(scope='module', name='textures')
 def _textures():
-  return synthetic.load_textures('train')
+  return texture_atlas.load_textures('train')
 
 
 def _constant(value):
@@ -98,28 +99,6 @@ def test_disparities_stay_in_range_and_layers_vary(textures):
       assert scene[key].max() <= _SMALL.near_limit + 1e-4 <= _SMALL.max_disparity - 1
     assert scene['left'].dtype == np.uint8 and scene['left'].shape == (32, 64, 3)
   assert len(counts) > 1
-
-
-def test_texture_splits_are_disjoint_and_load_offline():
-  assert not set(synthetic.TEXTURE_SPLITS['train']) & set(synthetic.TEXTURE_SPLITS['heldout'])
-  for split in ('train', 'heldout'):
-    atlas = synthetic.load_textures(split)
-    assert len(atlas) == len(synthetic.TEXTURE_SPLITS[split])
-    assert atlas.image.dtype == np.float32 and atlas.image.shape[-1] == 3
-    assert atlas.image.std() > 10.0  # Real texture, not a blank placeholder.
-  with pytest.raises(ValueError, match='valid'):
-    synthetic.load_textures('test')
-
-
-def test_atlas_lookup_mirrors_out_of_range_coordinates():
-  image = np.arange(2 * 5 * 3, dtype=np.float32).reshape(2, 5, 3)
-  atlas = synthetic.TextureAtlas([_constant(9), image])
-  index = np.ones((1, 4), np.int32)
-  u = np.array([[1.0, -1.0, 5.0, 2.5]], np.float32)  # reflect-101: -1 -> 1, 5 -> 3.
-  v = np.zeros((1, 4), np.float32)
-  got = atlas.lookup(index, u, v)[0]
-  np.testing.assert_allclose(got, [image[0, 1], image[0, 1], image[0, 3],
-                                   (image[0, 2] + image[0, 3]) / 2])
 
 
 def test_polygon_mask_ignores_vertex_order():

@@ -9,7 +9,7 @@ import pytest
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import mixtures
-from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.models import refiner
 from mixstereo_tf.training import refiner_data
 from mixstereo_tf.unmixing import predictors
@@ -75,7 +75,7 @@ def test_shards_are_built_once_and_loaded_in_order(tmp_path, textures):
   refiner_data.build_shard(folder, 0, 2, SMALL)
   data = refiner_data.load_shards(folder, 2)
   assert data['mixture'].shape == (4, 48, 64, 3)
-  first = refiner_data.make_example(2, SMALL, synthetic.load_textures('train'))
+  first = refiner_data.make_example(2, SMALL, texture_atlas.load_textures('train'))
   np.testing.assert_array_equal(data['left'][2], first['left'])
   inputs = refiner.network_input(data['mixture'], data['classical_left'],
                                       data['classical_right'],

@@ -9,7 +9,7 @@ from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import photo_warps
-from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.unmixing import learned_matching
 
 
@@ -30,7 +30,7 @@ def _patch_descriptors(single, pair):
 def pair():
   config = photo_warps.WarpConfig(height=96, width=160, max_disparity=32,
                                   window_probability=1.0)
-  return photo_warps.warped_pair(4, config, synthetic.load_textures('heldout'))
+  return photo_warps.warped_pair(4, config, texture_atlas.load_textures('heldout'))
 
 
 def _gray_anaglyph(pair):

@@ -8,6 +8,7 @@ from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.unmixing import detection
 from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import predictors
@@ -27,7 +28,7 @@ def _shot(seed, frames, pan=PAN, noise=0.0):
   `seed` (held-out textures), with Gaussian noise of `noise` levels per frame."""
   config = synthetic.SceneConfig(max_disparity=12, height=HEIGHT,
                                  width=WIDTH + pan * (frames - 1))
-  scene = synthetic.render_scene(seed, config, synthetic.load_textures('heldout'))
+  scene = synthetic.render_scene(seed, config, texture_atlas.load_textures('heldout'))
   mixture = _anaglyph(scene['left'], scene['right'])
   rng = np.random.RandomState(seed)
   shot = []
