@@ -272,3 +272,30 @@ def test_same_channel_scenes_without_ground_truth_only_when_asked(tmp_path, monk
   # Other experiments read the scenes as ground truth: the estimated one stays out of them.
   assert not names()
   assert names(views_only=True) == [same_channel.KITTI_2015_FRAME[0]]
+
+
+def test_channel_information_local_fit_recovers_a_linear_channel_mix():
+  from experiments import channel_information  # pylint: disable=import-outside-toplevel
+  rng = np.random.default_rng(0)
+  green, blue = (rng.uniform(0, 255, (24, 40)).astype(np.float32) for _ in range(2))
+  red = 2.0 * green - 0.5 * blue + 7.0
+  np.testing.assert_allclose(channel_information.local_fit(red, green, blue, 3), red,
+                             atol=0.05)
+  # A red independent of green and blue is not predicted: the fit stays near its mean.
+  other = rng.uniform(0, 255, (24, 40)).astype(np.float32)
+  assert np.corrcoef(channel_information.local_fit(other, green, blue, 3).ravel(),
+                     other.ravel())[0, 1] < 0.6
+
+
+def test_channel_information_pairings_and_noise():
+  from experiments import channel_information  # pylint: disable=import-outside-toplevel
+  rng = np.random.default_rng(1)
+  left, right = (rng.uniform(0, 255, (16, 24, 3)).astype(np.float32) for _ in range(2))
+  eyes = {p: f(left, right) for p, f in channel_information.PAIRINGS.items()}
+  np.testing.assert_array_equal(eyes['R vs R'][1], right[..., 0])
+  assert eyes['R vs G, B'][1].shape == (16, 24, 2)
+  pair = {'left': left.astype(np.uint8), 'right': right.astype(np.uint8)}
+  noisy = channel_information.noisy(pair, 3)
+  difference = noisy['left'].astype(float) - pair['left']
+  assert 1.5 < difference.std() < 2.5
+  np.testing.assert_array_equal(noisy['right'], channel_information.noisy(pair, 3)['right'])
