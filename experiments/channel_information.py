@@ -21,9 +21,10 @@ range +- 3 px) on the ground-truth pairs with the eyes given as:
     locally linear colour mapping between the channels can do.
 Sources: the scenes of `same_channel.scenes` (window-aligned at 30%) and the 12 validation
 photo warps of `matching_validation.py`; the rendered ones (procedural scenes, photo
-warps) again with independent noise (sigma 2 grey levels) added to each view: a rendered
-pair shows the same texture, its noise included, in both views, which no camera pair
-does, and census codes of flat regions then match that shared noise.
+warps) again with independent noise (sigma 2 grey levels) added to each view
+(`validation.noisy`): a rendered pair shows the same texture, its noise included, in
+both views, which no camera pair does, and census codes of flat regions then match that
+shared noise.
 """
 
 import sys
@@ -50,7 +51,6 @@ FLAGS = flags.FLAGS
 
 LUMA = np.array([0.299, 0.587, 0.114], np.float32)
 MARGIN = 3
-NOISE_SIGMA = 2.0
 REFERENCE = 'luma vs luma'
 Eyes = Tuple[np.ndarray, np.ndarray]
 
@@ -99,16 +99,6 @@ def bad1(pair: dict, valid: np.ndarray, pairing: str) -> float:
   return float(np.mean(np.abs(out['disparity_left'] - truth)[valid] > 1.0))
 
 
-def noisy(pair: dict, seed: int) -> dict:
-  """The pair with independent Gaussian noise (NOISE_SIGMA levels) on each view, uint8."""
-  rng = np.random.default_rng(seed)
-  out = dict(pair)
-  for key in ('left', 'right'):
-    image = pair[key].astype(np.float32) + rng.normal(0, NOISE_SIGMA, pair[key].shape)
-    out[key] = np.clip(np.round(image), 0, 255).astype(np.uint8)
-  return out
-
-
 def sources(shared_dir: str, photo_dir: str):
   """(group, scene name, pair, valid) of every pair scored (module docstring)."""
   for number, (name, data) in enumerate(same_channel.scenes(shared_dir)):
@@ -116,15 +106,16 @@ def sources(shared_dir: str, photo_dir: str):
     group = same_channel.group(name)
     yield group, name, pair, pair['valid_left']
     if group != name:  # Only the rendered scenes are grouped (`same_channel.group`).
-      yield f'{group} + noise {NOISE_SIGMA:g}', name, noisy(pair, number), pair['valid_left']
+      yield (f'{group} + noise {validation.NOISE_SIGMA:g}', name,
+             validation.noisy(pair, number), pair['valid_left'])
   if not photo_dir:
     return
   atlas = texture_atlas.load_texture_dir(photo_dir, 1.0, 1024)
   pairs = validation.photo_pairs(matching_validation.WARP, 12, atlas)
   for number, pair in enumerate(pairs):
     yield 'photo warps', f'warp {number}', pair, pair['nonocc_left']
-    yield (f'photo warps + noise {NOISE_SIGMA:g}', f'warp {number} + noise',
-           noisy(pair, number), pair['nonocc_left'])
+    yield (f'photo warps + noise {validation.NOISE_SIGMA:g}', f'warp {number} + noise',
+           validation.noisy(pair, number), pair['nonocc_left'])
 
 
 def table(rows: List[dict]) -> List[str]:

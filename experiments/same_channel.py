@@ -15,6 +15,9 @@ anaglyph ('gray'), whose two eyes carry the same luminance channel: the same-cha
 reference. Scored: classical on each, the 'sgbm' peer baseline on the colour and the gray
 anaglyph; bad-1 / bad-3 / EPE over the valid ground truth, views' RGB PSNR, and each bad-1
 over the same method's on 'gray'.
+The procedural scenes run twice, the second time with independent noise on each view
+(`validation.noisy`): rendered views share their texture's noise exactly, which flatters
+the same-channel reference (experiments/channel_information.py).
 Row 'true disparity' (scenes with dense ground truth): the shipped restoration on the true
 left disparity and the right one forward-warped from it (`eye_order.right_from_left`;
 the learned stage's where either is unknown): what the views would be with perfect
@@ -45,6 +48,8 @@ from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import shipped
 
 import numpy as np
+
+from experiments import validation  # `noisy`; defines --photo_dir (unused here).
 
 cli_flags.define_shared_dir()
 flags.DEFINE_string('same_channel_output', 'experiments/results/same_channel.md',
@@ -154,12 +159,22 @@ def true_disparity_views(pair, image, name, learned):
           'disparity_left': d_left, 'info': learned['info']}
 
 
-def _evaluate(shared_dir):
-  rows = []
-  for scene, data in scenes(shared_dir, views_only=True):
+def _pairs(shared_dir):
+  """(group, scene, window-aligned pair) of every run; the rendered scenes (grouped) twice,
+  the second time with `validation.noisy` views."""
+  for number, (scene, data) in enumerate(scenes(shared_dir, views_only=True)):
     pair = realworld.window_align(data, FRACTION)
     if data.get('views_only'):
       pair['valid_left'] = np.zeros_like(pair['valid_left'])
+    yield group(scene), scene, pair
+    if group(scene) != scene:
+      yield (f'{group(scene)} + noise {validation.NOISE_SIGMA:g}', scene,
+             validation.noisy(pair, number))
+
+
+def _evaluate(shared_dir):
+  rows = []
+  for scenes_group, scene, pair in _pairs(shared_dir):
     dense = np.mean(pair['valid_left']) >= DENSE
     learned = {}  # Encoding -> the learned stage's outputs, for the TRUTH rows.
     for name, method in RUNS + tuple((n, TRUTH) for n in ENCODINGS if dense):
@@ -169,11 +184,11 @@ def _evaluate(shared_dir):
              else unmixer(name, method)(image))
       if method == 'learned':
         learned[name] = out
-      rows.append(dict(scene=scene, group=group(scene), encoding=name, method=method,
+      rows.append(dict(scene=scene, group=scenes_group, encoding=name, method=method,
                        shift=pair['shift'], searched=out['info']['disparity_range'],
                        seconds=round(time.perf_counter() - start, 2), **_score(pair, out)))
-      print(scene, name, method, f"bad-1 {rows[-1]['bad1']:.3f}", file=sys.stderr,
-            flush=True)
+      print(scenes_group, scene, name, method, f"bad-1 {rows[-1]['bad1']:.3f}",
+            file=sys.stderr, flush=True)
   return rows
 
 
@@ -268,7 +283,13 @@ def main(argv):
           'disparity (scenes with dense ground truth): the shipped restoration on the true '
           "left disparity and the right one forward-warped from it (the learned stage's "
           'where unknown): the views that perfect matching would give with this '
-          'restoration.', '', *_table(rows), '']
+          f'restoration. procedural + noise {validation.NOISE_SIGMA:g}: the same scenes '
+          f'with independent Gaussian noise (sigma {validation.NOISE_SIGMA:g} grey levels) '
+          'on each view (`validation.noisy`): a rendered pair shows the same texture, '
+          'noise and quantisation included, in both views, which census codes of flat '
+          'regions match in a '
+          'same-channel pairing only (experiments/results/channel_information.md).', '',
+          *_table(rows), '']
   with open(FLAGS.same_channel_output, 'w') as handle:
     handle.write('\n'.join(text))
   print('\n'.join(text))

@@ -24,6 +24,7 @@ flags.DEFINE_string('photo_dir', '', 'Photographs of the warped validation pairs
 FLAGS = flags.FLAGS
 
 PHOTO_SEED = 10 ** 9
+NOISE_SIGMA = 2.0  # Grey levels of `noisy`.
 Parsed = TypeVar('Parsed')
 
 
@@ -32,6 +33,18 @@ def photo_pairs(config: photo_warps.WarpConfig, count: int,
   """The first `count` validation pairs of `config` (`photo_warps.warped_pair`'s dicts)."""
   for seed in range(PHOTO_SEED, PHOTO_SEED + count):
     yield photo_warps.warped_pair(seed, config, atlas)
+
+
+def noisy(pair, seed):
+  """The pair with independent Gaussian noise (NOISE_SIGMA grey levels) on each view, uint8:
+  a rendered pair shows the same texture, its noise and quantisation included, in both
+  views, which no camera pair does (experiments/channel_information.py)."""
+  rng = np.random.default_rng(seed)
+  out = dict(pair)
+  for key in ('left', 'right'):
+    image = pair[key].astype(np.float32) + rng.normal(0, NOISE_SIGMA, pair[key].shape)
+    out[key] = np.clip(np.round(image), 0, 255).astype(np.uint8)
+  return out
 
 
 def required_atlas() -> texture_atlas.TextureAtlas:

@@ -295,7 +295,8 @@ def test_channel_information_pairings_and_noise():
   np.testing.assert_array_equal(eyes['R vs R'][1], right[..., 0])
   assert eyes['R vs G, B'][1].shape == (16, 24, 2)
   pair = {'left': left.astype(np.uint8), 'right': right.astype(np.uint8)}
-  noisy = channel_information.noisy(pair, 3)
+  noisy = channel_information.validation.noisy(pair, 3)
   difference = noisy['left'].astype(float) - pair['left']
   assert 1.5 < difference.std() < 2.5
-  np.testing.assert_array_equal(noisy['right'], channel_information.noisy(pair, 3)['right'])
+  np.testing.assert_array_equal(noisy['right'],
+                                channel_information.validation.noisy(pair, 3)['right'])
