@@ -38,7 +38,6 @@ import numpy as np
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.classical import matcher
-from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.evaluation import realworld
 
 from experiments import matching_validation  # WARP: the validation pairs' size.
@@ -100,7 +99,8 @@ def bad1(pair: dict, valid: np.ndarray, pairing: str) -> float:
 
 
 def sources(shared_dir: str, photo_dir: str):
-  """(group, scene name, pair, valid) of every pair scored (module docstring)."""
+  """(group, scene name, pair, valid) of every pair scored (module docstring); no photo
+  warps without `photo_dir` (--photo_dir, which `validation.required_atlas` reads)."""
   for number, (name, data) in enumerate(same_channel.scenes(shared_dir)):
     pair = realworld.window_align(data, same_channel.FRACTION)
     group = same_channel.group(name)
@@ -110,8 +110,7 @@ def sources(shared_dir: str, photo_dir: str):
              validation.noisy(pair, number), pair['valid_left'])
   if not photo_dir:
     return
-  atlas = texture_atlas.load_texture_dir(photo_dir, 1.0, 1024)
-  pairs = validation.photo_pairs(matching_validation.WARP, 12, atlas)
+  pairs = validation.photo_pairs(matching_validation.WARP, 12, validation.required_atlas())
   for number, pair in enumerate(pairs):
     yield 'photo warps', f'warp {number}', pair, pair['nonocc_left']
     yield (f'photo warps + noise {validation.NOISE_SIGMA:g}', f'warp {number} + noise',

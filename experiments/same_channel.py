@@ -287,8 +287,8 @@ def main(argv):
           f'with independent Gaussian noise (sigma {validation.NOISE_SIGMA:g} grey levels) '
           'on each view (`validation.noisy`): a rendered pair shows the same texture, '
           'noise and quantisation included, in both views, which census codes of flat '
-          'regions match in a '
-          'same-channel pairing only (experiments/results/channel_information.md).', '',
+          'regions match in a same-channel pairing only '
+          '(experiments/results/channel_information.md).', '',
           *_table(rows), '']
   with open(FLAGS.same_channel_output, 'w') as handle:
     handle.write('\n'.join(text))
