@@ -38,7 +38,7 @@ import numpy as np
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.classical import matcher
-from mixstereo_tf.evaluation import realworld
+from mixstereo_tf.core import mixtures
 
 from experiments import matching_validation  # WARP: the validation pairs' size.
 from experiments import same_channel  # Defines --shared_dir (its scenes).
@@ -48,7 +48,7 @@ flags.DEFINE_string('channel_output', 'experiments/results/channel_information.m
                     'Markdown report.')
 FLAGS = flags.FLAGS
 
-LUMA = np.array([0.299, 0.587, 0.114], np.float32)
+LUMA = np.asarray(mixtures.LUMA, np.float32)  # BT.601, as the gray anaglyph's.
 MARGIN = 3
 REFERENCE = 'luma vs luma'
 Eyes = Tuple[np.ndarray, np.ndarray]
@@ -87,27 +87,25 @@ PAIRINGS: Dict[str, Callable[[np.ndarray, np.ndarray], Eyes]] = {
 }
 
 
-def bad1(pair: dict, valid: np.ndarray, pairing: str) -> float:
-  """bad-1 of the census matcher's left disparity over `valid` with the eyes of
-  `pairing`, searched over the true range +- MARGIN px."""
+def bad1s(pair: dict, valid: np.ndarray) -> Dict[str, float]:
+  """{pairing: bad-1 of the census matcher's left disparity over `valid`}, every pairing
+  searched over the true range +- MARGIN px."""
   truth = pair['disparity_left']
   low = int(np.floor(truth[valid].min())) - MARGIN
   high = int(np.ceil(truth[valid].max())) + MARGIN
   left, right = (pair[k].astype(np.float32) for k in ('left', 'right'))
-  out = matcher.match(*PAIRINGS[pairing](left, right), low, high)
-  return float(np.mean(np.abs(out['disparity_left'] - truth)[valid] > 1.0))
+  scores = {}
+  for pairing, eyes in PAIRINGS.items():
+    out = matcher.match(*eyes(left, right), low, high)
+    scores[pairing] = float(np.mean(np.abs(out['disparity_left'] - truth)[valid] > 1.0))
+  return scores
 
 
 def sources(shared_dir: str, photo_dir: str):
   """(group, scene name, pair, valid) of every pair scored (module docstring); no photo
   warps without `photo_dir` (--photo_dir, which `validation.required_atlas` reads)."""
-  for number, (name, data) in enumerate(same_channel.scenes(shared_dir)):
-    pair = realworld.window_align(data, same_channel.FRACTION)
-    group = same_channel.group(name)
+  for group, name, pair in same_channel.pairs(shared_dir):
     yield group, name, pair, pair['valid_left']
-    if group != name:  # Only the rendered scenes are grouped (`same_channel.group`).
-      yield (f'{group} + noise {validation.NOISE_SIGMA:g}', name,
-             validation.noisy(pair, number), pair['valid_left'])
   if not photo_dir:
     return
   pairs = validation.photo_pairs(matching_validation.WARP, 12, validation.required_atlas())
@@ -134,7 +132,7 @@ def main(argv):
   start = time.perf_counter()
   rows = []
   for group, name, pair, valid in sources(FLAGS.shared_dir, FLAGS.photo_dir):
-    rows.append(dict(group=group, scene=name, **{p: bad1(pair, valid, p) for p in PAIRINGS}))
+    rows.append(dict(group=group, scene=name, **bad1s(pair, valid)))
     print(name, ' '.join(f'{p}: {100 * rows[-1][p]:.1f}%' for p in PAIRINGS),
           file=sys.stderr, flush=True)
   header = (f'# Channel information: the census matcher on channel pairings\n\nWritten by '

@@ -159,10 +159,11 @@ def true_disparity_views(pair, image, name, learned):
           'disparity_left': d_left, 'info': learned['info']}
 
 
-def _pairs(shared_dir):
-  """(group, scene, window-aligned pair) of every run; the rendered scenes (grouped) twice,
-  the second time with `validation.noisy` views."""
-  for number, (scene, data) in enumerate(scenes(shared_dir, views_only=True)):
+def pairs(shared_dir, views_only=False):
+  """(group, scene, window-aligned pair) of every run (`scenes`; those without ground truth
+  with `views_only`, their valid_left all False); the rendered scenes (grouped) twice, the
+  second time with `validation.noisy` views."""
+  for number, (scene, data) in enumerate(scenes(shared_dir, views_only)):
     pair = realworld.window_align(data, FRACTION)
     if data.get('views_only'):
       pair['valid_left'] = np.zeros_like(pair['valid_left'])
@@ -174,7 +175,7 @@ def _pairs(shared_dir):
 
 def _evaluate(shared_dir):
   rows = []
-  for scenes_group, scene, pair in _pairs(shared_dir):
+  for scenes_group, scene, pair in pairs(shared_dir, views_only=True):
     dense = np.mean(pair['valid_left']) >= DENSE
     learned = {}  # Encoding -> the learned stage's outputs, for the TRUTH rows.
     for name, method in RUNS + tuple((n, TRUTH) for n in ENCODINGS if dense):
