@@ -37,9 +37,9 @@ from absl import flags
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.data import image_io
+from mixstereo_tf.data import real_pairs
 from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import realworld
-from mixstereo_tf.evaluation import velodyne
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.core import image_range
 from mixstereo_tf.restoration import views
@@ -95,24 +95,6 @@ def unmixer(name, method):
   return predictors.build_unmixer(config)
 
 
-def kitti_velodyne_scene(folder):
-  """The KITTI object frame of `folder` with sparse ground truth: its Velodyne points
-  projected into the left colour camera (P2 R0_rect Tr_velo_to_cam), disparity = (P2 - P3)
-  translation x / depth, pixels (left x matches right x - d)."""
-  calib = velodyne.read_calib_file(os.path.join(folder, 'calib.txt'))
-  left = image_io.read_image(os.path.join(folder, 'left.png'))
-  pad = lambda m: np.vstack([np.hstack([m, np.zeros((3, 4 - m.shape[1]))]), [0, 0, 0, 1]])
-  p2, p3 = (np.reshape(calib[k], (3, 4)) for k in ('P2', 'P3'))
-  projection = p2 @ pad(np.reshape(calib['R0_rect'], (3, 3))) @ pad(
-      np.reshape(calib['Tr_velo_to_cam'], (3, 4)))
-  depth = velodyne.project_velodyne_to_depth(
-      velodyne.read_velodyne(os.path.join(folder, 'lidar.bin')), projection, *left.shape[:2])
-  valid = depth > 0
-  disparity = np.where(valid, (p2[0, 3] - p3[0, 3]) / np.where(valid, depth, 1.0), 0.0)
-  return {'left': left, 'right': image_io.read_image(os.path.join(folder, 'right.png')),
-          'disparity_left': disparity.astype(np.float32), 'valid_left': valid}
-
-
 def views_only_scene(left, right):
   """A pair without ground truth, scored on its views alone: `realworld.
   estimated_disparities`, there only to place the window; 'views_only' tells `_evaluate` to
@@ -126,7 +108,7 @@ def scenes(shared_dir, views_only=False):
   yield from realworld.scenes(shared_dir)
   folder = os.path.join(shared_dir or '', KITTI_FRAME)
   if shared_dir and os.path.isdir(folder):
-    yield KITTI_FRAME, kitti_velodyne_scene(folder)
+    yield KITTI_FRAME, real_pairs.kitti_object_frame(folder)
   if not views_only:
     return
   folder, left, right = KITTI_2015_FRAME
@@ -193,7 +175,8 @@ def _evaluate(shared_dir):
   return rows
 
 
-def _mean(rows, key):
+def mean(rows, key):
+  """The mean of column `key` over `rows`, NaN (no ground truth) left out; NaN if none."""
   values = [r[key] for r in rows if np.isfinite(r[key])]
   return float(np.mean(values)) if values else float('nan')
 
@@ -207,14 +190,14 @@ def method_table(rows, methods, title='method', seconds=False):
   for name in dict.fromkeys(group(r['scene']) for r in rows):
     for method in methods:
       these = [r for r in rows if group(r['scene']) == name and r['method'] == method]
-      mean = lambda key: float(np.mean([r[key] for r in these]))  # pylint: disable=cell-var-from-loop
-      lines.append(f"| {name} | {method} | {100 * mean('bad1'):.1f}% | "
-                   f"{mean('psnr_left'):.2f} / {mean('psnr_right'):.2f} |"
-                   + (f" {mean('seconds'):.1f} |" if seconds else ''))
+      average = lambda key: float(np.mean([r[key] for r in these]))  # pylint: disable=cell-var-from-loop
+      lines.append(f"| {name} | {method} | {100 * average('bad1'):.1f}% | "
+                   f"{average('psnr_left'):.2f} / {average('psnr_right'):.2f} |"
+                   + (f" {average('seconds'):.1f} |" if seconds else ''))
   return lines
 
 
-def _cell(value, percent=False):
+def cell(value, percent=False):
   """'12.3%' of a share (percent) or '1.23', '-' of NaN (a scene without ground truth)."""
   if not np.isfinite(value):
     return '-'
@@ -230,14 +213,14 @@ def _table(rows):
                and r['method'] == method]
       if not these:
         continue
-      gray = _mean([r for r in rows if r['group'] == group and r['encoding'] == REFERENCE
+      gray = mean([r for r in rows if r['group'] == group and r['encoding'] == REFERENCE
                     and r['method'] == method], 'bad1')
-      bad1 = _mean(these, 'bad1')
+      bad1 = mean(these, 'bad1')
       ratio = ('-' if method == TRUTH or not np.isfinite(bad1) else 'reference'
                if name == REFERENCE else f'{bad1 / gray:.2f}x')
-      lines.append(f"| {group} | {name} | {method} | {_cell(bad1, True)} | "
-                   f"{_cell(_mean(these, 'bad3'), True)} | {_cell(_mean(these, 'epe'))} | "
-                   f"{_mean(these, 'psnr_left'):.2f} / {_mean(these, 'psnr_right'):.2f} | "
+      lines.append(f"| {group} | {name} | {method} | {cell(bad1, True)} | "
+                   f"{cell(mean(these, 'bad3'), True)} | {cell(mean(these, 'epe'))} | "
+                   f"{mean(these, 'psnr_left'):.2f} / {mean(these, 'psnr_right'):.2f} | "
                    f'{ratio} |')
   return lines
 

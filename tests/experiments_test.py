@@ -300,3 +300,27 @@ def test_channel_information_pairings_and_noise():
   assert 1.5 < difference.std() < 2.5
   np.testing.assert_array_equal(noisy['right'],
                                 channel_information.validation.noisy(pair, 3)['right'])
+
+
+def test_real_pairs_loso_scores_each_source_by_the_runs_that_never_saw_it(tmp_path):
+  from experiments import real_pairs_loso as loso  # pylint: disable=import-outside-toplevel
+  assert [loso.source_of(s) for s in ('motorcycle_div1', 'sceneflow_A-0032-0006',
+                                      'kitti_object_velodyne', 'kitti2015_aanet_000151',
+                                      'synthetic_heldout_00003')] == [
+                                          'motorcycle', 'sceneflow', 'kitti', 'kitti',
+                                          'procedural']
+  assert loso.parse_runs([f'kitti={tmp_path}']) == {'kitti': str(tmp_path)}
+  for bad in (f'middlebury={tmp_path}', f'kitti={tmp_path}/missing', 'kitti'):
+    with pytest.raises(ValueError, match='--loso_runs'):
+      loso.parse_runs([bad])
+  row = lambda method, name, bad1, left: dict(
+      scene='motorcycle_div1', encoding=name, method=method, bad1=bad1,
+      psnr_left=left, psnr_right=30.0)
+  rows = [row('classical', 'anaglyph', 0.2, 28.0), row('classical', 'gray', 0.1, 20.0),
+          row('without motorcycle', 'anaglyph', 0.15, 28.5),
+          row('without motorcycle', 'gray', 0.1, 20.0)]
+  table = loso.table(rows)
+  assert ('| motorcycle_div1 | classical | 20.0% | 10.0% | 2.00x | 28.00 / 30.00 | '
+          '+0.00 / +0.00 |') in table
+  assert ('| motorcycle_div1 | without motorcycle | 15.0% | 10.0% | 1.50x | 28.50 / 30.00 | '
+          '+0.50 / +0.00 |') in table

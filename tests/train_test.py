@@ -174,3 +174,13 @@ def test_bad_refiner_flags_are_usage_errors_naming_the_flag(tmp_path):
     process = _train_cli(tmp_path / 'run', '--architecture=refiner', '--num_steps=1', flag)
     output = process.communicate(timeout=120)[0]
     assert process.returncode != 0 and message in output, output[-2000:]
+
+
+def test_bad_real_pair_flags_are_usage_errors_naming_the_flag(tmp_path):
+  for flags, message in ((['--real_pair_probability=0.5'],
+                          '--real_pair_probability > 0 needs --real_pairs'),
+                         (['--real_pairs=motorcycle', '--real_pair_probability=2'],
+                          '--real_pair_probability must lie in [0, 1]')):
+    process = _train_cli(tmp_path / 'run', '--architecture=features', '--num_steps=1', *flags)
+    output = process.communicate(timeout=120)[0]
+    assert process.returncode != 0 and message in output, output[-2000:]

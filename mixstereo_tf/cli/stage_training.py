@@ -47,10 +47,20 @@ flags.DEFINE_integer('feature_layers', matching_features.FeatureConfig.layers,
 flags.DEFINE_list('feature_dilations', list(matching_features.FeatureConfig.dilations),
                   '--architecture=features: the dilation of each of the --feature_layers '
                   'convolutions (comma-separated); empty: all 1.')
+flags.DEFINE_list('real_pairs', list(feature_loop.FeatureTrainConfig.real_pairs),
+                  '--architecture=features: real stereo pairs with ground truth trained on '
+                  'beside the warps (data/real_pairs.py: motorcycle, or folders of the '
+                  'SceneFlow or KITTI object layout); never an evaluation scene.')
+flags.DEFINE_float('real_pair_probability', feature_loop.FeatureTrainConfig.real_probability,
+                   '--architecture=features: the share of examples cut from --real_pairs.')
+flags.DEFINE_string('init_from', feature_loop.FeatureTrainConfig.init_from,
+                    '--architecture=features: a shipped features model (--pretrained name) '
+                    'whose weights start the run (fine-tuning).')
 
 
 # Config fields behind differently named flags (of this module and of train.py).
 RENAMED = {'DataConfig.split_list': 'train_list', 'ExampleConfig.base': 'refiner_base',
+           'FeatureTrainConfig.real_probability': 'real_pair_probability',
            'RefinerConfig.disparity_features': 'refiner_disparity_features'}
 
 
@@ -105,12 +115,14 @@ def train_features() -> None:
         model_dir=FLAGS.model_dir, texture_dir=FLAGS.texture_dir, mixtures=names, batch_size=FLAGS.batch_size,
         learning_rate=FLAGS.learning_rate, num_steps=FLAGS.num_steps, min_disparity=low,
         num_disparities=count, degrade_probability=0.7 if FLAGS.degrade else 0.0,
-        checkpoint_every=FLAGS.checkpoint_every, log_every=FLAGS.log_every, seed=FLAGS.seed)
+        real_pairs=tuple(FLAGS.real_pairs), real_probability=FLAGS.real_pair_probability,
+        init_from=FLAGS.init_from, checkpoint_every=FLAGS.checkpoint_every,
+        log_every=FLAGS.log_every, seed=FLAGS.seed)
     features = matching_features.FeatureConfig(
         FLAGS.feature_width, FLAGS.feature_layers,
         int_tuple(FLAGS.feature_dilations, 'feature_dilations'))
   except ValueError as e:
-    raise cli_flags.usage_error(e) from None
+    raise cli_flags.usage_error(e, RENAMED) from None
   logging.info('Training the matching features for %d steps.', config.num_steps)
   feature_loop.train(config, warp, features, FLAGS.flags_into_string())
 

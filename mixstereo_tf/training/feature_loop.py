@@ -22,16 +22,18 @@ at the end; re-running the same command continues from the newest.
 """
 
 import dataclasses
-from typing import Callable, Dict, Tuple
+from typing import Callable, Dict, Sequence, Tuple
 
 import numpy as np
 import tensorflow as tf
 
+from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import degrade
 from mixstereo_tf.data import photo_warps
+from mixstereo_tf.data import real_pairs
 from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.models import matching_features
 from mixstereo_tf.training import resumable
@@ -60,6 +62,11 @@ class FeatureTrainConfig:
     logit_scale: cosine -> logit factor.
     degrade_probability: share of mixtures degraded like real files.
     weight_range: diplopia: the left eye's weight a, drawn uniformly from this range.
+    real_pairs: real stereo pairs with ground truth (`data/real_pairs.load` sources) whose
+      crops replace a warp with p = `real_probability` (0: the warps alone, drawn exactly
+      as before the option existed).
+    init_from: a shipped features model (`artifacts/pretrained` name) whose weights start
+      a new run (fine-tuning); '' starts from random weights.
     checkpoint_every, log_every: steps between checkpoints / log lines.
     seed: seed of the initialisation and of every draw.
   """
@@ -74,6 +81,9 @@ class FeatureTrainConfig:
   logit_scale: float = 10.0
   degrade_probability: float = 0.7
   weight_range: tuple = (0.3, 0.7)
+  real_pairs: tuple = ()
+  real_probability: float = 0.0
+  init_from: str = ''
   checkpoint_every: int = 250
   log_every: int = 50
   seed: int = 0
@@ -95,6 +105,12 @@ class FeatureTrainConfig:
       if getattr(self, field) <= 0:
         raise ValueError(f'FeatureTrainConfig.{field} must be positive, got '
                          f'{getattr(self, field)}.')
+    if not 0.0 <= self.real_probability <= 1.0:
+      raise ValueError(f'FeatureTrainConfig.real_probability must lie in [0, 1], got '
+                       f'{self.real_probability}.')
+    if self.real_probability > 0 and not self.real_pairs:
+      raise ValueError('FeatureTrainConfig.real_probability > 0 needs '
+                       'FeatureTrainConfig.real_pairs.')
     if not self.learning_rate > 0 or not self.logit_scale > 0:
       raise ValueError('FeatureTrainConfig.learning_rate and logit_scale must be positive.')
 
@@ -189,8 +205,16 @@ def kind_name(config: FeatureTrainConfig) -> str:
   return 'echo_features' if is_double(config.mixtures) else 'features'
 
 
-def _example(rng, config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas):
-  pair = photo_warps.warped_pair(int(rng.integers(2 ** 31)), warp, atlas)
+def _pair(rng, config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas, real):
+  """A warp of a photograph, or with p = real_probability a crop of a real pair."""
+  if config.real_probability > 0 and rng.uniform() < config.real_probability:
+    return real_pairs.crop(rng, real[rng.integers(len(real))], warp.height, warp.width,
+                           warp.max_disparity, warp.window_probability)
+  return photo_warps.warped_pair(int(rng.integers(2 ** 31)), warp, atlas)
+
+
+def _example(rng, config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas, real):
+  pair = _pair(rng, config, warp, atlas, real)
   mixture, name = _mix(rng, config, pair)
   example = KINDS[kind_name(config)].inputs(mixture, name)
   example.update(disparity=pair['disparity_left'], valid=pair['nonocc_left'])
@@ -199,12 +223,13 @@ def _example(rng, config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atla
 
 
 def draw_batch(config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas,
-               step: int) -> Dict[str, np.ndarray]:
+               step: int, real: Sequence[Dict[str, np.ndarray]] = ()
+               ) -> Dict[str, np.ndarray]:
   """Step `step`'s batch: the kind's inputs (anaglyphs: single [B, H, W, 1], pair
   [B, H, W, 2], single_is_left [B]; diplopia: mixture [B, H, W, 3]), disparity [B, H, W]
-  (signed pixels), valid [B, H, W]."""
+  (signed pixels), valid [B, H, W]; `real`: the loaded `config.real_pairs`."""
   rng = np.random.default_rng([config.seed, step])
-  rows = [_example(rng, config, warp, atlas) for _ in range(config.batch_size)]
+  rows = [_example(rng, config, warp, atlas, real) for _ in range(config.batch_size)]
   return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
 
 
@@ -250,6 +275,23 @@ def matching_loss(left: tf.Tensor, right: tf.Tensor, disparity: tf.Tensor, valid
   return {'loss': tf.reduce_sum(cross * weight) / count,
           'accuracy': tf.reduce_sum(hit * weight) / count}
 
+def start_from(model: tf.keras.Model, name: str, kind: str) -> None:
+  """Sets `model`'s weights to those of shipped model `name`.
+
+  Raises:
+    ValueError: `name` is not a shipped model of `kind`, or its weights do not fit.
+  """
+  entry = pretrained.get(name)
+  if entry.kind != kind:
+    raise ValueError(f'--init_from={name} is a {entry.kind!r} model; this run trains '
+                     f'{kind!r}.')
+  values = pretrained.load_model(entry).get_weights()
+  if [v.shape for v in values] != [tuple(w.shape) for w in model.weights]:
+    raise ValueError(f'--init_from={name}: its architecture ({entry.config}) differs from '
+                     'this run\'s feature flags.')
+  model.set_weights(values)
+
+
 def train(config: FeatureTrainConfig, warp: photo_warps.WarpConfig,
           feature_config: matching_features.FeatureConfig, flags_text: str = None) -> str:
   """Trains (resuming from `config.model_dir`) and returns the newest checkpoint prefix."""
@@ -261,6 +303,9 @@ def train(config: FeatureTrainConfig, warp: photo_warps.WarpConfig,
   model = kind.build(feature_config)
   optimizer = tf.keras.optimizers.Adam(config.learning_rate)
   step, manager = resumable.checkpointed(model, optimizer, config.model_dir)
+  if config.init_from and int(step) == 0:
+    start_from(model, config.init_from, kind_name(config))
+  real = [real_pairs.load(source) for source in config.real_pairs]
 
   @tf.function(reduce_retracing=True)
   def train_step(batch):
@@ -273,7 +318,7 @@ def train(config: FeatureTrainConfig, warp: photo_warps.WarpConfig,
     return losses
 
   def one_step():
-    losses = train_step(draw_batch(config, warp, atlas, int(step)))
+    losses = train_step(draw_batch(config, warp, atlas, int(step), real))
     step.assign_add(1)
     return [float(losses['loss']), float(losses['accuracy'])]
 

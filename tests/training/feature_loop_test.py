@@ -8,6 +8,7 @@ import tensorflow as tf
 
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.data import photo_warps
+from mixstereo_tf.data import real_pairs
 from mixstereo_tf.models import matching_features
 from mixstereo_tf.training import feature_loop
 
@@ -99,3 +100,40 @@ def test_echo_features_train_and_export_as_their_own_kind(tmp_path):
   assert entry.kind == 'echo_features' and entry.mixtures == ('diplopia',)
   here, there = pretrained.load_model(entry)(tf.zeros([1, 8, 8, 3]))
   assert here.shape == there.shape == (1, 8, 8, 4)
+
+
+def test_real_pairs_replace_warps_at_their_rate_and_leave_warp_batches_as_they_were(tmp_path):
+  warp = photo_warps.WarpConfig(height=32, width=64, max_disparity=16)
+  plain = feature_loop.FeatureTrainConfig(model_dir=str(tmp_path), batch_size=2)
+  atlas = feature_loop.textures(plain)
+  motorcycle = real_pairs.load('motorcycle')
+  # Off (the default), the draws are those of a run without the option.
+  off = feature_loop.FeatureTrainConfig(model_dir=str(tmp_path), batch_size=2,
+                                        real_pairs=('motorcycle',), real_probability=0.0)
+  before, after = (feature_loop.draw_batch(c, warp, atlas, 4, [motorcycle]) for c in (plain, off))
+  for key in before:
+    np.testing.assert_array_equal(before[key], after[key])
+  only = feature_loop.FeatureTrainConfig(model_dir=str(tmp_path), batch_size=2,
+                                         real_pairs=('motorcycle',), real_probability=1.0)
+  batch = feature_loop.draw_batch(only, warp, atlas, 4, [motorcycle])
+  # Motorcycle scaled by at most 0.8 * 16 / 58: its disparities stay under 13 px.
+  assert batch['valid'].any() and batch['disparity'][batch['valid']].max() < 13.0
+  with pytest.raises(ValueError, match='real_pairs'):
+    feature_loop.FeatureTrainConfig(model_dir='x', real_probability=0.5)
+  with pytest.raises(ValueError, match='real_probability'):
+    feature_loop.FeatureTrainConfig(model_dir='x', real_pairs=('motorcycle',),
+                                    real_probability=1.5)
+
+
+def test_a_run_can_start_from_the_shipped_features(tmp_path):
+  entry = pretrained.get('anaglyph_matching')
+  model = matching_features.build_features(matching_features.FeatureConfig(**entry.config))
+  feature_loop.start_from(model, 'anaglyph_matching', 'features')
+  shipped = pretrained.load_model(entry).get_weights()
+  for mine, theirs in zip(model.get_weights(), shipped):
+    np.testing.assert_array_equal(mine, theirs)
+  with pytest.raises(ValueError, match='--init_from=anaglyph_matching.*architecture'):
+    feature_loop.start_from(matching_features.build_features(
+        matching_features.FeatureConfig(width=4, layers=2)), 'anaglyph_matching', 'features')
+  with pytest.raises(ValueError, match="'features' model; this run trains 'echo_features'"):
+    feature_loop.start_from(model, 'anaglyph_matching', 'echo_features')

@@ -16,7 +16,7 @@ from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import paper_numbers
 from mixstereo_tf.evaluation import protocol
 from mixstereo_tf.evaluation import results
-from mixstereo_tf.evaluation import velodyne
+from mixstereo_tf.data import velodyne
 
 
 def metric_key(name: str, cap: float) -> str:

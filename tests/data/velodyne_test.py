@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.evaluation import metrics
-from mixstereo_tf.evaluation import velodyne
+from mixstereo_tf.data import velodyne
 
 # Velodyne (x forward, y left, z up) -> camera (x right, y down, z forward).
 _VELO_TO_CAM_R = '0 -1 0 0 0 -1 1 0 0'
