@@ -10,12 +10,7 @@ degraded like a real file with p = `degrade_probability` (`data/degrade.py`), qu
 8 bits; the mixture's eye channels (`mixtures.MixtureSpec.eye_channels`) go to the 'single'
 and 'pair' branches, whichever eye each carries; flipped upside down with p = 1/2 (keeps
 the epipolar geometry).
-Loss (not in the paper; these pairs have exact disparities): the correlation volume of the
-left and right descriptors over [min_disparity, min_disparity + num_disparities) is read
-as logits (cosine * logit_scale) of a distribution over disparities, and the cross-entropy
-against the true disparity's two nearest integers (weights 1 - frac, frac) is averaged over
-the left pixels whose match is visible. It asks the true match to beat every other
-candidate, which is what winner-take-all and SGM need.
+Loss: `feature_loss.matching_loss`.
 Every draw of step s comes from (seed, s), so a resumed run sees the batches an
 uninterrupted one would. Checkpoints every `checkpoint_every` steps, on SIGINT/SIGTERM and
 at the end; re-running the same command continues from the newest.
@@ -36,6 +31,7 @@ from mixstereo_tf.data import photo_warps
 from mixstereo_tf.data import real_pairs
 from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.models import matching_features
+from mixstereo_tf.training import feature_loss
 from mixstereo_tf.training import resumable
 
 DIPLOPIA = 'diplopia'  # The double-image encoding (`mixtures`), trained alone.
@@ -233,48 +229,6 @@ def draw_batch(config: FeatureTrainConfig, warp: photo_warps.WarpConfig, atlas,
   return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
 
 
-def matching_loss(left: tf.Tensor, right: tf.Tensor, disparity: tf.Tensor, valid: tf.Tensor,
-                  min_disparity: int, num_disparities: int,
-                  logit_scale: float) -> Dict[str, tf.Tensor]:
-  """The module docstring's cross-entropy.
-
-  The candidates of a left pixel x are the right pixels x' of its row with x - x' in
-  [min_disparity, min_disparity + num_disparities): the row's full correlation matrix (a
-  batched matmul, [B * H, W, W]) masked to that band.
-
-  Args:
-    left, right: [B, H, W, C] unit descriptors of the left and right eyes.
-    disparity: [B, H, W] true left disparities, signed pixels (x matches x - d).
-    valid: [B, H, W] bool, pixels to count (their match visible in the right view).
-    min_disparity, num_disparities: the candidates.
-    logit_scale: cosine -> logit factor.
-
-  Returns:
-    'loss' (nats per counted pixel) and 'accuracy' (share of counted pixels whose best
-    candidate is within 1 px of the truth).
-  """
-  shape = tf.shape(left)
-  width = shape[2]
-  rows = lambda t: tf.reshape(t, [-1, width, shape[3]])
-  logits = tf.matmul(rows(left), rows(right), transpose_b=True) * logit_scale  # [BH, x, x']
-  x = tf.range(width, dtype=tf.float32)
-  offset = x[:, None] - x[None, :] - float(min_disparity)  # x - x' - d_0, [x, x']
-  band = (offset >= 0) & (offset <= num_disparities - 1)
-  logits = tf.where(band[None], logits, -1e4)
-  match = tf.reshape(x[None, None, :] - disparity, [-1, width])  # x - d, [BH, x]
-  valid = tf.reshape(valid, [-1, width]) & (match >= 0) & (match <= tf.cast(width - 1, tf.float32))
-  offset_true = tf.reshape(disparity, [-1, width]) - float(min_disparity)
-  valid &= (offset_true >= 0) & (offset_true <= num_disparities - 1)
-  # Two-hot: 1 - frac at floor(x - d), frac at the next column.
-  target = tf.nn.relu(1.0 - tf.abs(x[None, None, :] - match[..., None]))
-  cross = -tf.reduce_sum(target * tf.nn.log_softmax(logits, axis=-1), axis=-1)
-  weight = tf.cast(valid, tf.float32)
-  count = tf.maximum(tf.reduce_sum(weight), 1.0)
-  best = tf.cast(tf.argmax(logits, axis=-1), tf.float32)
-  hit = tf.cast(tf.abs(best - match) <= 1.0, tf.float32)
-  return {'loss': tf.reduce_sum(cross * weight) / count,
-          'accuracy': tf.reduce_sum(hit * weight) / count}
-
 def start_from(model: tf.keras.Model, name: str, kind: str) -> None:
   """Sets `model`'s weights to those of shipped model `name`.
 
@@ -311,7 +265,7 @@ def train(config: FeatureTrainConfig, warp: photo_warps.WarpConfig,
   def train_step(batch):
     with tf.GradientTape() as tape:
       left, right = kind.descriptors(model, batch)
-      losses = matching_loss(left, right, batch['disparity'], batch['valid'],
+      losses = feature_loss.matching_loss(left, right, batch['disparity'], batch['valid'],
                              config.min_disparity, config.num_disparities, config.logit_scale)
     grads = tape.gradient(losses['loss'], model.trainable_variables)
     optimizer.apply_gradients(zip(grads, model.trainable_variables))
