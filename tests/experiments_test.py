@@ -319,8 +319,19 @@ def test_real_pairs_loso_scores_each_source_by_the_runs_that_never_saw_it(tmp_pa
   rows = [row('classical', 'anaglyph', 0.2, 28.0), row('classical', 'gray', 0.1, 20.0),
           row('without motorcycle', 'anaglyph', 0.15, 28.5),
           row('without motorcycle', 'gray', 0.1, 20.0)]
-  table = loso.table(rows)
+  table = loso.table(rows)  # The anaglyph family's.
   assert ('| motorcycle_div1 | classical | 20.0% | 10.0% | 2.00x | 28.00 / 30.00 | '
           '+0.00 / +0.00 |') in table
   assert ('| motorcycle_div1 | without motorcycle | 15.0% | 10.0% | 1.50x | 28.50 / 30.00 | '
           '+0.50 / +0.00 |') in table
+
+
+def test_real_pairs_loso_gives_double_images_their_ratio_to_classical():
+  from experiments import real_pairs_loso as loso  # pylint: disable=import-outside-toplevel
+  rows = [dict(scene='sceneflow_A-0032-0006', encoding='diplopia', method=method, bad1=bad1,
+               psnr_left=left, psnr_right=20.0)
+          for method, bad1, left in (('classical', 0.6, 21.0), ('without sceneflow', 0.45, 21.5))]
+  table = loso.table(rows, loso.FAMILIES['diplopia'])
+  assert table[0].startswith('| scenes | method | bad-1 double image | bad-1 classical |')
+  assert ('| sceneflow_A-0032-0006 | without sceneflow | 45.0% | 60.0% | 0.75x | '
+          '21.50 / 20.00 | +0.50 / +0.00 |') in table

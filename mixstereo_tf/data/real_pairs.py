@@ -120,6 +120,8 @@ def load(source: str) -> Dict[str, np.ndarray]:
     pair['nonocc_left'] = pair['valid_left'] & ~occluded_left(pair['disparity_left'],
                                                               pair['valid_left'])
   del pair['valid_left']
+  if not pair['nonocc_left'].any():
+    raise ValueError(f'--real_pairs: {source} has no visible pixel with ground truth.')
   pair['disparity_left'] = np.where(pair['nonocc_left'], pair['disparity_left'], 0.0)
   return pair
 
@@ -154,9 +156,13 @@ def crop(rng: np.random.Generator, pair: Dict[str, np.ndarray], height: int, wid
     shift = int(round(scale * (low + rng.uniform(0.0, 0.7) * (top - low))))
   shift = min(max(shift, 0), size[0] - width)
   ys, xs = np.nonzero(valid)
-  pick = int(rng.integers(len(ys)))
-  y0 = int(np.clip(ys[pick] - height // 2, 0, size[1] - height))
-  x0 = int(np.clip(xs[pick] - width // 2, shift, size[0] - width))
+  if len(ys):
+    pick = int(rng.integers(len(ys)))
+    y, x = ys[pick], xs[pick]
+  else:  # Sparse truth lost in the scaling: the centre.
+    y, x = size[1] // 2, size[0] // 2
+  y0 = int(np.clip(y - height // 2, 0, size[1] - height))
+  x0 = int(np.clip(x - width // 2, shift, size[0] - width))
   window = (slice(y0, y0 + height), slice(x0, x0 + width))
   return {'left': left[window], 'right': right[y0:y0 + height, x0 - shift:x0 - shift + width],
           'disparity_left': (disparity[window] - shift).astype(np.float32),

@@ -90,3 +90,13 @@ def test_crops_keep_their_views_matched_at_scaled_signed_disparities(window):
     wrong = np.abs(left[ys[inside], xs[inside]]
                    - right[ys[inside], np.clip(match[inside] + 3, 0, 63)]).mean()
     assert error < 0.4 * wrong
+
+
+def test_a_folder_without_visible_ground_truth_is_refused_by_name(tmp_path):
+  pair = _pair()
+  for key in ('left', 'right'):
+    cv2.imwrite(str(tmp_path / f'{key}.png'), pair[key][..., ::-1])
+  _write_pfm(str(tmp_path / 'disp_left.pfm'), np.full(pair['disparity_left'].shape, np.inf,
+                                                      np.float32))
+  with pytest.raises(ValueError, match=f'{tmp_path} has no visible pixel'):
+    real_pairs.load(str(tmp_path))
