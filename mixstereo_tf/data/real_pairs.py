@@ -31,6 +31,7 @@ import numpy as np
 
 from mixstereo_tf.data import image_io
 from mixstereo_tf.data import middlebury
+from mixstereo_tf.data import sample
 from mixstereo_tf.data import velodyne
 
 MOTORCYCLE = 'motorcycle'
@@ -110,10 +111,9 @@ def load(source: str) -> Dict[str, np.ndarray]:
   """
   refuse_evaluation_source(source)
   if source.lower() == MOTORCYCLE:
-    from skimage import data  # pylint: disable=import-outside-toplevel
-    left, right, disparity = data.stereo_motorcycle()
-    pair = {'left': left, 'right': right, 'disparity_left': disparity.astype(np.float32),
-            'valid_left': np.isfinite(disparity)}
+    left, right, disparity = sample.motorcycle()  # Unknown = 0.
+    pair = {'left': left, 'right': right, 'disparity_left': disparity,
+            'valid_left': disparity > 0}
   else:
     pair = _folder_pair(source)
   if 'nonocc_left' not in pair:

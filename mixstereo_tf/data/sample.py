@@ -53,7 +53,7 @@ def motorcycle_factor(max_disparity: int) -> int:
   """Smallest integer k with (largest Motorcycle disparity) / k <= max_disparity - 1."""
   if max_disparity < 2:
     raise ValueError(f'max_disparity must be >= 2, got {max_disparity}.')
-  largest = float(_motorcycle()[2].max())
+  largest = float(motorcycle()[2].max())
   return max(1, int(np.ceil(largest / (max_disparity - 1.0))))
 
 
@@ -152,7 +152,7 @@ def load_virtual(sample: records.StereoSample) -> Dict[str, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=1)
-def _motorcycle():
+def motorcycle():
   """(left, right, disparity with unknown = 0) at scikit-image's size, cached."""
   import skimage.data  # pylint: disable=g-import-not-at-top
   left, right, disparity = skimage.data.stereo_motorcycle()
@@ -171,7 +171,7 @@ def _load_motorcycle(factor: int) -> Dict[str, np.ndarray]:
   """The Motorcycle pair shrunk by `factor` (see the module docstring)."""
   if factor < 1:
     raise ValueError(f'Motorcycle factor must be >= 1, got {factor}.')
-  left, right, disparity = _motorcycle()
+  left, right, disparity = motorcycle()
   valid = disparity > 0
   if factor > 1:
     left = np.rint(_block_mean(left, factor)).astype(np.uint8)

@@ -265,8 +265,9 @@ def train(config: FeatureTrainConfig, warp: photo_warps.WarpConfig,
   def train_step(batch):
     with tf.GradientTape() as tape:
       left, right = kind.descriptors(model, batch)
-      losses = feature_loss.matching_loss(left, right, batch['disparity'], batch['valid'],
-                             config.min_disparity, config.num_disparities, config.logit_scale)
+      losses = feature_loss.matching_loss(
+          left, right, batch['disparity'], batch['valid'], config.min_disparity,
+          config.num_disparities, config.logit_scale)
     grads = tape.gradient(losses['loss'], model.trainable_variables)
     optimizer.apply_gradients(zip(grads, model.trainable_variables))
     return losses
