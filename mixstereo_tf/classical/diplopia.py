@@ -12,7 +12,8 @@ one linear equation per pixel in the unknown left view. Steps:
      images peaks at lag 1 instead).
   2. Per-pixel shifts: I(x) and I(x - d_L(x)) share the component L(x), so SGM on a ZNCC
      volume of the mixture against itself (`self_matching_volume`, lags from
-     `min_disparity` >= 1 up, the trivial lag 0 excluded) gives d_L, and the volume's
+     `min_disparity` >= 1 up, the trivial lag 0 excluded; in a wide range the lags below
+     `min_lag` penalised) gives d_L, and the volume's
      diagonal search gives d_R; then the left-right check and filling of `sgm` (run by
      the anaglyph matcher's numba kernels, `parallel_sgm.match_volume`, one strip per
      core).
@@ -72,6 +73,20 @@ class DiplopiaConfig:
       flicker is 3.05 px, view flicker 5.90 levels, bad-1 58.5%; weights 2 / 4 / 8 with
       cap 16 gave 1.06 / 1.04 / 1.03 px, 4.27 / 4.26 / 4.24 levels, 53.7 / 53.8 / 53.7%;
       caps 32 and 64 were worse at every weight (up to 1.09 px, 4.46 levels, 54.3%).
+    min_lag, small_lag_penalty: lags below min_lag cost small_lag_penalty more, where the
+      range reaches 4 x min_lag or more (`penalise_small_lags`; a narrower range keeps
+      them as they are). At lags of 1-3 px the windows compare neighbouring pixels, which
+      a camera image's blur and noise correlate whatever the echo: without it a fifth of
+      Motorcycle's and a third of the KITTI frame's pixels locked onto lags 1-3 (true
+      disparities 7 px and more). 4 and 8 (2026-11-27). 16 validation double images
+      (`diplopia_validation.md`) chose the lags: bad-1 35.0% without; below 2 / 3 / 4 / 5
+      / 6: 33.4 / 31.6 / 30.4 / 30.1 / 31.4%, views best at 4; but hardly the penalty
+      (8 / 16 / 32 / 64 / 255: 30.4 / 30.3 / 30.3 / 30.4 / 30.4%, views 0.07-0.09 dB
+      higher from 16 up). The temporal clip did (`temporal.py`; a third of its pixels
+      below 4 px, which the penalty gets wrong): the default video path's bad-1 46.9%
+      without, 45.9% at 8, 52.3% at 16.
+      A penalty, not a raised min_disparity (built first): excluded, lags 1-3 cost that
+      clip more still.
   """
   matching: sgm.SgmConfig = sgm.SgmConfig(min_disparity=1, p1=16, p2=160)
   window_radius: int = 7
@@ -80,11 +95,17 @@ class DiplopiaConfig:
   layers: diplopia_layers.LayerConfig = diplopia_layers.LayerConfig()
   prior_weight: int = 4
   prior_cap: int = 16
+  min_lag: int = 4
+  small_lag_penalty: int = 8
 
   def __post_init__(self):
     if not 0 <= self.prior_weight <= 255 or not 0 <= self.prior_cap <= 255:
       raise ValueError(f'DiplopiaConfig.prior_weight and prior_cap must lie in [0, 255] '
                        f'(uint8 cost units), got {self.prior_weight} and {self.prior_cap}.')
+    if self.min_lag < 1 or not 0 <= self.small_lag_penalty <= 255:
+      raise ValueError(f'DiplopiaConfig.min_lag must be >= 1 and small_lag_penalty in '
+                       f'[0, 255] (uint8 cost units), got {self.min_lag} and '
+                       f'{self.small_lag_penalty}.')
     if self.matching.min_disparity < 1:
       raise ValueError('Diplopia self-matching needs matching.min_disparity >= 1 (lag 0 '
                        'matches every image to itself).')
@@ -155,6 +176,26 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
   penalty = (envelope.max() - envelope).astype(np.float32)
   volume = np.empty(costs.shape, np.uint8)
   parallel_sgm.run_blocks(zncc_kernel.quantize_rows, blocks, threads, costs, penalty, volume)
+  return volume
+
+
+def small_lags(config: DiplopiaConfig) -> int:
+  """How many of config.matching's lags lie below `min_lag` in a range reaching 4 x min_lag
+  or more (0 in a narrower one: copies that close keep their lags as they are)."""
+  matching = config.matching
+  if matching.max_disparity < 4 * config.min_lag:
+    return 0
+  return max(0, config.min_lag - matching.min_disparity)
+
+
+def penalise_small_lags(volume: np.ndarray, config: DiplopiaConfig) -> np.ndarray:
+  """Adds `small_lag_penalty` (saturating) to the `small_lags` of a uint8 [H, W, D] volume
+  over config.matching's lags, in place; returns the volume."""
+  count = small_lags(config)
+  if count and config.small_lag_penalty:
+    small = volume[..., :count]
+    np.minimum(small.astype(np.int16) + config.small_lag_penalty, 255, out=small,
+               casting='unsafe')
   return volume
 
 
@@ -270,7 +311,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     config = dataclasses.replace(config, matching=dataclasses.replace(
         config.matching, min_disparity=int(low), max_disparity=int(high)))
   image = image_range.as_unit_float(mixture, 'mixture')
-  volume = (costs or zncc_costs)(image, config)
+  volume = penalise_small_lags((costs or zncc_costs)(image, config), config)
   if prior is not None:
     add_prior(volume, config, prior, prior_window or (1, 2))
   matched = parallel_sgm.match_volume(volume, config.matching,
