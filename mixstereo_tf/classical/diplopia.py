@@ -48,20 +48,19 @@ RANGE_PENALTIES = (8, 64)
 
 @dataclasses.dataclass(frozen=True)
 class DiplopiaConfig:
-  """Parameters of the de-diplopia baseline.
+  """Parameters of the de-diplopia baseline. Each value was chosen on validation double
+  images or a validation clip; the measurements are in docs/DESIGN.md and
+  docs/LEARNED_DIPLOPIA.md (`experiments/results/diplopia_validation.md`).
 
   Attributes:
     matching: SGM parameters of the self-matching (min_disparity >= 1; the census
-      fields are unused). Penalties P1 16, P2 160 (8 and 64 before), chosen on validation
-      double images (`diplopia_validation.md`: bad-1 38.7 -> 35.0%, views +0.25 / +0.31
-      dB; 24/240 and 32/320 gave bad-1 33.8% and 33.7% but lower views, 48/480 34.2% and
-      views lower still); `estimate_range` keeps its own (`RANGE_PENALTIES`).
-    window_radius: ZNCC window radius, pixels: 7 (a 15 x 15 window; 3 before), chosen on
-      validation double images (`experiments/results/diplopia_validation.md`, with P 8 /
-      64 then: bad-1 47.8% at 3, 41.4% at 5, 38.7% at 7, 38.2% at 9, the views 0.4-0.5 dB
-      higher; with 16 / 160: 40.8%, 36.3%, 35.0%, 35.1%): the
-      echo shares only half of each window's signal, so it needs a larger window than a
-      stereo pair. The rolled sums of `zncc_kernel` cost the same at any radius.
+      fields are unused). P1 16, P2 160 (8 / 64 before 2026-11-26: validation bad-1
+      38.7 -> 35.0%; 24 / 240 lowers bad-1 but also the default's views);
+      `estimate_range` keeps its own (`RANGE_PENALTIES`).
+    window_radius: ZNCC window radius, pixels: 7, a 15 x 15 window (3 before 2026-11-26:
+      validation bad-1 40.8 -> 35.0%). The echo shares only half of each window's signal,
+      so it needs a larger window than a stereo pair; the rolled sums of `zncc_kernel`
+      cost the same at any radius.
     highpass_sigma: Gaussian sigma of the high-pass applied before ZNCC, pixels.
     cost_scale: cost units per unit of (1 - zncc).
     layers: prior weights and solver of the layer separation.
@@ -69,24 +68,16 @@ class DiplopiaConfig:
       each lag costs prior_weight cost units per pixel outside the window around the
       previous frame's disparity (`search_windows.around_prior`), at most prior_cap. 4 and
       16, chosen on a validation clip (`experiments/temporal.py`'s clip with other scenes,
-      seeds 303 and 404; scratch run of 2026-11-26): without the prior its disparity
-      flicker is 3.05 px, view flicker 5.90 levels, bad-1 58.5%; weights 2 / 4 / 8 with
-      cap 16 gave 1.06 / 1.04 / 1.03 px, 4.27 / 4.26 / 4.24 levels, 53.7 / 53.8 / 53.7%;
-      caps 32 and 64 were worse at every weight (up to 1.09 px, 4.46 levels, 54.3%).
-    min_lag, small_lag_penalty: lags below min_lag cost small_lag_penalty more, where the
+      seeds 303 and 404): disparity flicker 3.05 -> 1.04 px, bad-1 58.5 -> 53.8%.
+    min_lag, small_lag_penalty: lags below min_lag cost small_lag_penalty more where the
       range reaches 4 x min_lag or more (`penalise_small_lags`; a narrower range keeps
-      them as they are). At lags of 1-3 px the windows compare neighbouring pixels, which
-      a camera image's blur and noise correlate whatever the echo: without it a fifth of
-      Motorcycle's and a third of the KITTI frame's pixels locked onto lags 1-3 (true
-      disparities 7 px and more). 4 and 8 (2026-11-27). 16 validation double images
-      (`diplopia_validation.md`) chose the lags: bad-1 35.0% without; below 2 / 3 / 4 / 5
-      / 6: 33.4 / 31.6 / 30.4 / 30.1 / 31.4%, views best at 4; but hardly the penalty
-      (8 / 16 / 32 / 64 / 255: 30.4 / 30.3 / 30.3 / 30.4 / 30.4%, views 0.07-0.09 dB
-      higher from 16 up). The temporal clip did (`temporal.py`; a third of its pixels
-      below 4 px, which the penalty gets wrong): the default video path's bad-1 46.9%
-      without, 45.9% at 8, 52.3% at 16.
-      A penalty, not a raised min_disparity (built first): excluded, lags 1-3 cost that
-      clip more still.
+      them). At lags of 1-3 px the windows compare neighbouring pixels, which a camera
+      image's blur and noise correlate whatever the echo: without it a fifth of
+      Motorcycle's and a third of the KITTI frame's pixels locked onto lags 1-3. 4 and 8
+      (2026-11-27): the lag chosen on validation (bad-1 35.0 -> 30.4%), the penalty,
+      which validation hardly tells apart, on the temporal clip, a third of whose pixels
+      lie below 4 px (the default video path's bad-1 46.9% without, 45.9% at 8, 52.3% at
+      16). A penalty, not a raised min_disparity: excluded, lags 1-3 cost that clip more.
   """
   matching: sgm.SgmConfig = sgm.SgmConfig(min_disparity=1, p1=16, p2=160)
   window_radius: int = 7
