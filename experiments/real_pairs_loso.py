@@ -112,6 +112,7 @@ class Family:
     unmixer: (encoding, 'classical' or 'shipped') -> Unmixer.
     pairs: shared_dir -> (scene, pair) to score.
     make: (pair, encoding) -> the uint8 mixture.
+    stage, data, ratio: the report's title, what it says of its data and of its ratio.
   """
   encodings: Tuple[str, ...]
   reference: Tuple[str, Optional[str]]
@@ -119,6 +120,9 @@ class Family:
   unmixer: Callable
   pairs: Callable
   make: Callable
+  stage: str
+  data: str
+  ratio: str
 
 
 FAMILIES = {
@@ -126,12 +130,18 @@ FAMILIES = {
         ('anaglyph', same_channel.REFERENCE), (same_channel.REFERENCE, None),
         ('colour', 'gray'), lambda name, method: same_channel.unmixer(
             name, 'learned' if method == 'shipped' else method),
-        _anaglyph_pairs, lambda pair, name: realworld.make_anaglyph(pair, name, 'ffmpeg')),
+        _anaglyph_pairs, lambda pair, name: realworld.make_anaglyph(pair, name, 'ffmpeg'),
+        'Learned matching stage',
+        'FFmpeg colour and gray anaglyphs of the same_channel scenes, window-aligned at 30%',
+        "colour bad-1 over the same method's on the gray anaglyph"),
     'diplopia': Family(
         ('diplopia',), ('diplopia', 'classical'), ('double image', 'classical'),
         lambda name, method: learned_diplopia.unmixer(
             'learned' if method == 'shipped' else method),
-        _double_pairs, lambda pair, name: learned_diplopia.mix(pair, 0.5)),
+        _double_pairs, lambda pair, name: learned_diplopia.mix(pair, 0.5),
+        'Learned echo stage',
+        'double images (L + R) / 2 of the same_channel scenes, not window-aligned',
+        "bad-1 over the classical method's (the issue's 0.75x)"),
 }
 
 
@@ -190,14 +200,6 @@ def table(rows, family=FAMILIES['anaglyph']):
   return lines
 
 
-# What each family's report says of its data.
-_DATA = {'anaglyph': 'FFmpeg colour and gray anaglyphs of the same_channel scenes, '
-                     'window-aligned at 30%', 'diplopia': 'double images (L + R) / 2 of '
-                     'the same_channel scenes, not window-aligned'}
-_RATIO = {'anaglyph': "colour bad-1 over the same method's on the gray anaglyph",
-          'diplopia': "bad-1 over the classical method's (the issue's 0.75x)"}
-
-
 def main(argv):
   del argv
   start = time.perf_counter()
@@ -208,14 +210,13 @@ def main(argv):
   family = FAMILIES[FLAGS.loso_mixture]
   with tempfile.TemporaryDirectory() as folder:
     rows = _evaluate(family, runs, FLAGS.loso_control, FLAGS.shared_dir, folder)
-  stage = {'anaglyph': 'Learned matching stage', 'diplopia': 'Learned echo stage'}
-  text = [f'# {stage[FLAGS.loso_mixture]}: leave one real source out', '',
+  text = [f'# {family.stage}: leave one real source out', '',
           f'Written by `python -m experiments.real_pairs_loso --loso_mixture='
           f'{FLAGS.loso_mixture}` in {time.perf_counter() - start:.0f} s on '
           f'{os.cpu_count()} CPU cores. Control: `{FLAGS.loso_control}`; runs: '
-          + ', '.join(f'`{r}`' for r in FLAGS.loso_runs) + f'. {_DATA[FLAGS.loso_mixture]}; '
+          + ', '.join(f'`{r}`' for r in FLAGS.loso_runs) + f'. {family.data}; '
           'each real source is scored only by the methods that never trained on it (module '
-          f'docstring). ratio: {_RATIO[FLAGS.loso_mixture]}.', '', *table(rows, family), '']
+          f'docstring). ratio: {family.ratio}.', '', *table(rows, family), '']
   output = FLAGS.loso_output or f'experiments/results/real_pairs_loso_{FLAGS.loso_mixture}.md'
   with open(output, 'w', encoding='utf-8') as handle:
     handle.write('\n'.join(text))
