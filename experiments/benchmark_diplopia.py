@@ -31,6 +31,7 @@ import numpy as np
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.cli import media
@@ -90,7 +91,7 @@ def stage_seconds(image, costs, density):
   and post-processing, mixing weight, layers; and the range searched."""
   image01 = image.astype(np.float32) / 255.0
   times, start = {}, time.perf_counter()
-  search = diplopia.estimate_range(image, density=density)
+  search = diplopia_range.estimate_range(image, density=density)
   times['range'] = time.perf_counter() - start
   config = diplopia.DiplopiaConfig()
   config = dataclasses.replace(config, matching=dataclasses.replace(

@@ -40,6 +40,7 @@ import numpy as np
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import realworld
@@ -122,7 +123,7 @@ def evaluate(shared_dir):
 def _cost_ablation(echo, data, base):
   """Part 4's rows of one scene."""
   image = mix(data, 0.5)
-  search = diplopia.estimate_range(image)
+  search = diplopia_range.estimate_range(image)
   rows = []
   for share in ZNCC_SHARES:
     out = learned_diplopia.learned_unmix(echo, image, 'diplopia', search,

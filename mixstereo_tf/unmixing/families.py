@@ -32,6 +32,7 @@ import numpy as np
 
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import hints
@@ -153,9 +154,9 @@ class Diplopia(Family):
   learned_stages = ('refiner', 'echo_features')
 
   def estimate_range(self, image, name, default, hint=None):
-    """The double image's self-matching on a small copy (`diplopia.estimate_range`)."""
+    """The double image's self-matching on a small copy (`diplopia_range.estimate_range`)."""
     del name, default, hint  # Its SGM runs in one strip: no matcher options.
-    return diplopia.estimate_range(image)
+    return diplopia_range.estimate_range(image)
 
   def classical(self, image, name, search=None, hint=None):
     """`diplopia.unmix_diplopia` over `search` (None: its configured range) with the

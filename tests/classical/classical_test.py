@@ -9,6 +9,7 @@ import tensorflow as tf
 
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import image_range
@@ -225,7 +226,7 @@ def test_the_small_lag_penalty_keeps_a_real_double_image_off_the_smallest_lags()
   pixels of a camera image correlate whatever the echo; with it they find their echoes."""
   left, right, truth = sample.motorcycle()
   image = np.rint((left.astype(np.float64) + right) / 2).astype(np.uint8)
-  search = diplopia.estimate_range(image)
+  search = diplopia_range.estimate_range(image)
   valid = truth > 0
 
   def scores(config):
