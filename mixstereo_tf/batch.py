@@ -26,6 +26,7 @@ from absl import logging
 
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.cli import device
+from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.unmixing import predictors
 
@@ -62,7 +63,7 @@ def main(argv):
     options = cli_flags.output_options(settings=dataclasses.asdict(config))
     pipeline_options = beam_batch.pipeline_options(argv[1:])
   except ValueError as e:
-    raise cli_flags.usage_error(e) from None
+    raise flag_errors.usage_error(e) from None
   logging.info('%d input(s) to %s.', len(items), FLAGS.output_dir)
   std_logging.getLogger('apache_beam').setLevel(std_logging.WARNING)  # Runner chatter.
   counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)

@@ -20,6 +20,7 @@ from absl import flags
 from absl import logging
 
 from mixstereo_tf.cli import device
+from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.evaluation import protocols
@@ -91,7 +92,7 @@ def main(argv):
     result = runner.evaluate(config, unmixer, progress)
     text = report.format_report(result)
   except ValueError as e:
-    raise cli_flags.usage_error(e, _RENAMED) from None
+    raise flag_errors.usage_error(e, _RENAMED) from None
   print(text, end='')
   if FLAGS.output_csv:
     report.write_csv(FLAGS.output_csv, result.rows)

@@ -24,6 +24,7 @@ from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.artifacts import serving
 from mixstereo_tf.cli import device
+from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 
 FLAGS = flags.FLAGS
@@ -71,7 +72,7 @@ def main(argv):
     serving.export_saved_model(graphs.serving_function(model), model.variables, run_info,
                                FLAGS.export_dir)
   except ValueError as e:
-    raise cli_flags.usage_error(e) from None
+    raise flag_errors.usage_error(e) from None
   logging.info('Exported the %s model to %s.', run_info.mixture, FLAGS.export_dir)
 
 

@@ -19,6 +19,7 @@ from absl import logging
 
 from mixstereo_tf import models
 from mixstereo_tf.cli import device
+from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import stage_training
 from mixstereo_tf.data import pipeline
@@ -195,7 +196,7 @@ def main(argv):
         FLAGS.num_epochs * len(samples) / FLAGS.batch_size)
     train_config = _train_config(num_steps)
   except ValueError as e:
-    raise cli_flags.usage_error(e, stage_training.RENAMED) from None
+    raise flag_errors.usage_error(e, stage_training.RENAMED) from None
   logging.info('Training on %d pairs from %s for %d steps.', len(samples), FLAGS.dataset,
                num_steps)
   try:

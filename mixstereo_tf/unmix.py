@@ -23,6 +23,7 @@ from absl import flags
 from absl import logging
 
 from mixstereo_tf.cli import device
+from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
@@ -48,7 +49,7 @@ def main(argv):
         cli_flags.output_options(settings=dataclasses.asdict(config)),
         progress_stream=sys.stderr)
   except ValueError as e:
-    raise cli_flags.usage_error(e) from None
+    raise flag_errors.usage_error(e) from None
   logging.info('%d input(s) done, %d failed; %d frame(s) in %.2f s: %.2f frames/s '
                '(unmixing alone %.2f frames/s).', report.processed, len(report.failures),
                report.frames, report.seconds, report.frames_per_second,

@@ -3,15 +3,13 @@
 Each `define_*` group declares its flags the first time it is called (later calls do
 nothing), so tools that share a flag share one declaration. Defaults come from the frozen
 config dataclasses. Library code raises errors naming config fields
-(`PredictorConfig.checkpoint`); `flag_names` and `usage_error` turn them into the flags
-the user typed.
+(`PredictorConfig.checkpoint`); `flag_errors` turns them into the flags the user typed.
 """
 
 import dataclasses
 import functools
-import re
 import sys
-from typing import Any, Container, Dict, Optional, Sequence, Tuple
+from typing import Any, Dict, Optional, Sequence, Tuple
 
 from absl import app
 from absl import flags
@@ -31,17 +29,6 @@ from mixstereo_tf.video import temporal
 FLAGS = flags.FLAGS
 # The flags of `define_predictor`: one per PredictorConfig field, of the field's name.
 PREDICTOR_FLAGS = frozenset(f.name for f in dataclasses.fields(predictors.PredictorConfig))
-
-# Config fields whose flag has another name; other fields map to the flag of their name.
-_RENAMED = {
-    'DataConfig.middlebury_scales': 'middlebury_scale',
-    'EvalConfig.middlebury_scales': 'middlebury_scale',
-    'ModelConfig.separation_widths': 'unet_widths',
-    'ModelConfig.stereo_residual_blocks': 'num_res_blocks',
-    'ModelConfig.stereo_3d_widths': 'volume_features',
-    'OutputOptions.formats': 'output_format',
-}
-
 
 def defaults(config_class: type) -> Dict[str, Any]:
   """{field: default} of a config dataclass (fields without a default are left out)."""
@@ -291,27 +278,3 @@ def parse_scene_scales(items: Sequence[str]) -> Tuple[Tuple[str, float], ...]:
                            f'(e.g. tsukuba:16), got {item!r}.') from None
     pairs.append((scene.strip(), scale))
   return tuple(pairs)
-
-
-def flag_names(message: str, renamed: Optional[Dict[str, str]] = None,
-               known: Optional[Container[str]] = None) -> str:
-  """`message` naming the flags the user typed instead of config fields.
-
-  `Config.field` becomes `--flag` where `known` (default: every flag defined in this
-  process) holds that flag: the flag named in `renamed` (a tool's own renamings) or
-  `_RENAMED`, else the flag of the field's name.
-  """
-  names = dict(_RENAMED, **(renamed or {}))
-  known = FLAGS if known is None else known
-
-  def flag(match: re.Match) -> str:
-    key = f'{match.group(1)}.{match.group(2)}'
-    name = names.get(key, match.group(2))
-    return f'--{name}' if name in known else match.group(0)
-
-  return re.sub(r'\b([A-Z]\w*(?:Config|Options))\.(\w+)\b', flag, message)
-
-
-def usage_error(error: Exception, renamed: Optional[Dict[str, str]] = None) -> app.UsageError:
-  """A UsageError whose message names flags instead of config fields (`flag_names`)."""
-  return app.UsageError(flag_names(str(error), renamed))

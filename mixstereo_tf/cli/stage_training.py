@@ -9,7 +9,7 @@ from absl import app
 from absl import flags
 from absl import logging
 
-from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.data import photo_warps
 from mixstereo_tf.models import matching_features
 from mixstereo_tf.models import refiner
@@ -94,7 +94,7 @@ def train_refiner() -> None:
         log_every=FLAGS.log_every, seed=FLAGS.seed)
     architecture = refiner.RefinerConfig(disparity_features=FLAGS.refiner_disparity_features)
   except ValueError as e:
-    raise cli_flags.usage_error(e, RENAMED) from None
+    raise flag_errors.usage_error(e, RENAMED) from None
   logging.info('Training the refiner on %d examples for %d steps.',
                config.num_shards * shard_size, config.num_steps)
   refiner_loop.train(config, examples, architecture, FLAGS.flags_into_string())
@@ -122,7 +122,7 @@ def train_features() -> None:
         FLAGS.feature_width, FLAGS.feature_layers,
         int_tuple(FLAGS.feature_dilations, 'feature_dilations'))
   except ValueError as e:
-    raise cli_flags.usage_error(e, RENAMED) from None
+    raise flag_errors.usage_error(e, RENAMED) from None
   logging.info('Training the matching features for %d steps.', config.num_steps)
   feature_loop.train(config, warp, features, FLAGS.flags_into_string())
 

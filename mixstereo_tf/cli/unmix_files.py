@@ -35,6 +35,7 @@ from absl import logging
 import cv2
 import tensorflow as tf
 
+from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
@@ -76,7 +77,7 @@ def reason(error: Exception) -> str:
   naming the predictor flags (`--mixture`) instead of PredictorConfig fields."""
   message = error.message if isinstance(error, tf.errors.OpError) else str(error)
   lines = message.strip().splitlines()
-  line = cli_flags.flag_names(lines[0], known=cli_flags.PREDICTOR_FLAGS) if lines else ''
+  line = flag_errors.flag_names(lines[0], known=cli_flags.PREDICTOR_FLAGS) if lines else ''
   return f'{type(error).__name__}: {line}'
 
 

@@ -8,6 +8,7 @@ from absl import app
 from absl import flags
 import pytest
 
+from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.unmixing import predictors
 
@@ -27,25 +28,6 @@ def test_groups_declare_each_flag_once():
   cli_flags.define_mixture()
   assert flags.FLAGS['method'].default == predictors.PredictorConfig().method
   assert flags.FLAGS['restore_colors'].help.startswith('Alias for --restore_colour')
-
-
-def test_usage_error_names_flags_instead_of_config_fields():
-  cli_flags.define_data()
-  cli_flags.define_predictor()
-  error = ValueError("PredictorConfig.method='classical' needs PredictorConfig.mixture; "
-                     'DataConfig.middlebury_scales: bad; EvalConfig.split_list missing; '
-                     'OtherConfig.nothing stays.')
-  text = str(cli_flags.usage_error(error, {'EvalConfig.split_list': 'data_dir'}))
-  assert text == ("--method='classical' needs --mixture; --middlebury_scale: bad; "
-                  '--data_dir missing; OtherConfig.nothing stays.')
-
-
-def test_flag_names_translates_only_known_flags():
-  message = "PredictorConfig.mixture=x; PredictorConfig.method='model'; VideoConfig.enabled."
-  assert cli_flags.flag_names(message, known=cli_flags.PREDICTOR_FLAGS) == (
-      "--mixture=x; --method='model'; VideoConfig.enabled.")
-  cli_flags.define_predictor()
-  assert all(name in flags.FLAGS for name in cli_flags.PREDICTOR_FLAGS)
 
 
 def test_defaults_come_from_the_config_dataclass():
@@ -77,7 +59,7 @@ def test_output_format_is_repeatable_and_reaches_output_options():
     assert cli_flags.output_options().formats == ('mpo', 'anaglyph_dubois')
     with pytest.raises(flags.IllegalFlagValueError, match='wiggle'):
       output_format.parse('gif')
-    error = cli_flags.usage_error(ValueError("OutputOptions.formats: 'jps' twice"))
+    error = flag_errors.usage_error(ValueError("OutputOptions.formats: 'jps' twice"))
     assert str(error) == "--output_format: 'jps' twice"
 
 

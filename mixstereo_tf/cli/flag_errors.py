@@ -1,0 +1,45 @@
+"""Errors naming the flags the user typed instead of the config fields library code names.
+
+Library code raises errors such as "PredictorConfig.checkpoint must ..."; the tools turn
+them into "--checkpoint must ..." here, for every flag defined in the process.
+"""
+
+import re
+from typing import Container, Dict, Optional
+
+from absl import app
+from absl import flags
+
+# Config fields whose flag has another name; other fields map to the flag of their name.
+RENAMED = {
+    'DataConfig.middlebury_scales': 'middlebury_scale',
+    'EvalConfig.middlebury_scales': 'middlebury_scale',
+    'ModelConfig.separation_widths': 'unet_widths',
+    'ModelConfig.stereo_residual_blocks': 'num_res_blocks',
+    'ModelConfig.stereo_3d_widths': 'volume_features',
+    'OutputOptions.formats': 'output_format',
+}
+
+
+def flag_names(message: str, renamed: Optional[Dict[str, str]] = None,
+               known: Optional[Container[str]] = None) -> str:
+  """`message` naming the flags the user typed instead of config fields.
+
+  `Config.field` becomes `--flag` where `known` (default: every flag defined in this
+  process) holds that flag: the flag named in `renamed` (a tool's own renamings) or
+  `RENAMED`, else the flag of the field's name.
+  """
+  names = dict(RENAMED, **(renamed or {}))
+  known = flags.FLAGS if known is None else known
+
+  def flag(match: re.Match) -> str:
+    key = f'{match.group(1)}.{match.group(2)}'
+    name = names.get(key, match.group(2))
+    return f'--{name}' if name in known else match.group(0)
+
+  return re.sub(r'\b([A-Z]\w*(?:Config|Options))\.(\w+)\b', flag, message)
+
+
+def usage_error(error: Exception, renamed: Optional[Dict[str, str]] = None) -> app.UsageError:
+  """A UsageError whose message names flags instead of config fields (`flag_names`)."""
+  return app.UsageError(flag_names(str(error), renamed))

@@ -1,0 +1,25 @@
+"""Tests for mixstereo_tf.cli.flag_errors: config fields in errors become the flags typed."""
+
+from absl import flags
+
+from mixstereo_tf.cli import flag_errors
+from mixstereo_tf.cli import flags as cli_flags
+
+
+def test_usage_error_names_flags_instead_of_config_fields():
+  cli_flags.define_data()
+  cli_flags.define_predictor()
+  error = ValueError("PredictorConfig.method='classical' needs PredictorConfig.mixture; "
+                     'DataConfig.middlebury_scales: bad; EvalConfig.split_list missing; '
+                     'OtherConfig.nothing stays.')
+  text = str(flag_errors.usage_error(error, {'EvalConfig.split_list': 'data_dir'}))
+  assert text == ("--method='classical' needs --mixture; --middlebury_scale: bad; "
+                  '--data_dir missing; OtherConfig.nothing stays.')
+
+
+def test_flag_names_translates_only_known_flags():
+  message = "PredictorConfig.mixture=x; PredictorConfig.method='model'; VideoConfig.enabled."
+  assert flag_errors.flag_names(message, known=cli_flags.PREDICTOR_FLAGS) == (
+      "--mixture=x; --method='model'; VideoConfig.enabled.")
+  cli_flags.define_predictor()
+  assert all(name in flags.FLAGS for name in cli_flags.PREDICTOR_FLAGS)
