@@ -11,7 +11,7 @@ than synthetic scenes):
   2. every layer shows the SAME photograph at the same place (texture point of the
      left-view point (x_L, y) = (u0, v0) + zoom * (x_L, y)): the left view is a crop of the
      photograph, the right view the photograph warped by the field, hidden parts resolved
-     by the z-buffer of `synthetic.render_layers`; with p = `object_probability` each
+     by the z-buffer of `layer_render.render_layers`; with p = `object_probability` each
      foreground layer instead shows another part of a photograph (so that some depth
      edges are also colour edges, as at real object borders);
   3. with p = `window_probability` the pair is window-aligned (a share U[0, 0.7] of the
@@ -27,6 +27,7 @@ from typing import Dict
 
 import numpy as np
 
+from mixstereo_tf.data import layer_render
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.data import texture_atlas
@@ -122,7 +123,7 @@ def warped_pair(seed: int, config: WarpConfig,
   layers = synthetic.random_layers(seed, scene, len(atlas))
   if config.photo_warps:
     layers = _photo_layers(rng, layers, atlas, config, wide)
-  pair = synthetic.render_layers(layers, atlas, config.height, wide)
+  pair = layer_render.render_layers(layers, atlas, config.height, wide)
   shift = 0
   if rng.uniform() < config.window_probability:
     low, high = np.percentile(pair['disparity_left'], [1.0, 99.0])

@@ -8,7 +8,7 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sources
-from mixstereo_tf.data import synthetic
+from mixstereo_tf.data import layer_render
 
 _H, _W, _D = 16, 40, 3  # A fronto-parallel scene at a constant disparity of 3 px.
 
@@ -84,10 +84,10 @@ def _occluding_scene():
   """A square at disparity 6 over a background at 2, random textures: d_L != d_R."""
   rng = np.random.default_rng(5)
   textures = [rng.uniform(0, 255, (32, 64, 3)).astype(np.float32) for _ in range(2)]
-  layers = [synthetic.Layer('full', (), (2.0, 0.0, 0.0), texture=0),
-            synthetic.Layer('rectangle', (25.0, 16.0, 5.0, 5.0, 0.0), (6.0, 0.0, 0.0),
+  layers = [layer_render.Layer('full', (), (2.0, 0.0, 0.0), texture=0),
+            layer_render.Layer('rectangle', (25.0, 16.0, 5.0, 5.0, 0.0), (6.0, 0.0, 0.0),
                             texture=1)]
-  scene = synthetic.render_layers(layers, textures, 32, 64)
+  scene = layer_render.render_layers(layers, textures, 32, 64)
   scene['valid_left'] = rng.uniform(size=(32, 64)) < 0.7
   scene['valid_right'] = rng.uniform(size=(32, 64)) < 0.7
   return scene
