@@ -11,7 +11,6 @@ import dataclasses
 import math
 import os
 import signal
-import tempfile
 import time
 from typing import Callable, Optional, Tuple
 
@@ -22,6 +21,7 @@ from mixstereo_tf import models
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.ops import conv3d
 from mixstereo_tf.training import config as config_lib
+from mixstereo_tf.training import distribution
 from mixstereo_tf.training import objective
 from mixstereo_tf.training import optimizers
 from mixstereo_tf.training import step as step_lib
@@ -42,44 +42,6 @@ class TrainResult:
   final_loss: float
   steps_per_second: float
   num_replicas: int
-
-
-def make_strategy(name: str) -> tf.distribute.Strategy:
-  """'default' (one device), 'mirrored' (all local devices), 'multi_worker' (TF_CONFIG)."""
-  if name == 'default':
-    return tf.distribute.get_strategy()
-  if name == 'mirrored':
-    return tf.distribute.MirroredStrategy()
-  if name == 'multi_worker':
-    return tf.distribute.MultiWorkerMirroredStrategy()
-  raise ValueError(f'Unknown strategy {name!r}; valid: {config_lib.STRATEGIES}.')
-
-
-def _device_type(strategy: tf.distribute.Strategy) -> str:
-  """'GPU' or 'CPU' (or 'TPU'): the device type the step runs on."""
-  if strategy is tf.distribute.get_strategy() and not tf.distribute.has_strategy():
-    # The default strategy places ops on the first GPU when there is one.
-    return 'GPU' if tf.config.list_logical_devices('GPU') else 'CPU'
-  devices = strategy.extended.worker_devices
-  return tf.DeviceSpec.from_string(devices[0]).device_type or 'CPU'
-
-
-def _write_dir(strategy: tf.distribute.Strategy, model_dir: str) -> Tuple[bool, str]:
-  """(is_chief, where this worker writes checkpoints).
-
-  Under MultiWorkerMirroredStrategy every worker takes part in saving (it is a collective
-  operation) but only the chief writes to `model_dir`; the others write to a scratch folder.
-  """
-  resolver = getattr(strategy, 'cluster_resolver', None)
-  cluster = resolver.cluster_spec().as_dict() if resolver else {}
-  if not cluster:
-    return True, model_dir
-  task_type, task_id = resolver.task_type, resolver.task_id
-  chief = task_type == 'chief' or (task_type == 'worker' and task_id == 0 and
-                                   'chief' not in cluster)
-  if chief:
-    return True, model_dir
-  return False, os.path.join(tempfile.gettempdir(), f'mixstereo_{task_type}_{task_id}')
 
 
 class _StopSignals:
@@ -103,16 +65,6 @@ class _StopSignals:
       signal.signal(signum, handler)
 
 
-def _check_batch(dataset: tf.data.Dataset, strategy: tf.distribute.Strategy) -> int:
-  batch = dataset.element_spec['mixture'].shape[0]
-  if batch is None:
-    raise ValueError('The training dataset must have a static batch size (drop_remainder).')
-  if batch % strategy.num_replicas_in_sync:
-    raise ValueError(f'batch_size {batch} is not divisible by the '
-                     f'{strategy.num_replicas_in_sync} replicas of the strategy.')
-  return batch
-
-
 @dataclasses.dataclass
 class _Session:
   """Everything a run needs once set up: where it writes and what it trains."""
@@ -134,11 +86,11 @@ def _prepare(config: config_lib.TrainConfig, model_config: models.ModelConfig,
 
   Returns (strategy, is_chief, write_dir, model_config with conv3d resolved, jit).
   """
-  strategy = make_strategy(config.strategy)
-  chief, write_dir = _write_dir(strategy, config.model_dir)
+  strategy = distribution.make_strategy(config.strategy)
+  chief, write_dir = distribution.write_dir(strategy, config.model_dir)
   if chief:
     runs.write_run_files(config.model_dir, flags_text, **configs)
-  device_type = _device_type(strategy)
+  device_type = distribution.device_type(strategy)
   jit = step_lib.resolve_jit_compile(config.jit_compile, device_type)
   if model_config.conv3d_implementation == 'auto':
     model_config = dataclasses.replace(
@@ -296,7 +248,7 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
   strategy, chief, write_dir, model_config, jit = _prepare(config, model_config, flags_text,
                                                            configs)
   dataset = dataset_fn()
-  _check_batch(dataset, strategy)
+  distribution.check_batch(dataset, strategy)
   session = _build(config, model_config, loss_config, strategy, chief, write_dir, jit)
   start_step = _restore_or_initialise(session, config)
   return _run_steps(session, config, dataset, start_step)

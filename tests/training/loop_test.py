@@ -14,6 +14,7 @@ from tensorflow.python.framework import config as tf_config
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.training import config as config_lib
+from mixstereo_tf.training import distribution
 from mixstereo_tf.training import loop
 from mixstereo_tf.training import objective
 from tests import training_helpers
@@ -139,7 +140,7 @@ def test_deterministic_runs_give_identical_weights(tmp_path):
 def test_mixed_precision_on_a_gpu_scales_the_loss_and_logs_unscaled_scalars(
     tmp_path, monkeypatch):
   # The GPU path (mixed_float16, LossScaleOptimizer) run on the CPU's float16 kernels.
-  monkeypatch.setattr(loop, '_device_type', lambda strategy: 'GPU')
+  monkeypatch.setattr(distribution, 'device_type', lambda strategy: 'GPU')
   try:
     result = _train(tmp_path, 2, mixed_precision=True, jit_compile='false')
   finally:
