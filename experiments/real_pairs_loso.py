@@ -95,10 +95,10 @@ def _anaglyph_pairs(shared_dir):
 
 
 def _double_pairs(shared_dir):
+  """(scene, pair) of the same_channel scenes as captured (not window-aligned), the frames
+  without ground truth scored on their views alone."""
   for scene, data in same_channel.scenes(shared_dir, views_only=True):
-    if data.get('views_only'):
-      data = dict(data, valid_left=np.zeros_like(data['valid_left']))
-    yield scene, data
+    yield scene, same_channel.without_estimated_truth(data, data)
 
 
 @dataclasses.dataclass(frozen=True)

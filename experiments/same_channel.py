@@ -102,6 +102,14 @@ def views_only_scene(left, right):
   return dict(realworld.estimated_disparities(left, right), views_only=True)
 
 
+def without_estimated_truth(data, pair):
+  """`pair` (`data` or a crop of it) with 'valid_left' all False where data's disparities
+  were only estimated (`views_only_scene`: they place the window, they score nothing)."""
+  if data.get('views_only'):
+    return dict(pair, valid_left=np.zeros_like(pair['valid_left']))
+  return pair
+
+
 def scenes(shared_dir, views_only=False):
   """(name, data) of every scene with ground truth (module docstring); with `views_only`,
   then the frames without (`views_only_scene`, data['views_only'] set)."""
@@ -146,9 +154,7 @@ def pairs(shared_dir, views_only=False):
   with `views_only`, their valid_left all False); the rendered scenes (grouped) twice, the
   second time with `validation.noisy` views."""
   for number, (scene, data) in enumerate(scenes(shared_dir, views_only)):
-    pair = realworld.window_align(data, FRACTION)
-    if data.get('views_only'):
-      pair['valid_left'] = np.zeros_like(pair['valid_left'])
+    pair = without_estimated_truth(data, realworld.window_align(data, FRACTION))
     yield group(scene), scene, pair
     if group(scene) != scene:
       yield (f'{group(scene)} + noise {validation.NOISE_SIGMA:g}', scene,

@@ -251,6 +251,11 @@ def test_same_channel_scores_a_pair_without_ground_truth_on_its_views_alone():
   assert inner.mean() > 0.8
   np.testing.assert_allclose(data['disparity_left'][:, 20:80][inner], 6, atol=0.5)
   assert realworld.window_align(data, 0.3)['shift'] == 6  # Every disparity is 6.
+  # Those estimated disparities place the window and score nothing; a true one passes.
+  pair = realworld.window_align(data, 0.3)
+  assert not same_channel.without_estimated_truth(data, pair)['valid_left'].any()
+  truth = dict(data, views_only=False)
+  assert same_channel.without_estimated_truth(truth, pair)['valid_left'].sum() > 0
   rows = [dict(group='g', encoding=name, method='classical', bad1=np.nan, bad3=np.nan,
                epe=np.nan, psnr_left=30.0, psnr_right=31.0)
           for name in same_channel.ENCODINGS]
