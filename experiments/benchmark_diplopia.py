@@ -52,10 +52,10 @@ FLAGS = flags.FLAGS
 WIDTH, HEIGHT, PAN = 1280, 720, 4
 STAGES = ('range', 'costs', 'sgm', 'weight', 'layers')
 # The classical method, the default (the refiner on the classical result, `--pretrained=
-# diplopia_weighted`; the same network as `diplopia`, so the same speed) and the learned
+# diplopia_weighted_penalised`; the same network as `diplopia`, so the same speed) and the learned
 # echo stage (`--pretrained=diplopia_echo`).
 METHODS = {'classical': dict(method='classical'),
-           'refiner (default)': dict(method='model', pretrained='diplopia_weighted'),
+           'refiner (default)': dict(method='model', pretrained='diplopia_weighted_penalised'),
            'learned echo': dict(method='model', pretrained='diplopia_echo')}
 
 

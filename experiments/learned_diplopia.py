@@ -10,7 +10,9 @@ KITTI object frame (sparse ground truth from its Velodyne scan). Not window-alig
 double image's disparities are positive by convention (docs/DESIGN.md).
   1. I = (L + R) / 2 (`--mixture=diplopia`): rows mixture (I as both views), classical,
      the refiner trained on a = 1/2 only (`--pretrained=diplopia`, the previous default),
-     the refiner trained on any a (`--pretrained=diplopia_weighted`, the default), learned
+     the refiner trained on any a on the classical method before its small-lag penalty
+     (`--pretrained=diplopia_weighted`, the previous default), the same recipe on today's
+     classical method (`--pretrained=diplopia_weighted_penalised`, the default), learned
      (`--pretrained=diplopia_echo`); bad-1, bad-3, D1, views' RGB PSNR.
   2. I = a L + (1 - a) R for a in WEIGHTS, classical method with `--mixing_weight=auto`: the
      estimate's error, views with the estimated a against views with the true a and with
@@ -55,7 +57,8 @@ FLAGS = flags.FLAGS
 
 METHODS = {'classical': dict(method='classical'),
            'refiner, a = 1/2': dict(method='model', pretrained='diplopia'),
-           'refiner, any a': dict(method='model', pretrained='diplopia_weighted'),
+           'refiner, any a (previous)': dict(method='model', pretrained='diplopia_weighted'),
+           'refiner, any a': dict(method='model', pretrained='diplopia_weighted_penalised'),
            'learned': dict(method='model', pretrained='diplopia_echo')}
 REFINERS = {'refiner_half': 'refiner, a = 1/2', 'default': 'refiner, any a'}  # Part 2's columns.
 WEIGHTS = (0.3, 0.4, 0.5, 0.6, 0.7)
