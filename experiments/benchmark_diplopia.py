@@ -31,8 +31,8 @@ import numpy as np
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.classical import diplopia
-from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
@@ -52,8 +52,8 @@ FLAGS = flags.FLAGS
 WIDTH, HEIGHT, PAN = 1280, 720, 4
 STAGES = ('range', 'costs', 'sgm', 'weight', 'layers')
 # The classical method, the default (the refiner on the classical result, `--pretrained=
-# diplopia_weighted_penalised`; the same network as `diplopia`, so the same speed) and the learned
-# echo stage (`--pretrained=diplopia_echo`).
+# diplopia_weighted_penalised`; the same network as `diplopia`, so the same speed) and the
+# learned echo stage (`--pretrained=diplopia_echo`).
 METHODS = {'classical': dict(method='classical'),
            'refiner (default)': dict(method='model', pretrained='diplopia_weighted_penalised'),
            'learned echo': dict(method='model', pretrained='diplopia_echo')}

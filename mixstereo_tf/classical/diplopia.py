@@ -51,7 +51,7 @@ class DiplopiaConfig:
     matching: SGM parameters of the self-matching (min_disparity >= 1; the census
       fields are unused). P1 16, P2 160 (8 / 64 before 2026-11-26: validation bad-1
       38.7 -> 35.0%; 24 / 240 lowers bad-1 but also the default's views);
-      `estimate_range` keeps its own (`RANGE_PENALTIES`).
+      `diplopia_range.estimate_range` keeps its own (`diplopia_range.RANGE_PENALTIES`).
     window_radius: ZNCC window radius, pixels: 7, a 15 x 15 window (3 before 2026-11-26:
       validation bad-1 40.8 -> 35.0%). The echo shares only half of each window's signal,
       so it needs a larger window than a stereo pair; the rolled sums of `zncc_kernel`

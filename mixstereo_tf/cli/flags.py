@@ -30,6 +30,7 @@ FLAGS = flags.FLAGS
 # The flags of `define_predictor`: one per PredictorConfig field, of the field's name.
 PREDICTOR_FLAGS = frozenset(f.name for f in dataclasses.fields(predictors.PredictorConfig))
 
+
 def defaults(config_class: type) -> Dict[str, Any]:
   """{field: default} of a config dataclass (fields without a default are left out)."""
   return {f.name: f.default for f in dataclasses.fields(config_class)

@@ -23,7 +23,6 @@ from mixstereo_tf.data import texture_atlas
 SHAPES = ('ellipse', 'rectangle', 'polygon')
 
 
-
 @dataclasses.dataclass(frozen=True)
 class Layer:
   """One planar textured layer, all coordinates in the left view (pixels).

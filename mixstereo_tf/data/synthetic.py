@@ -152,7 +152,8 @@ def random_layers(seed: int, config: SceneConfig, num_textures: int) -> List[lay
 
 
 def render_scene(seed: int, config: SceneConfig, textures) -> Dict[str, np.ndarray]:
-  """Renders the random scene `seed` (see `layer_render.render_layers` for textures and the result)."""
+  """Renders the random scene `seed` (`layer_render.render_layers`: its textures and
+  result)."""
   if not isinstance(textures, texture_atlas.TextureAtlas):
     textures = texture_atlas.TextureAtlas(textures)
   layers = random_layers(seed, config, len(textures))
