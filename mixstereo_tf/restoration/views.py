@@ -111,7 +111,8 @@ def lr_consistency(d_left: np.ndarray, d_right: np.ndarray,
 def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
   """`config.iterations` over-relaxed alternations between the views from `start`
   (`kernel.solve_rows` on row blocks, in threads: the kernel releases the
-  GIL); returns both views clipped to [0, 1]."""
+  GIL; `kernel.solve_decoupled_rows` where `decoupled`); returns both views clipped to
+  [0, 1]."""
   offsets = (-d_left, d_right)
   matrices = (np.asarray(spec.left_matrix, np.float32),
               np.asarray(spec.right_matrix, np.float32))
@@ -127,14 +128,35 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
   contiguous = lambda arrays, dtype: tuple(np.ascontiguousarray(a, dtype) for a in arrays)
   weights = tuple(np.float32(w) for w in (config.observation_weight, config.match_weight,
                                            config.prior_weight, config.relaxation))
-  arguments = (config.iterations, np.ascontiguousarray(mixture, np.float32),
-               contiguous(offsets, np.float32), contiguous(consistent, np.bool_),
-               contiguous(priors, np.float32), matrices, tuple(inverses), tuple(copied),
-               weights, bool(spec.clip), left, right)
+  inputs = (config.iterations, np.ascontiguousarray(mixture, np.float32),
+            contiguous(offsets, np.float32), contiguous(consistent, np.bool_),
+            contiguous(priors, np.float32))
+  if decoupled(spec):  # The same alternations in closed form.
+    solve = kernel.solve_decoupled_rows
+    arguments = inputs + (tuple(inverses), tuple(copied), weights, left, right)
+  else:
+    solve = kernel.solve_rows
+    arguments = inputs + (matrices, tuple(inverses), tuple(copied), weights,
+                          bool(spec.clip), left, right)
   height, threads = mixture.shape[0], workers.usable_cpus(config.threads)
-  workers.run_tasks(lambda block: kernel.solve_rows(*block, *arguments),
+  workers.run_tasks(lambda block: solve(*block, *arguments),
                     workers.row_blocks(height, 4 * threads), threads)
   return left, right
+
+
+def decoupled(spec: mixtures.MixtureSpec) -> bool:
+  """True when every channel a view does not copy is unobserved by the mixture and
+  copied by the other view (the colour, green-magenta and amber-blue anaglyphs): each
+  lost channel then relaxes towards a fixed target, and `kernel.solve_decoupled_rows`
+  gives `kernel.solve_rows`' result in one pass."""
+  if spec.clip:
+    return False
+  for matrix, own, other in ((spec.left_matrix, spec.left_channels, spec.right_channels),
+                             (spec.right_matrix, spec.right_channels, spec.left_channels)):
+    lost = [c for c in range(3) if c not in own]
+    if any(np.any(np.asarray(matrix)[:, c]) or c not in other for c in lost):
+      return False
+  return True
 
 
 def _gray_priors(mixture, spec):

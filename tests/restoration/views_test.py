@@ -150,6 +150,38 @@ def test_the_fused_solve_equals_the_equations_per_pixel(name, threads):
     np.testing.assert_allclose(got, want, atol=1e-3)  # float32 against float64: 1/4 level.
 
 
+@pytest.mark.parametrize('name', ['anaglyph', 'green_magenta', 'amber_blue'])
+@pytest.mark.parametrize('iterations', [1, 4, 10])
+def test_the_closed_form_equals_the_alternations_of_decoupled_encodings(
+    name, iterations, monkeypatch):
+  spec = mixtures.get_mixture(name)
+  assert views.decoupled(spec)
+  left, right, d, _ = _pair(shift=4, height=9)
+  rng = np.random.default_rng(3)
+  d_left, d_right = ((d + rng.uniform(-3, 3, d.shape)).astype(np.float32)  # Some clamped.
+                     for _ in range(2))
+  consistent = tuple(rng.uniform(size=d.shape) < 0.7 for _ in range(2))
+  priors = tuple(rng.uniform(size=left.shape).astype(np.float32) for _ in range(2))
+  # Starts unlike the priors and outside [0, 1]: the left view's first step reads the
+  # right view's start, before its copied channels are set.
+  starts = tuple(rng.uniform(-0.5, 1.5, size=left.shape).astype(np.float32)
+                 for _ in range(2))
+  mixture = _mix(name, left, right)
+  config = views.RestoreConfig(iterations=iterations, threads=1)
+  arguments = (mixture, spec, d_left, d_right, consistent, priors, config, starts)
+  closed = views._solve(*arguments)
+  monkeypatch.setattr(views, 'decoupled', lambda spec: False)  # The alternations.
+  iterated = views._solve(*arguments)
+  for got, want in zip(closed, iterated):
+    assert np.ptp(want) > 0.5
+    np.testing.assert_allclose(got, want, atol=2e-6)
+
+
+def test_mixed_channels_are_not_decoupled():
+  for name in ('gray', 'half_color', 'dubois', 'dubois_ffmpeg', 'green_magenta_half'):
+    assert not views.decoupled(mixtures.get_mixture(name)), name
+
+
 def test_only_anaglyphs_are_restored():
   left, right, d, _ = _pair()
   with pytest.raises(ValueError, match='anaglyph encoding'):
