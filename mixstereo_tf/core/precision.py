@@ -5,7 +5,7 @@ uses) run TensorFlow's convolutions in bfloat16 about twice as fast as in float3
 (experiments/BENCHMARKS.md section 20); elsewhere oneDNN emulates them, slower than
 float32. Variables stay float32; what the layers compute in bfloat16 is chosen by the model
 (`models/layers_util.compute_in_bfloat16`). `MIXSTEREO_BFLOAT16=0` or `1` overrides the
-detection.
+detection; set but empty, it is read as unset (`MIXSTEREO_BFLOAT16= cmd` in a shell).
 """
 
 import os
@@ -32,8 +32,8 @@ def inference_bfloat16(cpuinfo: str = '/proc/cpuinfo') -> bool:
   Raises:
     ValueError: MIXSTEREO_BFLOAT16 set to something other than 0 or 1.
   """
-  forced = os.environ.get(ENVIRONMENT)
-  if forced is not None:
+  forced = os.environ.get(ENVIRONMENT, '').strip()
+  if forced:
     if forced not in ('0', '1'):
       raise ValueError(f'{ENVIRONMENT} must be 0 or 1, got {forced!r}.')
     return forced == '1'

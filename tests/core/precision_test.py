@@ -35,3 +35,10 @@ def test_the_environment_overrides_the_flags_and_a_bad_value_is_named(tmp_path, 
   monkeypatch.setenv(precision.ENVIRONMENT, 'yes')
   with pytest.raises(ValueError, match='MIXSTEREO_BFLOAT16'):
     precision.inference_bfloat16(with_bf16)
+
+
+def test_an_empty_setting_is_read_as_unset(tmp_path, monkeypatch):
+  for value in ('', ' '):
+    monkeypatch.setenv(precision.ENVIRONMENT, value)
+    assert precision.inference_bfloat16(_cpuinfo(tmp_path, 'avx512_bf16')) is True
+    assert precision.inference_bfloat16(_cpuinfo(tmp_path, 'avx2')) is False
