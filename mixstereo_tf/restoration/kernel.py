@@ -105,6 +105,14 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
         view[y, x, i] += omega * (solved - view[y, x, i])
 
 
+@numba.njit(error_model='numpy')
+def _clip_row(y, view):
+  """Row y of `view` clipped to [0, 1], in place."""
+  for x in range(view.shape[1]):
+    for c in range(3):
+      view[y, x, c] = min(max(view[y, x, c], np.float32(0.0)), np.float32(1.0))
+
+
 @numba.njit(nogil=True, cache=True, error_model='numpy')
 def solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, matrices,
                 inverses, copied, weights, clip, left, right):
@@ -119,10 +127,8 @@ def solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, matrice
                    matrices[1], matrices[0], inverses[0], copied[0], weights, clip)
       _update_view(y, right, left, mixture, offsets[1], consistent[1], priors[1],
                    matrices[0], matrices[1], inverses[1], copied[1], weights, clip)
-    for view in (left, right):  # The result is clipped to [0, 1].
-      for x in range(view.shape[1]):
-        for c in range(3):
-          view[y, x, c] = min(max(view[y, x, c], np.float32(0.0)), np.float32(1.0))
+    _clip_row(y, left)  # The result is clipped to [0, 1].
+    _clip_row(y, right)
 
 
 @numba.njit(error_model='numpy')
@@ -174,10 +180,8 @@ def solve_decoupled_rows(y0, y1, iterations, mixture, offsets, consistent, prior
   instead of 2 x `iterations`. Arguments as `solve_rows` (no matrices, no clipping)."""
   if iterations < 1:
     for y in range(y0, y1):
-      for view in (left, right):
-        for x in range(view.shape[1]):
-          for c in range(3):
-            view[y, x, c] = min(max(view[y, x, c], np.float32(0.0)), np.float32(1.0))
+      _clip_row(y, left)
+      _clip_row(y, right)
     return
   for y in range(y0, y1):
     _decoupled_view(y, left, mixture, offsets[0], consistent[0], priors[0], copied[0],

@@ -151,7 +151,7 @@ def test_the_fused_solve_equals_the_equations_per_pixel(name, threads):
 
 
 @pytest.mark.parametrize('name', ['anaglyph', 'green_magenta', 'amber_blue'])
-@pytest.mark.parametrize('iterations', [1, 4, 10])
+@pytest.mark.parametrize('iterations', [0, 1, 4, 10])
 def test_the_closed_form_equals_the_alternations_of_decoupled_encodings(
     name, iterations, monkeypatch):
   spec = mixtures.get_mixture(name)
