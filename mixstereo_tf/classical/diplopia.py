@@ -73,6 +73,14 @@ class DiplopiaConfig:
       which validation hardly tells apart, on the temporal clip, a third of whose pixels
       lie below 4 px (the default video path's bad-1 46.9% without, 45.9% at 8, 52.3% at
       16). A penalty, not a raised min_disparity: excluded, lags 1-3 cost that clip more.
+    max_float_mib: above this many MiB of float32 costs (4 H W D bytes) the self-matching
+      stores none: the ZNCC kernel runs twice, first for the per-lag means, then writing
+      the uint8 volume directly (the same volume, bit for bit; a 12-MP photo over 350 lags
+      would otherwise hold 16.8 GB of floats).
+    max_strip_mib: SGM aggregates the volume in strips of rows holding at most this many
+      MiB of path sums (`parallel_sgm.match_cost_volume`; 2 bytes a cell), one per core at
+      a time: a 720p or 1080p frame keeps one strip per core, a 12-MP photo over 350 lags
+      (8.4 GB of sums in one piece) gets 16 strips.
   """
   matching: sgm.SgmConfig = sgm.SgmConfig(min_disparity=1, p1=16, p2=160)
   window_radius: int = 7
@@ -83,6 +91,8 @@ class DiplopiaConfig:
   prior_cap: int = 16
   min_lag: int = 4
   small_lag_penalty: int = 8
+  max_float_mib: int = 1024
+  max_strip_mib: int = 512
 
   def __post_init__(self):
     if not 0 <= self.prior_weight <= 255 or not 0 <= self.prior_cap <= 255:
@@ -92,6 +102,9 @@ class DiplopiaConfig:
       raise ValueError(f'DiplopiaConfig.min_lag must be >= 1 and small_lag_penalty in '
                        f'[0, 255] (uint8 cost units), got {self.min_lag} and '
                        f'{self.small_lag_penalty}.')
+    for field in ('max_float_mib', 'max_strip_mib'):
+      if getattr(self, field) < 0:
+        raise ValueError(f'DiplopiaConfig.{field} must be >= 0, got {getattr(self, field)}.')
     if self.matching.min_disparity < 1:
       raise ValueError('Diplopia self-matching needs matching.min_disparity >= 1 (lag 0 '
                        'matches every image to itself).')
@@ -136,7 +149,8 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
   would favour the smallest lags: the expected cost of lag d without an echo is estimated
   by the upper envelope (running maximum over lags) of the image-mean cost per lag, which
   an echo only lowers, and each lag gets the penalty (envelope maximum - envelope(d)).
-  The window sums run in `zncc_kernel` (row blocks in threads).
+  The window sums run in `zncc_kernel` (row blocks in threads); above
+  `config.max_float_mib` of float costs they run twice instead of storing them.
 
   Args:
     gray: float [H, W] mixture intensities.
@@ -152,16 +166,26 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
   window = (2 * config.window_radius + 1,) * 2
   energy = cv2.boxFilter(high * high, -1, window)
   lags = np.arange(matching.min_disparity, max_disparity + 1, dtype=np.int64)
-  costs = np.empty((height, width, lags.size), np.float32)
   threads = workers.usable_cpus(0)
   blocks = workers.row_blocks(height, 4 * threads)
-  sums = parallel_sgm.run_blocks(zncc_kernel.zncc_rows, blocks, threads, high, energy,
-                                 int(lags[0]), lags.size, config.window_radius,
-                                 np.float32(config.cost_scale), costs, partial=lags.size)
+  stored = 4 * height * width * lags.size <= config.max_float_mib << 20
+  costs = np.empty((height, width, lags.size), np.float32) if stored else None
+
+  def kernel(out, penalty):
+    return parallel_sgm.run_blocks(zncc_kernel.zncc_rows, blocks, threads, high, energy,
+                                   int(lags[0]), lags.size, config.window_radius,
+                                   np.float32(config.cost_scale), out, penalty,
+                                   partial=lags.size)
+
+  sums = kernel(costs, None)
   envelope = np.maximum.accumulate(sums / (height * (width - lags)))  # Mean cost per lag.
   penalty = (envelope.max() - envelope).astype(np.float32)
-  volume = np.empty(costs.shape, np.uint8)
-  parallel_sgm.run_blocks(zncc_kernel.quantize_rows, blocks, threads, costs, penalty, volume)
+  volume = np.empty((height, width, lags.size), np.uint8)
+  if stored:
+    parallel_sgm.run_blocks(zncc_kernel.quantize_rows, blocks, threads, costs, penalty,
+                            volume)
+  else:
+    kernel(volume, penalty)
   return volume
 
 
@@ -262,7 +286,9 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
   if prior is not None:
     add_prior(volume, config, prior, prior_window or (1, 2))
   matched = parallel_sgm.match_volume(volume, config.matching,
-                                     threads=workers.usable_cpus(0))
+                                     threads=workers.usable_cpus(0),
+                                     max_strip_mib=config.max_strip_mib)
+  del volume  # H x W x D bytes: not held through the layer solve.
   weight = diplopia_layers.resolve_weight(weight, image, matched['disparity_left'],
                                           matched['consistent_left'])
   layers = diplopia_layers.separate_layers(image, matched['disparity_right'], config.layers,

@@ -131,7 +131,7 @@ def disparities(codes_left: np.ndarray, codes_right: np.ndarray, lo: np.ndarray,
 
 
 def match_volume(volume: np.ndarray, config: sgm.SgmConfig, threads: int = 1,
-                 overlap: int = 32) -> dict:
+                 overlap: int = 32, max_strip_mib: int = 0) -> dict:
   """`sgm.match_volume` by the numba kernels: SGM, winners and post-processing of a
   left-referenced cost volume, the same outputs bit for bit in one strip (threads = 1).
 
@@ -139,7 +139,7 @@ def match_volume(volume: np.ndarray, config: sgm.SgmConfig, threads: int = 1,
     volume: uint8 [H, W, D]; volume[y, x, i] scores the left pixel x against the right
       pixel x - d_i, d_i = config.min_disparity + i.
     config: penalties and left-right threshold (the census fields are unused).
-    threads, overlap: as `match_cost_volume`'s.
+    threads, overlap, max_strip_mib: as `match_cost_volume`'s.
 
   Returns:
     As `sgm.match`.
@@ -147,15 +147,17 @@ def match_volume(volume: np.ndarray, config: sgm.SgmConfig, threads: int = 1,
   # A right pixel no left pixel reaches: `sgm.select_disparities` gives it d_0.
   return match_cost_volume(volume, config.min_disparity, config.p1, config.p2,
                            config.lr_threshold, unreached=float(config.min_disparity),
-                           threads=threads, overlap=overlap)
+                           threads=threads, overlap=overlap, max_strip_mib=max_strip_mib)
 
 
 def match_cost_volume(volume: np.ndarray, min_disparity: int, p1: int, p2: int,
                       lr_threshold: float, unreached: float = None, threads: int = 1,
-                      overlap: int = 32) -> dict:
+                      overlap: int = 32, max_strip_mib: int = 0) -> dict:
   """SGM, winners and post-processing (`fast_postprocess`) of a left-referenced uint8
   cost volume over a signed range, in `threads` strips of equal rows (1: one strip,
-  exact) aggregating `overlap` extra rows above and below (the matcher's rule).
+  exact) aggregating `overlap` extra rows above and below (the matcher's rule); with
+  `max_strip_mib` > 0 in more strips where the aggregated costs (2 bytes per cell) would
+  exceed that many MiB per strip, `threads` of them at a time.
 
   Args:
     volume: uint8 [H, W, D]; volume[y, x, i] scores the left pixel x against the right
@@ -172,10 +174,13 @@ def match_cost_volume(volume: np.ndarray, min_disparity: int, p1: int, p2: int,
   d_left = np.empty((h, w), np.float32)
   d_right = np.empty((h, w), np.float32)
   volume = np.ascontiguousarray(volume, np.uint8)
+  strips = threads
+  if max_strip_mib > 0:
+    strips = max(threads, -(-2 * volume.size // (max_strip_mib << 20)))
   workers.run_tasks(lambda block: census_sgm.volume_sgm(
       volume, int(min_disparity), int(p1), int(p2), d_left, d_right,
       (max(0, block[0] - overlap), min(h, block[1] + overlap), *block)),
-                    workers.row_blocks(h, threads), threads)
+                    workers.row_blocks(h, strips), threads)
   d_right[np.isnan(d_right)] = np.float32(
       min_disparity - 1e4 if unreached is None else unreached)
   return fast_postprocess.postprocess(d_left, d_right, lr_threshold)

@@ -33,14 +33,12 @@ def _reflect(index, size):
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
-def zncc_rows(y0, y1, high, energy, first_lag, count, radius, scale, out, sums):
-  """Costs of rows [y0, y1) for the lags d_i = first_lag + i, i < count, into out[y, x, i]
-  (float32 [H, W, D]).
+def zncc_rows(y0, y1, high, energy, first_lag, count, radius, scale, out, penalty, sums):
+  """Costs of rows [y0, y1) for the lags d_i = first_lag + i, i < count, into out[y, x, i].
 
   Every lag's window sums are kept side by side ([W, D] vertical sums, [D] horizontal
-  running sums), so the innermost loop runs over the lags: independent running sums and
-  writes along out's last axis. Each lag's sums take the same steps in the same order as
-  one lag at a time would.
+  running sums), so the innermost loop runs over the lags. Each lag's sums take the same
+  steps in the same order as one lag at a time would.
 
   Args:
     y0, y1: the row block.
@@ -49,7 +47,9 @@ def zncc_rows(y0, y1, high, energy, first_lag, count, radius, scale, out, sums):
     first_lag, count: the lags, first_lag >= 1.
     radius: window radius r.
     scale: cost units per unit of (1 - zncc).
-    out: float32 [H, W, D], written for rows [y0, y1): `scale` at columns x < d_i.
+    out, penalty: float32 [H, W, D] and None: the costs (`scale` at columns x < d_i);
+      uint8 [H, W, D] and float32 [D]: the costs as `quantize_rows` quantises them with
+      that per-lag penalty; None and None: only the sums (a pass that stores nothing).
     sums: float64 [D], each lag's cost summed over the block's columns x >= d_i
       (accumulated: the caller's per-lag means).
   """
@@ -83,15 +83,33 @@ def zncc_rows(y0, y1, high, energy, first_lag, count, radius, scale, out, sums):
         back = np.uint64(x - first_lag - i)  # >= 0 here; unsigned: see the module docstring.
         denominator = np.sqrt(here * energy[y, back] + np.float32(1e-6))
         cost = np.float32((1.0 - total[i] * norm / denominator) * scale)
-        out[y, x, i] = cost
+        _store(out, penalty, y, x, i, cost)
         sums[i] += cost
         total[i] += column[entering, i] - column[leaving, i]
       for i in range(inside, count):
-        out[y, x, i] = scale
+        _store(out, penalty, y, x, i, np.float32(scale))
         total[i] += column[entering, i] - column[leaving, i]
     if y + 1 < y1:
       _add_products(column, high, _reflect(y - radius, height), first_lag, -1.0)
       _add_products(column, high, _reflect(y + radius + 1, height), first_lag, 1.0)
+
+
+@numba.njit(nogil=True, cache=True, error_model='numpy')
+def _store(out, penalty, y, x, i, cost):
+  """out[y, x, i] = cost (penalty None), or its `quantize_rows` value (penalty [D]); nothing
+  when out is None. numba prunes the None branches when it compiles each combination."""
+  if out is not None:
+    if penalty is None:
+      out[y, x, i] = cost
+    else:
+      out[y, x, i] = _quantized(cost, penalty[i])
+
+
+@numba.njit(nogil=True, cache=True, error_model='numpy')
+def _quantized(cost, penalty):
+  """clip(rint(cost + penalty), 0, 255) as uint8 (float32 arithmetic)."""
+  value = np.rint(cost + penalty)
+  return np.uint8(min(max(value, np.float32(0.0)), np.float32(255.0)))
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
@@ -112,8 +130,7 @@ def quantize_rows(y0, y1, costs, penalty, out):
   for y in range(y0, y1):
     for x in range(costs.shape[1]):
       for i in range(costs.shape[2]):
-        value = np.rint(costs[y, x, i] + penalty[i])
-        out[y, x, i] = np.uint8(min(max(value, np.float32(0.0)), np.float32(255.0)))
+        out[y, x, i] = _quantized(costs[y, x, i], penalty[i])
 
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')

@@ -222,3 +222,23 @@ def test_a_stored_volume_in_strips_changes_almost_nothing():
   three = parallel_sgm.match_volume(volume, config.matching, threads=3)
   assert np.mean(np.abs(one['disparity_left'] - three['disparity_left']) < 0.25) > 0.99
   assert not np.array_equal(one['disparity_left'], three['disparity_left'])
+
+
+def test_a_strip_budget_cuts_a_large_volume_as_more_threads_would():
+  # 128 x 128 x 40 cells hold 1.25 MiB of uint16 path sums: a 1 MiB budget needs two
+  # strips even on one thread, the same two that two threads get; a small volume keeps
+  # one strip per thread whatever the budget.
+  rng = np.random.default_rng(3)
+  volume = rng.integers(0, 64, (128, 128, 40), dtype=np.uint8)
+  volume = cv2.GaussianBlur(volume, (5, 5), 0)  # Some spatial structure for SGM.
+  config = sgm.SgmConfig(min_disparity=1, max_disparity=40, p1=8, p2=64)
+  one = parallel_sgm.match_volume(volume, config)
+  budget = parallel_sgm.match_volume(volume, config, max_strip_mib=1)
+  two = parallel_sgm.match_volume(volume, config, threads=2)
+  for key in ('disparity_left', 'disparity_right'):
+    np.testing.assert_array_equal(budget[key], two[key])
+  assert not np.array_equal(budget['disparity_left'], one['disparity_left'])
+  small = volume[:40]
+  np.testing.assert_array_equal(
+      parallel_sgm.match_volume(small, config, max_strip_mib=1)['disparity_left'],
+      parallel_sgm.match_volume(small, config)['disparity_left'])

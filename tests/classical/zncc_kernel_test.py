@@ -1,7 +1,10 @@
 """The numba self-matching volume against the NumPy transcription of its definition."""
 
+import dataclasses
+
 import cv2
 import numpy as np
+import pytest
 
 from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import sgm
@@ -49,3 +52,22 @@ def test_lags_up_to_the_image_width_and_windows_wider_than_it():
   got, want = diplopia.self_matching_volume(gray, config), _reference(gray, config)
   assert got.shape == want.shape == (9, 12, 11)  # Lags 1..11: the width minus one.
   assert np.abs(got.astype(int) - want).max() <= 1
+
+
+def test_two_passes_give_the_stored_costs_volume_bit_for_bit():
+  # Above max_float_mib no float volume is stored: the kernel runs twice (means, then
+  # the uint8 volume). Both routes must quantise the same floats the same way.
+  rng = np.random.default_rng(2)
+  texture = cv2.GaussianBlur(rng.uniform(0, 255, (37, 83)).astype(np.float32), (0, 0), 1.2)
+  gray = (texture + np.roll(texture, 5, axis=1)) / 2
+  config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=1, max_disparity=40))
+  stored = diplopia.self_matching_volume(gray, config)
+  twice = diplopia.self_matching_volume(gray, dataclasses.replace(config, max_float_mib=0))
+  assert stored.dtype == twice.dtype == np.uint8
+  np.testing.assert_array_equal(twice, stored)
+  assert np.abs(stored.astype(int) - _reference(gray, config)).max() <= 1
+
+
+def test_a_negative_float_budget_is_refused():
+  with pytest.raises(ValueError, match='max_float_mib'):
+    diplopia.DiplopiaConfig(max_float_mib=-1)
