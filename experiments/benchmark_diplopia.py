@@ -1,6 +1,7 @@
 """Double-image video speed (issue "Learned diplopia"; BENCHMARKS.md section 19).
 
     python -m experiments.benchmark_diplopia [--diplopia_frames=6] [--before_checkout=DIR]
+        [--diplopia_photo_size=4000x3000]
 
 A procedural scene (held-out textures, disparities up to 51 px) rendered at 1280x720 and
 panned 4 px per frame, mixed as I = (L + R) / 2, written as an H.264 MP4 and unmixed by
@@ -14,13 +15,17 @@ then one frame's stages timed apart (range, cost volume, SGM and post-processing
 weight, layers, seconds) for the classical method and the learned echo stage. Each
 measurement runs in its own process; with --before_checkout (a checkout of an earlier
 commit, e.g. `git worktree add DIR REV`) each is also run there, on the same clip: the
-"before" of a change.
+"before" of a change. With --diplopia_photo_size, also a double-image photo of that size
+(`photo_12mp.py --photo_encoding=diplopia`: wall seconds and peak resident memory), the
+working tree's script run on each checkout's package.
 """
 
 import dataclasses
 import fractions
 import os
 import shutil
+import subprocess
+import sys
 import tempfile
 import time
 
@@ -47,6 +52,8 @@ from mixstereo_tf.video import temporal
 from experiments import checkouts  # Defines --before_checkout.
 
 flags.DEFINE_integer('diplopia_frames', 6, 'Frames of the clip.', lower_bound=1)
+flags.DEFINE_string('diplopia_photo_size', '', 'WIDTHxHEIGHT of a double-image photo also '
+                    'run per method (e.g. 4000x3000, minutes a row); empty: none.')
 FLAGS = flags.FLAGS
 
 WIDTH, HEIGHT, PAN = 1280, 720, 4
@@ -57,6 +64,25 @@ STAGES = ('range', 'costs', 'sgm', 'weight', 'layers')
 METHODS = {'classical': dict(method='classical'),
            'refiner (default)': dict(method='model', pretrained='diplopia_weighted_penalised'),
            'learned echo': dict(method='model', pretrained='diplopia_echo')}
+
+
+PHOTO_METHODS = {'classical': ['--photo_method=classical'],
+                 'refiner (default)': ['--photo_method=model']}
+
+
+def photo(arguments, checkout=''):
+  """`photo_12mp.py`'s line for a double image: the working tree's script on the package
+  of `checkout` (the working tree's when empty), checked to be the one that ran."""
+  tree = os.path.abspath(checkout or os.getcwd())
+  out = subprocess.run(
+      [sys.executable, os.path.abspath('experiments/photo_12mp.py'),
+       '--photo_encoding=diplopia', f'--photo_size={FLAGS.diplopia_photo_size}', *arguments],
+      capture_output=True, text=True, check=True, cwd=tree,
+      env=dict(os.environ, PYTHONPATH=tree)).stdout.strip().splitlines()[-1]
+  line, package = out.rsplit('; package ', 1)
+  if not os.path.abspath(package).startswith(tree + os.sep):
+    raise RuntimeError(f'{tree}: the package came from {package} (a stale install?).')
+  return line
 
 
 def frames(count):
@@ -155,6 +181,11 @@ def main(argv):
         print(f'| {label}{suffix} | {list(search)} | ' +
               ' | '.join(f'{times[k]:.2f}' for k in STAGES) +
               f' | {sum(times.values()):.2f} |', flush=True)
+    if FLAGS.diplopia_photo_size:
+      print(f'\n| {FLAGS.diplopia_photo_size} double image | photo_12mp.py |\n|---|---|')
+      for method, arguments in PHOTO_METHODS.items():
+        for suffix, checkout in runs:
+          print(f'| {method}{suffix} | {photo(arguments, checkout)} |', flush=True)
   finally:
     shutil.rmtree(root, ignore_errors=True)
 
