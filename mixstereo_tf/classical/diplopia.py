@@ -12,16 +12,15 @@ one linear equation per pixel in the unknown left view. Steps:
      images peaks at lag 1 instead).
   2. Per-pixel shifts: I(x) and I(x - d_L(x)) share the component L(x), so SGM on a ZNCC
      volume of the mixture against itself (`self_matching_volume`, lags from
-     `min_disparity` >= 1 up, the trivial lag 0 excluded; in a wide range the lags below
-     `min_lag` penalised) gives d_L, and the volume's
-     diagonal search gives d_R; then the left-right check and filling of `sgm` (run by
-     the anaglyph matcher's numba kernels, `parallel_sgm.match_volume`, one strip per
-     core).
+     `min_disparity` >= 1 up; in a wide range the lags below `min_lag` penalised) gives
+     d_L, the volume's diagonal search d_R; then the left-right check and filling of
+     `sgm` (`parallel_sgm.match_volume`). Images wider than `max_width` are matched on a
+     reduced copy (`working_scale`).
   3. Layers: a regularised least squares for L given d_R, then R = L sampled at x + d_R
-     (`diplopia_layers.separate_layers`, weight a = 1/2).
+     (`diplopia_layers.separate_layers`, weight a), at full size.
 
-Ambiguity: (L, R, d) and (R, L, -d) give the same symmetric average; the convention that
-disparities are positive (the left camera is on the left) decides which layer is left.
+Ambiguity: (L, R, d) and (R, L, -d) give the same symmetric average; positive disparities
+(the left camera on the left) decide which layer is left.
 """
 
 import dataclasses
@@ -34,6 +33,7 @@ from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.classical import search_windows
 from mixstereo_tf.classical import sgm
+from mixstereo_tf.classical import working_scale
 from mixstereo_tf.classical import zncc_kernel
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import workers
@@ -49,38 +49,29 @@ class DiplopiaConfig:
 
   Attributes:
     matching: SGM parameters of the self-matching (min_disparity >= 1; the census
-      fields are unused). P1 16, P2 160 (8 / 64 before 2026-11-26: validation bad-1
-      38.7 -> 35.0%; 24 / 240 lowers bad-1 but also the default's views);
-      `diplopia_range.estimate_range` keeps its own (`diplopia_range.RANGE_PENALTIES`).
-    window_radius: ZNCC window radius, pixels: 7, a 15 x 15 window (3 before 2026-11-26:
-      validation bad-1 40.8 -> 35.0%). The echo shares only half of each window's signal,
-      so it needs a larger window than a stereo pair; the rolled sums of `zncc_kernel`
-      cost the same at any radius.
-    highpass_sigma: Gaussian sigma of the high-pass applied before ZNCC, pixels.
-    cost_scale: cost units per unit of (1 - zncc).
+      fields unused). P1 16, P2 160 (8 / 64 before 2026-11-26: validation bad-1 38.7 ->
+      35.0%); `diplopia_range.estimate_range` keeps its own (`RANGE_PENALTIES`).
+    window_radius: ZNCC window radius, pixels: 7 (3 before 2026-11-26: validation bad-1
+      40.8 -> 35.0%); the echo shares only half of each window's signal.
+    highpass_sigma, cost_scale: the high-pass' Gaussian sigma, pixels; units per 1 - zncc.
     layers: prior weights and solver of the layer separation.
     prior_weight, prior_cap: a video frame's temporal prior (`unmix_diplopia(prior=)`):
-      each lag costs prior_weight cost units per pixel outside the window around the
-      previous frame's disparity (`search_windows.around_prior`), at most prior_cap. 4 and
-      16, chosen on a validation clip (`experiments/temporal.py`'s clip with other scenes,
-      seeds 303 and 404): disparity flicker 3.05 -> 1.04 px, bad-1 58.5 -> 53.8%.
+      each lag costs prior_weight units per pixel outside the window around the previous
+      frame's disparity (`search_windows.around_prior`), at most prior_cap; 4 and 16,
+      chosen on a validation clip (flicker 3.05 -> 1.04 px, bad-1 58.5 -> 53.8%).
     min_lag, small_lag_penalty: lags below min_lag cost small_lag_penalty more where the
-      range reaches 4 x min_lag or more (`penalise_small_lags`; a narrower range keeps
-      them). At lags of 1-3 px the windows compare neighbouring pixels, which a camera
-      image's blur and noise correlate whatever the echo: without it a fifth of
-      Motorcycle's and a third of the KITTI frame's pixels locked onto lags 1-3. 4 and 8
-      (2026-11-27): the lag chosen on validation (bad-1 35.0 -> 30.4%), the penalty,
-      which validation hardly tells apart, on the temporal clip, a third of whose pixels
-      lie below 4 px (the default video path's bad-1 46.9% without, 45.9% at 8, 52.3% at
-      16). A penalty, not a raised min_disparity: excluded, lags 1-3 cost that clip more.
-    max_float_mib: above this many MiB of float32 costs (4 H W D bytes) the self-matching
-      stores none: the ZNCC kernel runs twice, first for the per-lag means, then writing
-      the uint8 volume directly (the same volume, bit for bit; a 12-MP photo over 350 lags
-      would otherwise hold 16.8 GB of floats).
-    max_strip_mib: SGM aggregates the volume in strips of rows holding at most this many
-      MiB of path sums (`parallel_sgm.match_cost_volume`; 2 bytes a cell), one per core at
-      a time: a 720p or 1080p frame keeps one strip per core, a 12-MP photo over 350 lags
-      (8.4 GB of sums in one piece) gets 16 strips.
+      range reaches 4 x min_lag or more (`penalise_small_lags`): at lags of 1-3 px the
+      windows compare neighbouring pixels, which blur and noise correlate whatever the
+      echo. 4 and 8, chosen on validation and on the temporal clip (LEARNED_DIPLOPIA.md).
+    max_width: the self-matching (costs, SGM, the weight) runs on a copy reduced
+      ceil(W / max_width) times (`working_scale`; 0: never), the layers at full size. 1280,
+      chosen on large validation double images (docs/LEARNED_DIPLOPIA.md "Large images":
+      bad-1 59.9 -> 48.9% at 1920 x 1080, 84.4 -> 55.4% at 4000 x 3000); frames up to 1280
+      px wide, the evaluation frames and 720p video, are not reduced.
+    max_float_mib, max_strip_mib: memory bounds. Above max_float_mib of float32 costs
+      (4 H W D bytes) the ZNCC kernel runs twice (per-lag means, then the uint8 volume:
+      the same volume); SGM runs in strips of at most max_strip_mib of path sums
+      (`parallel_sgm.match_cost_volume`; 720p and 1080p frames keep one strip per core).
   """
   matching: sgm.SgmConfig = sgm.SgmConfig(min_disparity=1, p1=16, p2=160)
   window_radius: int = 7
@@ -91,6 +82,7 @@ class DiplopiaConfig:
   prior_cap: int = 16
   min_lag: int = 4
   small_lag_penalty: int = 8
+  max_width: int = 1280
   max_float_mib: int = 1024
   max_strip_mib: int = 512
 
@@ -102,7 +94,7 @@ class DiplopiaConfig:
       raise ValueError(f'DiplopiaConfig.min_lag must be >= 1 and small_lag_penalty in '
                        f'[0, 255] (uint8 cost units), got {self.min_lag} and '
                        f'{self.small_lag_penalty}.')
-    for field in ('max_float_mib', 'max_strip_mib'):
+    for field in ('max_width', 'max_float_mib', 'max_strip_mib'):
       if getattr(self, field) < 0:
         raise ValueError(f'DiplopiaConfig.{field} must be >= 0, got {getattr(self, field)}.')
     if self.matching.min_disparity < 1:
@@ -111,20 +103,13 @@ class DiplopiaConfig:
 
 
 def global_shift(gray: np.ndarray, min_lag: int = 2, max_lag: int = 128) -> int:
-  """Dominant horizontal shift of a double image: the peak of the power cepstrum.
+  """The lag in [min_lag, max_lag] (pixels, max_lag clipped to W - 1) maximising the
+  row-averaged power cepstrum of float [H, W] `gray`: the dominant echo of a double image.
 
   An echo I(x) = (L(x) + L(x + d)) / 2 multiplies the row power spectrum by
-  (1 + cos(w d)) / 2, a ripple that the log turns into an additive term whose inverse
-  transform (the cepstrum) peaks at quefrency d; the image's own smooth spectrum stays at
-  small quefrencies. (The plain autocorrelation peaks at lag 1 on natural images.)
-
-  Args:
-    gray: float [H, W] intensities of the mixture.
-    min_lag, max_lag: lags searched, pixels (max_lag clipped to W - 1); lags below 2 are
-      dominated by the spectrum's envelope.
-
-  Returns:
-    The lag in [min_lag, max_lag] maximising the row-averaged power cepstrum.
+  (1 + cos(w d)) / 2, a ripple the log turns into an additive term whose inverse transform
+  peaks at quefrency d (the autocorrelation of natural images peaks at lag 1 instead;
+  lags below 2 are dominated by the spectrum's envelope).
   """
   rows = np.asarray(gray, np.float64)
   rows = rows - rows.mean(axis=1, keepdims=True)
@@ -244,6 +229,27 @@ def add_prior(volume: np.ndarray, config: DiplopiaConfig, prior: np.ndarray,
   return volume
 
 
+def _self_match(image, config, weight, costs, prior, prior_window):
+  """Step 2 and the weight on the copy reduced to `config.max_width` (`working_scale`):
+  ({'disparity_left', 'disparity_right'} at full size, the a used)."""
+  matching = config.matching
+  copy = working_scale.reduce(image, working_scale.factor(image.shape[1], config.max_width),
+                              (matching.min_disparity, matching.max_disparity), prior)
+  config = dataclasses.replace(config, matching=dataclasses.replace(
+      matching, min_disparity=copy.search[0], max_disparity=copy.search[1]))
+  volume = penalise_small_lags((costs or zncc_costs)(copy.image, config), config)
+  if copy.prior is not None:
+    add_prior(volume, config, copy.prior, prior_window or (1, 2))
+  matched = parallel_sgm.match_volume(volume, config.matching,
+                                     threads=workers.usable_cpus(0),
+                                     max_strip_mib=config.max_strip_mib)
+  del volume  # H x W x D bytes, not held through the layer solve.
+  weight = diplopia_layers.resolve_weight(weight, copy.image, matched['disparity_left'],
+                                          matched['consistent_left'])
+  return {key: working_scale.enlarge(matched[key], image.shape[:2], copy.scale)
+          for key in ('disparity_left', 'disparity_right')}, weight
+
+
 def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
                    config: Optional[DiplopiaConfig] = None,
                    weight: Union[None, float, str] = None,
@@ -261,9 +267,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     costs: (mixture float [H, W, 3] in [0, 1], config) -> the uint8 [H, W, D] self-matching
       volume over config.matching's lags (None: `zncc_costs`; a learned stage's otherwise).
     prior: float [H, W], the previous video frame's left disparity (NaN: none there), or
-      None; prior_window: (radius, spread) of `search_windows.around_prior` (None: 1, 2,
-      the anaglyph matcher's video window). Lags outside the window are penalised
-      (`add_prior`), not excluded.
+      None; lags outside its window are penalised (`add_prior`), not excluded;
+      prior_window: (radius, spread) of `search_windows.around_prior` (None: 1, 2).
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
@@ -282,15 +287,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     config = dataclasses.replace(config, matching=dataclasses.replace(
         config.matching, min_disparity=int(low), max_disparity=int(high)))
   image = image_range.as_unit_float(mixture, 'mixture')
-  volume = penalise_small_lags((costs or zncc_costs)(image, config), config)
-  if prior is not None:
-    add_prior(volume, config, prior, prior_window or (1, 2))
-  matched = parallel_sgm.match_volume(volume, config.matching,
-                                     threads=workers.usable_cpus(0),
-                                     max_strip_mib=config.max_strip_mib)
-  del volume  # H x W x D bytes: not held through the layer solve.
-  weight = diplopia_layers.resolve_weight(weight, image, matched['disparity_left'],
-                                          matched['consistent_left'])
+  matched, weight = _self_match(image, config, weight, costs, prior, prior_window)
   layers = diplopia_layers.separate_layers(image, matched['disparity_right'], config.layers,
                                            weight)
   return {'left': image_range.unit_to_u8(layers['left']),
