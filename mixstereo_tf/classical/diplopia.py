@@ -66,7 +66,7 @@ class DiplopiaConfig:
     max_width: the self-matching (costs, SGM, the weight) runs on a copy reduced
       ceil(W / max_width) times (`working_scale`; 0: never), the layers at full size. 1280,
       chosen on large validation double images (docs/LEARNED_DIPLOPIA.md "Large images":
-      bad-1 59.9 -> 48.9% at 1920 x 1080, 84.4 -> 55.4% at 4000 x 3000); frames up to 1280
+      bad-1 54.1 -> 43.6% at 1920 x 1080, 84.4 -> 52.2% at 4000 x 3000); frames up to 1280
       px wide, the evaluation frames and 720p video, are not reduced.
     max_float_mib, max_strip_mib: memory bounds. Above max_float_mib of float32 costs
       (4 H W D bytes) the ZNCC kernel runs twice (per-lag means, then the uint8 volume:
