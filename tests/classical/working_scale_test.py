@@ -63,3 +63,20 @@ def test_a_coarse_wide_echo_is_found_on_the_reduced_copy_only():
   assert found(reduced) > 0.98  # 1.0: the copy is 160 px wide, the echo 10 px there.
   assert reduced['left'].shape == image.shape and reduced['disparity_right'].shape == (96, 640)
   assert reduced['disparity_range'] == (1, 80)  # Reported in full pixels.
+
+
+def test_a_video_prior_reaches_the_reduced_copy_in_its_pixels():
+  # A 1080p-like frame of a shot: the previous frame's full-size disparity (NaN where it
+  # failed) is the prior; the copy searches around it in its own pixels.
+  rng = np.random.default_rng(2)
+  lag, height, width = 24, 64, 400
+  texture = cv2.GaussianBlur(rng.uniform(0, 255, (height, width + lag)).astype(np.float32),
+                             (0, 0), 2.0)
+  double = (texture[:, lag:] + texture[:, :width]) / 2
+  image = np.repeat(np.clip(double, 0, 255).astype(np.uint8)[..., None], 3, axis=-1)
+  prior = np.full((height, width), float(lag), np.float32)
+  prior[:, :40] = np.nan
+  config = diplopia.DiplopiaConfig(max_width=200)  # Reduced twice: the echo at 12 px.
+  out = diplopia.unmix_diplopia(image, (1, 60), config, prior=prior, prior_window=(1, 2))
+  assert out['disparity_left'].shape == (height, width) and out['left'].shape == image.shape
+  assert np.mean(np.abs(out['disparity_left'][:, 80:] - lag) <= 2) > 0.95
