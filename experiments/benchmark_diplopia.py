@@ -80,8 +80,7 @@ def photo(arguments, checkout=''):
       capture_output=True, text=True, check=True, cwd=tree,
       env=dict(os.environ, PYTHONPATH=tree)).stdout.strip().splitlines()[-1]
   line, package = out.rsplit('; package ', 1)
-  if not os.path.abspath(package).startswith(tree + os.sep):
-    raise RuntimeError(f'{tree}: the package came from {package} (a stale install?).')
+  checkouts.check_package(package, checkout)
   return line
 
 

@@ -29,8 +29,14 @@ def measure(module: str, expression: str, checkout: str = ''):
   out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                        check=True, env=env, cwd=checkout or None).stdout
   package, value = json.loads(out.split('RESULT ', 1)[1])
+  check_package(package, checkout)
+  return value
+
+
+def check_package(package: str, checkout: str = '') -> None:
+  """RuntimeError unless `package` (a path inside the package that ran) lies in `checkout`
+  (the working tree when empty): a stale install answered otherwise."""
   tree = os.path.abspath(checkout or os.getcwd())
   if not os.path.abspath(package).startswith(tree + os.sep):
     where = f'--before_checkout={checkout}' if checkout else 'the working tree'
     raise RuntimeError(f'{where}: the package came from {package} (a stale install?).')
-  return value

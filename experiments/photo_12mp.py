@@ -48,11 +48,10 @@ def main(argv):
   size = tuple(int(v) for v in FLAGS.photo_size.split('x'))
   left, right = (cv2.resize(v, size, interpolation=cv2.INTER_CUBIC) for v in (left, right))
   pair = {'left': left, 'right': right}
+  encoder = 'ffmpeg' if FLAGS.photo_encoding in ffmpeg_encoder.FFMPEG_MODES else 'ours'
   try:
-    if FLAGS.photo_encoding not in ffmpeg_encoder.FFMPEG_MODES:
-      raise ImportError  # Not one of FFmpeg's encodings: ours.
-    image = realworld.make_anaglyph(pair, FLAGS.photo_encoding, 'ffmpeg')
-  except ImportError:
+    image = realworld.make_anaglyph(pair, FLAGS.photo_encoding, encoder)
+  except ImportError:  # No imageio-ffmpeg.
     image = realworld.make_anaglyph(pair, FLAGS.photo_encoding, 'ours')
   del left, right, pair
   before = _peak_gib()

@@ -64,5 +64,7 @@ def enlarge(disparity: np.ndarray, shape: Tuple[int, int], scale: float) -> np.n
   shapes agree."""
   if disparity.shape == tuple(shape):
     return disparity
-  big = cv2.resize(disparity, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
-  return (big * np.float32(scale)).astype(np.float32)
+  big = cv2.resize(np.asarray(disparity, np.float32), (shape[1], shape[0]),
+                   interpolation=cv2.INTER_LINEAR)
+  big *= np.float32(scale)
+  return big
