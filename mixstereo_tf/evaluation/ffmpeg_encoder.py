@@ -1,12 +1,14 @@
 """Anaglyphs made by an independent encoder: FFmpeg's `stereo3d` filter.
 
     image = encode(left_u8, right_u8, 'half_color')   # FFmpeg's arch from the pair
+    stored = round_trip(image, 'h264')                 # as a video stores it
 
 FFmpeg comes from imageio-ffmpeg's static binary (the 'eval' and 'test' extras of
 setup.py; PyAV's wheels are built without stereo3d). The pair goes in side by side, left
 first (`sbsl`); the output mode per encoding is FFMPEG_MODES. FFmpeg's amber-blue colour,
 gray and half-colour modes (aybc, aybg, aybh) put the amber filter over the right eye, the
-mirror of `mixtures.amber_blue*`, so those are fed the views exchanged.
+mirror of `mixtures.amber_blue*`, so those are fed the views exchanged. `round_trip` stores
+an image as published anaglyphs are stored (JPEG, H.264 video: both with 4:2:0 chroma).
 """
 
 import os
@@ -26,6 +28,13 @@ FFMPEG_MODES: Dict[str, Tuple[str, bool]] = {
     'amber_blue_gray': ('aybg', True), 'amber_blue_half': ('aybh', True),
     'amber_blue_dubois': ('aybd', False),
 }
+# Lossy storage -> FFmpeg output options: a JPEG of quality about 90 and an H.264 video
+# frame at x264's default quality, both with chroma at half resolution (4:2:0).
+CODECS: Dict[str, Tuple[str, ...]] = {
+    'jpeg': ('-q:v', '3', '-pix_fmt', 'yuvj420p'),
+    'h264': ('-c:v', 'libx264', '-pix_fmt', 'yuv420p', '-crf', '23'),
+}
+_SUFFIX = {'jpeg': '.jpg', 'h264': '.mkv'}
 
 
 def ffmpeg_binary() -> str:
@@ -63,9 +72,41 @@ def encode(left: np.ndarray, right: np.ndarray, name: str) -> np.ndarray:
   with tempfile.TemporaryDirectory() as folder:
     source, target = os.path.join(folder, 'sbs.png'), os.path.join(folder, 'out.png')
     cv2.imwrite(source, cv2.cvtColor(np.concatenate([first, second], 1), cv2.COLOR_RGB2BGR))
-    done = subprocess.run([ffmpeg_binary(), '-y', '-loglevel', 'error', '-i', source,
-                           '-vf', f'stereo3d=sbsl:{mode}', target],
-                          capture_output=True, text=True, check=False)
-    if done.returncode != 0 or not os.path.exists(target):
-      raise RuntimeError(f'FFmpeg stereo3d={mode} failed: {done.stderr.strip()}')
+    _run(['-i', source, '-vf', f'stereo3d=sbsl:{mode}', target])
+    return cv2.cvtColor(cv2.imread(target), cv2.COLOR_BGR2RGB)
+
+
+def _run(arguments) -> None:
+  done = subprocess.run([ffmpeg_binary(), '-y', '-loglevel', 'error', *arguments],
+                        capture_output=True, text=True, check=False)
+  if done.returncode != 0:
+    raise RuntimeError(f'FFmpeg {" ".join(arguments)} failed: {done.stderr.strip()}')
+
+
+def round_trip(image: np.ndarray, codec: str) -> np.ndarray:
+  """`image` stored with a lossy codec of CODECS by FFmpeg and decoded again.
+
+  Args:
+    image: uint8 [H, W, 3] RGB (H.264 4:2:0 needs even H and W).
+    codec: a key of CODECS; 'png' returns the image itself.
+
+  Returns:
+    uint8 [H, W, 3] RGB.
+
+  Raises:
+    ValueError: an unknown codec, or odd sizes for h264.
+    RuntimeError: FFmpeg failed (its message included).
+  """
+  if codec == 'png':
+    return image
+  if codec not in CODECS:
+    raise ValueError(f'Unknown codec {codec!r}; known: png, {", ".join(CODECS)}.')
+  if codec == 'h264' and (image.shape[0] % 2 or image.shape[1] % 2):
+    raise ValueError(f'H.264 4:2:0 needs even sizes, got {image.shape[1]}x{image.shape[0]}.')
+  with tempfile.TemporaryDirectory() as folder:
+    source, stored, target = (os.path.join(folder, name) for name in
+                              ('in.png', 'stored' + _SUFFIX[codec], 'out.png'))
+    cv2.imwrite(source, cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+    _run(['-i', source, *CODECS[codec], stored])
+    _run(['-i', stored, target])
     return cv2.cvtColor(cv2.imread(target), cv2.COLOR_BGR2RGB)

@@ -33,3 +33,31 @@ def test_unknown_encoding_and_bad_views_are_refused():
     ffmpeg_encoder.encode(left, right, 'diplopia')
   with pytest.raises(ValueError, match='one size'):
     ffmpeg_encoder.encode(left, right[:, :10], 'anaglyph')
+
+
+def _smooth_image():
+  """A smooth colour image with one sharp red-cyan edge (colour detail at one pixel)."""
+  yy, xx = np.mgrid[:64, :96]
+  image = np.stack([80 + xx, 60 + yy, 140 + 0 * xx], -1).astype(np.uint8)
+  image[:, 47:, 0] = 20  # At an odd column: inside a 2 x 2 chroma block.
+  return image
+
+
+@pytest.mark.parametrize('codec', ['jpeg', 'h264'])
+def test_round_trip_keeps_smooth_colour_and_blurs_chroma_edges(codec):
+  image = _smooth_image()
+  stored = ffmpeg_encoder.round_trip(image, codec).astype(int)
+  assert stored.shape == image.shape
+  error = np.abs(stored - image)
+  assert np.median(error) <= 2  # Smooth regions survive ...
+  # ... but 4:2:0 chroma spreads the red edge over its neighbour columns.
+  assert error[:, 45:49, 0].mean() > 4 * max(1.0, error[:, :40, 0].mean())
+
+
+def test_round_trip_png_is_the_image_and_bad_requests_are_refused():
+  image = _smooth_image()
+  assert ffmpeg_encoder.round_trip(image, 'png') is image
+  with pytest.raises(ValueError, match='webp'):
+    ffmpeg_encoder.round_trip(image, 'webp')
+  with pytest.raises(ValueError, match='even'):
+    ffmpeg_encoder.round_trip(image[:63], 'h264')
