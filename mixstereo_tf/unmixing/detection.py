@@ -14,18 +14,11 @@ Two questions, each answered by a physical property of the encodings (`mixtures`
      the other two against each other. An ordinary photo, a gray photo or a diplopia image
      (every channel holds both views, aligned) scores ~0 for every family and is refused.
   2. **Variant (colour, gray, half-colour, optimized).** The odd channel is matched
-     against the mean of the other two; at consistent, smooth pixels the colour c of the
-     surface is seen as o = [odd channel at x, other channels at x - d]. Under encoding h
-     (matrices A_L, A_R) o = clip(M_h c), M_h = A_L + A_R, c in [0, 1]^3: the colour
-     encoding explains every o; gray (R = G = B), optimized (a plane) and half-colour (a
-     slab 0.299 thick) explain less. The smallest set that explains the samples wins,
-     ordered by rank and volume |det M_h|; colour is the fallback. Gray: the two channels
-     of one eye equal on singular_share of the pixels. Others: for c uniform in the box,
-     a sample inside the set (within `noise`) is 1 / V times likelier than under colour
-     (V = max(|det M_h|, 2 noise)) and one outside costs `outside_penalty` nats, so the set
-     explains the samples when its outside share is at most log(1/V) / (log(1/V) +
-     outside_penalty). A colour anaglyph of a scene without saturated colours lies inside
-     the half-colour sets as well and is reported as half-colour.
+     against the mean of the other two; the colours seen at consistent, smooth pixels
+     choose the smallest encoding that explains them (`colour_sets`); colour is the
+     fallback. Gray: the two channels of one eye equal on singular_share of the pixels.
+     A colour anaglyph of a scene without saturated colours lies inside the half-colour
+     sets as well and is reported as half-colour.
   3. **Dubois ghosts.** Dubois matrices leak a little of the odd eye into the other
      channels (red-cyan: G gets -0.094 of the left view). Regressing the high-passed other
      channels at a right pixel on the high-passed odd channel at the matching left pixel and
@@ -33,7 +26,9 @@ Two questions, each answered by a physical property of the encodings (`mixtures`
      half-colour; `dubois_leak`). Its projection on a Dubois encoding's expected leak, as
      a fraction of it, chooses the Dubois encoding at >= ghost_fraction and rules it
      out below; the colour samples then choose among the others. The leak is a pixel-scale
-     signal: it is measured on its own copy, up to DetectConfig.ghost_width px wide.
+     signal: it is measured on its own copy, up to DetectConfig.ghost_width px wide and
+     at most half the image's width: JPEG and video (4:2:0) keep colour at half the
+     width, and above it every channel's detail is the luma's, which mixes both eyes.
 Confidence: the family's margin through a logistic, times the variant's: the explained
 share's distance to its threshold through a logistic of scale share_softness (1 for gray),
 and for a decision read from the ghost, the leak's distance to ghost_fraction through one
@@ -43,15 +38,15 @@ apart.
 """
 
 import dataclasses
-from typing import Dict, Optional, Tuple
+from typing import Dict, Optional
 
-import cv2
 import numpy as np
 
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.core import workers
 from mixstereo_tf.restoration import dubois_leak
 from mixstereo_tf.unmixing import channel_matching
+from mixstereo_tf.unmixing import colour_sets
 
 # The channel each family's odd eye owns (red-cyan: R alone is the left eye).
 FAMILY_ODD_CHANNEL = {'red_cyan': 0, 'green_magenta': 1, 'amber_blue': 2}
@@ -71,6 +66,10 @@ class DetectConfig:
     noise: the colour residual's standard deviation, [0, 1] units.
     singular_share: a gray encoding is chosen when this share of pixels has the two
       channels of one eye equal within noise / 2 ...
+    gray_blur: ... on a copy box-blurred over this many pixels, or within gray_relative
+      of the detail (the copy minus its gray_detail-px box blur) of the odd channel's
+      difference from the others (`colour_sets.gray_tolerance`; for 4:2:0 images, JPEG
+      and video: 1 and 0 before, `DESIGN.md`) ...
     outside_penalty: ... another smaller encoding by its share of colour samples outside
       it, each costing this many nats (step 2).
     share_softness: the logistic's scale on the explained share's margin.
@@ -95,10 +94,14 @@ class DetectConfig:
   family_softness: float = 0.03
   noise: float = 0.025
   singular_share: float = 0.9
+  gray_blur: int = 5
+  gray_relative: float = 0.35
+  gray_detail: int = 15
   outside_penalty: float = 40.0
   share_softness: float = 0.01
   samples: int = 20000
   ghost_width: int = 960
+  ghost_max_fraction: float = 0.5
   ghost_sigma: float = 2.0
   ghost_correlation: float = 0.85
   ghost_min_shift: int = 3
@@ -147,97 +150,14 @@ def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
   return scores
 
 
-def colour_samples(small: np.ndarray, odd: int, matched: channel_matching.Matched,
-                   config: DetectConfig) -> np.ndarray:
-  """[N, 3] colours o in [0, 1] (step 2): the odd channel at x, the others at x - d."""
-  others = [c for c in range(3) if c != odd]
-  smooth = cv2.blur(small, (3, 3)) / 255.0
-  grad = sum(np.abs(cv2.Sobel(smooth[..., c], cv2.CV_32F, 1, 0)) +
-             np.abs(cv2.Sobel(smooth[..., c], cv2.CV_32F, 0, 1)) for c in range(3))
-  ys, xs, xr = matched
-  flat = (grad[ys, xs] <= np.median(grad)) & (grad[ys, xr] <= np.median(grad))
-  ys, xs, xr = ys[flat], xs[flat], xr[flat]
-  if ys.size > config.samples:
-    pick = np.random.default_rng(0).choice(ys.size, config.samples, replace=False)
-    ys, xs, xr = ys[pick], xs[pick], xr[pick]
-  obs = np.empty((ys.size, 3), np.float64)
-  obs[:, odd] = smooth[ys, xs, odd]
-  obs[:, others] = smooth[ys, xr][:, others]
-  return obs
-
-
-def _matrix(name: str) -> np.ndarray:
-  spec = mixtures.get_mixture(name)
-  return np.asarray(spec.left_matrix) + np.asarray(spec.right_matrix)
-
-
-def _fit(obs: np.ndarray, name: str) -> np.ndarray:
-  """Squared residuals [N] of colour samples against clip(M c), c in the unit box."""
-  m, clip = _matrix(name), mixtures.get_mixture(name).clip
-  c = np.clip(obs @ np.linalg.pinv(m).T, 0.0, 1.0)
-  step = 1.0 / np.linalg.norm(m, 2) ** 2
-  for _ in range(60):  # Projected gradient on |clip(M c) - o|^2 over the unit box.
-    predicted = m @ c.T
-    inside = ((predicted > 0) & (predicted < 1)) if clip else 1.0
-    c = np.clip(c - step * ((np.clip(predicted, 0, 1) - obs.T) * inside).T @ m, 0.0, 1.0)
-  return ((obs - np.clip(c @ m.T, 0.0, 1.0)) ** 2).sum(axis=1)
-
-
-def explained_share(small: np.ndarray, obs: np.ndarray, name: str,
-                    config: DetectConfig) -> float:
-  """The share of the image a smaller encoding explains (step 2): gray ones, the pixels
-  whose two channels of one eye are equal within noise / 2; others, the colour samples
-  within noise of their set."""
-  spec = mixtures.get_mixture(name)
-  if not spec.transmits_colour:
-    pair = next(eye for eye in spec.eye_channels if len(eye) == 2)
-    same = np.abs(small[..., pair[0]] - small[..., pair[1]]) <= 255.0 * config.noise / 2
-    return float(same.mean())
-  if len(obs) < 50:
-    return 0.0
-  return float((_fit(obs, name) <= config.noise ** 2).mean())
-
-
-def _size(name: str) -> Tuple[int, float]:
-  """(rank, |det|) of an encoding's M: smaller sets first."""
-  m = _matrix(name)
-  return int(np.linalg.matrix_rank(m, tol=1e-3)), abs(float(np.linalg.det(m)))
-
-
-def _logistic(value: float) -> float:
-  return float(1.0 / (1.0 + np.exp(-value)))
-
-
-def needed_share(name: str, config: DetectConfig) -> float:
-  """The share of the image a smaller encoding must explain to be chosen (step 2)."""
-  if not mixtures.get_mixture(name).transmits_colour:
-    return config.singular_share
-  gain = -np.log(max(_size(name)[1], 2.0 * config.noise))
-  return 1.0 - gain / (gain + config.outside_penalty)
-
-
-def choose_variant(small: np.ndarray, obs: np.ndarray, names, config: DetectConfig
-                   ) -> Tuple[str, float, Dict[str, float]]:
-  """(encoding, confidence, explained shares): the smallest of `names` (encodings that
-  transmit colour) that explains the samples, else the largest (step 2)."""
-  ordered = sorted(names, key=_size)
-  shares, closest = {}, -np.inf
-  for name in ordered[:-1]:
-    shares[name] = explained_share(small, obs, name, config)
-    margin = (shares[name] - needed_share(name, config)) / config.share_softness
-    if margin >= 0:
-      return name, _logistic(margin), shares
-    closest = max(closest, margin)
-  return ordered[-1], _logistic(-closest), shares
-
-
 def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int,
                matched: channel_matching.Matched, config: DetectConfig) -> np.ndarray:
-  """`dubois_leak.observed` (step 3) on a copy of `image` up to config.ghost_width px wide,
-  its eyes matched anew there (in 2 strips) over the dense range of `matched`'s disparities
+  """`dubois_leak.observed` (step 3) on a copy of `image` up to config.ghost_width px and
+  half the image's width wide (module docstring), its eyes matched anew there (in 2 strips) over the dense range of `matched`'s disparities
   scaled to it (`channel_matching.rescaled_search`); on `small` and its `matched` pixels
   when that copy is no wider."""
-  wide = channel_matching.downsampled(image, config.ghost_width)
+  wide = channel_matching.downsampled(
+      image, min(config.ghost_width, int(image.shape[1] * config.ghost_max_fraction)))
   if wide.shape[1] > small.shape[1]:
     search = channel_matching.rescaled_search(
         matched, channel_matching.span(small, config.reach_fraction),
@@ -267,16 +187,16 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   odd = FAMILY_ODD_CHANNEL[family]
   matched = channel_matching.eye_match(small, odd,
                                        channel_matching.span(small, config.reach_fraction))
-  obs = colour_samples(small, odd, matched, config)
+  obs = colour_sets.colour_samples(small, odd, matched, config)
   names = [n for n in CANDIDATES if mixtures.get_mixture(n).family == family]
-  gray = {n: explained_share(small, obs, n, config) for n in names
+  gray = {n: colour_sets.explained_share(small, obs, n, config) for n in names
           if not mixtures.get_mixture(n).transmits_colour}
   scores.update({n: round(v, 4) for n, v in gray.items()})
   ghost = ghost_leak(image, small, odd, matched, config)
   expected = {n: dubois_leak.expected(n, odd) for n in names}
   leaky = {n: float(ghost @ e / (e @ e)) for n, e in expected.items() if np.abs(e).max() > 0.01}
   scores.update({f'ghost:{n}': round(t, 3) for n, t in leaky.items()})
-  fitting = [n for n, share in gray.items() if share >= needed_share(n, config)]
+  fitting = [n for n, share in gray.items() if share >= colour_sets.needed_share(n, config)]
   also_fits = None
   if fitting:  # Equal channels are the surest sign; a leak is measured less surely.
     name, variant_confidence = fitting[0], 1.0
@@ -285,12 +205,12 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
       names = [max(leaky, key=leaky.get)]
     else:
       names = [n for n in names if n not in leaky and n not in gray]
-    name, variant_confidence, shares = choose_variant(small, obs, names, config)
+    name, variant_confidence, shares = colour_sets.choose_variant(small, obs, names, config)
     if leaky:
-      variant_confidence *= _logistic(abs(max(leaky.values()) - config.ghost_fraction)
+      variant_confidence *= colour_sets.logistic(abs(max(leaky.values()) - config.ghost_fraction)
                                       / config.ghost_softness)
     scores.update({n: round(v, 4) for n, v in shares.items()})
-    largest = max(names, key=_size)
+    largest = max(names, key=colour_sets.size)
     also_fits = largest if name != largest else None
   return Detection(name, family_confidence * variant_confidence,
                    f'{family} channels displaced (score {families[family]:.3f}); '

@@ -1,6 +1,7 @@
 """Tests of detection: anaglyphs made by FFmpeg's stereo3d filter (imageio-ffmpeg's binary,
 where installed) and by our operators from a synthetic stereo pair with known disparities."""
 
+import dataclasses
 import subprocess
 
 import cv2
@@ -10,6 +11,7 @@ import pytest
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import sample
+from mixstereo_tf.evaluation import ffmpeg_encoder
 from mixstereo_tf.restoration import dubois_leak
 from mixstereo_tf.unmixing import channel_matching
 from mixstereo_tf.unmixing import detection
@@ -85,17 +87,6 @@ def test_ffmpeg_stereo3d_anaglyphs(tmp_path, mode):
   assert (ghost > 0.6) if dubois else (abs(ghost) < 0.15), found.scores
 
 
-def test_needed_share_follows_the_sets_volume():
-  config = detection.DetectConfig()
-  # A thinner set is likelier per sample, so it may leave more samples outside.
-  red_cyan, green_magenta = (detection.needed_share(n, config)
-                             for n in ('half_color', 'green_magenta_half'))
-  assert 0.9 < red_cyan < green_magenta < 1.0
-  gain = -np.log(0.299)
-  assert red_cyan == pytest.approx(1 - gain / (gain + config.outside_penalty), rel=1e-2)
-  assert detection.needed_share('gray', config) == config.singular_share
-
-
 @pytest.mark.parametrize('kind', ['left view', 'diplopia', 'gray photo'])
 def test_images_that_are_not_anaglyphs_are_refused(kind):
   left, right, _ = _pair()
@@ -163,8 +154,8 @@ def test_small_or_malformed_images_are_errors():
 
 
 @pytest.mark.parametrize('name, low, high', [('dubois_ffmpeg', 0.6, 1.3), ('anaglyph', -0.15, 0.15)])
-def test_the_leak_is_measured_on_a_copy_up_to_ghost_width(name, low, high):
-  left, right, _ = _pair(height=120, width=720)
+def test_the_leak_is_measured_on_a_copy_up_to_ghost_width_and_half_the_image(name, low, high):
+  left, right, _ = _pair(height=120, width=1440)
   image = _ours(name, left, right)
   config = detection.DetectConfig()
   small = channel_matching.downsampled(image, config.width)
@@ -173,10 +164,25 @@ def test_the_leak_is_measured_on_a_copy_up_to_ghost_width(name, low, high):
   ghost = detection.ghost_leak(image, small, 0, matched, config)
   expected = dubois_leak.expected('dubois_ffmpeg', 0)
   assert low < ghost @ expected / (expected @ expected) < high
-  # The copy is the image itself here (720 <= ghost_width): at 320 px the leak differs.
+  # The copy is 720 px wide: half the image's (< ghost_width); at 320 px the leak differs.
+  half = dataclasses.replace(config, ghost_width=720, ghost_max_fraction=1.0)
+  np.testing.assert_array_equal(ghost, detection.ghost_leak(image, small, 0, matched, half))
   narrow = detection.ghost_leak(image, small, 0, matched,
                                 detection.DetectConfig(ghost_width=config.width))
   assert not np.allclose(ghost, narrow)
+
+
+@pytest.mark.parametrize('name', ['gray', 'green_magenta_gray', 'anaglyph'])
+def test_gray_anaglyphs_stay_gray_through_h264(name):
+  """4:2:0 chroma leaves G - B of a gray red-cyan anaglyph off by several levels: a fixed
+  tolerance on single pixels (the detection before) read it as half-colour."""
+  left, right, _ = _pair()
+  pytest.importorskip('imageio_ffmpeg')
+  image = ffmpeg_encoder.round_trip(_ours(name, left, right), 'h264')
+  assert detection.detect(image).name == name
+  before = dataclasses.replace(detection.DetectConfig(), gray_blur=1, gray_relative=0.0)
+  if name != 'anaglyph':
+    assert detection.detect(image, before).name != name
 
 
 def test_a_dubois_decision_is_as_sure_as_its_leak_is_far_from_the_threshold():
