@@ -23,7 +23,6 @@ ground truth, is measured at the census matcher's consistent matches of its luma
 found, not truth, so its RMS includes the matcher's errors.
 """
 
-import os
 import platform
 import time
 from typing import Dict
@@ -32,6 +31,7 @@ from absl import app
 from absl import flags
 import numpy as np
 
+from experiments import markdown
 from experiments import same_channel  # The scenes and their window alignment.
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.evaluation import realworld
@@ -106,10 +106,7 @@ def main(argv):
           f'in {time.perf_counter() - start:.0f} s. See the module docstring; procedural '
           'scenes are rendered with equal cameras (their differences are the renderer\'s '
           'shading and the linear resampling).', ''] + lines
-  os.makedirs(os.path.dirname(FLAGS.camera_difference_output) or '.', exist_ok=True)
-  with open(FLAGS.camera_difference_output, 'w') as handle:
-    handle.write('\n'.join(text) + '\n')
-  print('\n'.join(text))
+  markdown.write(FLAGS.camera_difference_output, text)
 
 
 if __name__ == '__main__':

@@ -22,6 +22,7 @@ import numpy as np
 from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.restoration import views
+from experiments import markdown
 from experiments import same_channel  # Also defines --shared_dir.
 
 flags.DEFINE_string('colour_line_output', 'experiments/results/colour_line.md',
@@ -78,9 +79,7 @@ def main(argv):
           'are restored without (`RestoreConfig(colour_line_weight=0)`, the restoration '
           'before the pass) and with the pass (the default). RGB PSNR of the uint8 views.',
           '', *_table(rows), '']
-  with open(FLAGS.colour_line_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.colour_line_output, text)
 
 
 if __name__ == '__main__':

@@ -30,6 +30,7 @@ from absl import flags
 import numpy as np
 import tensorflow as tf
 
+from experiments import markdown
 from experiments import same_channel  # Scenes, unmixers; also defines --shared_dir.
 from experiments import validation  # --photo_dir and the validation warps.
 from mixstereo_tf.artifacts import pretrained
@@ -205,9 +206,7 @@ def main(argv):
           'See the module docstring. A rerun of this command was not timed or compared; '
           'scratch runs of the recipe on other draws of training pairs differed by up to '
           '0.16 dB a view (docs/LEARNED_MATCHING.md).', ''] + lines
-  with open(FLAGS.colouriser_output, 'w') as handle:
-    handle.write('\n'.join(text) + '\n')
-  print('\n'.join(text))
+  markdown.write(FLAGS.colouriser_output, text)
 
 
 if __name__ == '__main__':

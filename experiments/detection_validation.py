@@ -27,6 +27,7 @@ from mixstereo_tf.evaluation import ffmpeg_encoder
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import detection
 
+from experiments import markdown
 from experiments import validation  # --photo_dir.
 
 flags.DEFINE_integer('detection_pairs', 12, 'Warped photo pairs per seed set.')
@@ -92,9 +93,7 @@ def main(argv):
     found = _detections(SEED_SETS[title], FLAGS.detection_pairs, names, atlas)
     text += _section(f'Seeds {SEED_SETS[title]:.2g} on ({title})', found, names)
   text.append(f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores.')
-  with open(FLAGS.detection_validation_output, 'w') as f:
-    f.write('\n'.join(text) + '\n')
-  print('\n'.join(text))
+  markdown.write(FLAGS.detection_validation_output, text)
 
 
 if __name__ == '__main__':

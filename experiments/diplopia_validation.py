@@ -30,6 +30,7 @@ from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.data import photo_warps
 
+from experiments import markdown
 from experiments import validation  # --photo_dir, the pairs, their scores.
 
 flags.DEFINE_list('diplopia_variants', [], 'label=field=value[@field=value...]: fields of '
@@ -99,9 +100,7 @@ def main(argv):
           f'{FLAGS.diplopia_pairs} photo-warp double images (seeds 10^9 on, 256 x 512, '
           'range 96; module docstring). Variants: '
           + ', '.join(f'`{v}`' for v in FLAGS.diplopia_variants) + '.', '', *lines, '']
-  with open(FLAGS.diplopia_validation_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.diplopia_validation_output, text)
 
 
 if __name__ == '__main__':

@@ -30,6 +30,7 @@ from mixstereo_tf.classical import diplopia
 from mixstereo_tf.data import photo_warps
 from mixstereo_tf.data import texture_atlas
 
+from experiments import markdown
 from experiments import validation  # --photo_dir, the pairs, their scores.
 
 flags.DEFINE_integer('large_pairs', 3, 'Pairs per size.', lower_bound=1)
@@ -106,9 +107,7 @@ def main(argv):
           f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores, '
           f'{FLAGS.large_pairs} validation pairs a size (module docstring); the shipped '
           f'`DiplopiaConfig.max_width` is {shipped}.', '', *lines, '']
-  with open(FLAGS.large_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.large_output, text)
 
 
 if __name__ == '__main__':

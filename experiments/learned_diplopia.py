@@ -41,13 +41,13 @@ import numpy as np
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.artifacts import pretrained
-from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import learned_diplopia
 from mixstereo_tf.unmixing import predictors
+from experiments import markdown
 from experiments import same_channel
 
 cli_flags.define_shared_dir()
@@ -251,9 +251,7 @@ def main(argv):
           'valid ground-truth pixels off by more than 1 / 3 px; D1: off by more than 3 px '
           'and 5 %. procedural: mean of 8 scenes. The echo features never saw a stereo '
           'pair or an evaluation scene: every source is held out.', '', *tables(rows)]
-  with open(FLAGS.learned_diplopia_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.learned_diplopia_output, text)
 
 
 if __name__ == '__main__':

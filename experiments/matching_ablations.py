@@ -40,6 +40,7 @@ from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import shipped
 
+from experiments import markdown
 from experiments import same_channel
 from experiments import validation
 
@@ -91,9 +92,7 @@ def main(argv):
           'FFmpeg of the same_channel scenes, window-aligned at 30%; the learned rows are '
           'the stage alone (no refiner); see experiments/results/same_channel.md for the '
           'refiner on / off.', '', *same_channel.method_table(rows, list(unmixers), 'stage'), '']
-  with open(FLAGS.ablation_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.ablation_output, text)
 
 
 if __name__ == '__main__':

@@ -40,6 +40,7 @@ from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import learned_matching
 
+from experiments import markdown
 from experiments import validation  # --photo_dir, the pairs, their scores.
 
 flags.DEFINE_list('variants', ['shipped=shipped'], 'label=MODEL[@field=value...]: MODEL '
@@ -146,9 +147,7 @@ def main(argv):
           'FFmpeg anaglyphs; module docstring). Variants: '
           + ', '.join(f'`{v}`' for v in FLAGS.variants) + '.', '',
           *table(rows, ['classical'] + [v[0] for v in variants]), '']
-  with open(FLAGS.validation_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.validation_output, text)
 
 
 if __name__ == '__main__':

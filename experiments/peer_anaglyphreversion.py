@@ -33,6 +33,7 @@ from mixstereo_tf.evaluation import realworld
 
 import numpy as np
 
+from experiments import markdown
 from experiments import same_channel
 
 flags.DEFINE_string('peer_dir', None, 'A checkout of andreldc/anaglyphreversion.')
@@ -113,9 +114,7 @@ def main(argv):
           'run on the learned stage instead of the classical method; refiner = the previous '
           'default (`--pretrained=anaglyph`). Seconds on a machine shared with training '
           'runs.', '', *same_channel.method_table(rows, ('peer',) + OURS, seconds=True), '']
-  with open(FLAGS.peer_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.peer_output, text)
 
 
 if __name__ == '__main__':

@@ -27,6 +27,7 @@ from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import learned_matching
 
+from experiments import markdown
 from experiments import matching_validation
 from experiments import validation  # --photo_dir, the pairs.
 
@@ -94,9 +95,7 @@ def main(argv):
                 f'{100 * values[:, 0].min():.1f}% | {mean[1]:.2f}x | '
                 f'{values[:, 1].max():.2f}x | {100 * mean[2]:.1f}% | '
                 f'{mean[3]:.2f} / {mean[4]:.2f} |')
-  with open(FLAGS.range_output, 'w') as handle:
-    handle.write('\n'.join(text) + '\n')
-  print('\n'.join(text))
+  markdown.write(FLAGS.range_output, text)
 
 
 if __name__ == '__main__':

@@ -28,7 +28,6 @@ from absl import flags
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.cli import stereo_formats
-from mixstereo_tf.core import image_range
 from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.unmixing import predictors
 

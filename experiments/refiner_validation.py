@@ -40,6 +40,7 @@ from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import shipped
 
+from experiments import markdown
 from experiments import validation
 
 flags.DEFINE_list('refiner_runs', [], 'Refiner training runs or pretrained folders to '
@@ -107,9 +108,7 @@ def main(argv):
           f'--refiner_mixture={FLAGS.refiner_mixture} --refiner_runs='
           f'{",".join(FLAGS.refiner_runs)}` in {time.perf_counter() - start:.0f} s on '
           f'{os.cpu_count()} CPU cores (module docstring).', '', *lines, '']
-  with open(FLAGS.refiner_validation_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.refiner_validation_output, text)
 
 
 if __name__ == '__main__':

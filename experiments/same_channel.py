@@ -1,7 +1,7 @@
 """The same-channel diagnostic (issue "Learned cross-channel matching"): how much worse the
 matching gets because an anaglyph's eyes are seen through different colour channels.
 
-    python experiments/same_channel.py [--shared_dir=../shared/stereo_samples] \
+    python -m experiments.same_channel [--shared_dir=../shared/stereo_samples] \
         [--same_channel_output=experiments/results/same_channel.md]
 
 Scenes with ground truth: the `sample` held-out scenes (8 procedural, averaged, + Motorcycle)
@@ -49,6 +49,7 @@ from mixstereo_tf.unmixing import shipped
 
 import numpy as np
 
+from experiments import markdown
 from experiments import validation  # `noisy`; defines --photo_dir (unused here).
 
 cli_flags.define_shared_dir()
@@ -245,7 +246,7 @@ def main(argv):
   _write_csv(rows, os.path.splitext(FLAGS.same_channel_output)[0] + '.csv')
   machine = ' '.join(filter(None, (platform.system(), platform.machine(),
                                    platform.processor())))
-  command = 'python experiments/same_channel.py' + (
+  command = 'python -m experiments.same_channel' + (
       f' --shared_dir={FLAGS.shared_dir}' if FLAGS.shared_dir else '')
   text = ['# Same-channel diagnostic: colour anaglyphs against the gray anaglyph', '',
           f'Written by `{command}` on {machine} ({os.cpu_count()} CPU cores) in '
@@ -280,9 +281,7 @@ def main(argv):
           'regions match in a same-channel pairing only '
           '(experiments/results/channel_information.md).', '',
           *_table(rows), '']
-  with open(FLAGS.same_channel_output, 'w') as handle:
-    handle.write('\n'.join(text))
-  print('\n'.join(text))
+  markdown.write(FLAGS.same_channel_output, text)
 
 
 if __name__ == '__main__':

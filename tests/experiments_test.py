@@ -340,3 +340,12 @@ def test_real_pairs_loso_gives_double_images_their_ratio_to_classical():
   assert table[0].startswith('| scenes | method | bad-1 double image | bad-1 classical |')
   assert ('| sceneflow_A-0032-0006 | without sceneflow | 45.0% | 60.0% | 0.75x | '
           '21.50 / 20.00 | +0.50 / +0.00 |') in table
+
+
+def test_a_markdown_report_ends_with_one_newline_in_a_new_folder(tmp_path, capsys):
+  from experiments import markdown  # pylint: disable=import-outside-toplevel
+  path = tmp_path / 'results' / 'report.md'
+  for lines in (['# Title', '', 'a line'], ['# Title', '', 'a line', '', '']):
+    markdown.write(str(path), lines)
+    assert path.read_text() == '# Title\n\na line\n'
+    assert capsys.readouterr().out == '# Title\n\na line\n'
