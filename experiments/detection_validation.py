@@ -40,16 +40,17 @@ CODECS = ('png', 'jpeg', 'h264')
 WARPS = photo_warps.WarpConfig(height=368, width=1024, max_disparity=96,
                                window_probability=0.5)
 SHIPPED = detection.DetectConfig()
+SHIPPED_NAME = 'shipped (leak at 1/2 width)'
 # The detection before this choice, the gray rule alone, and other copy widths for the leak.
 CONFIGS = {
     'before': dataclasses.replace(SHIPPED, gray_blur=1, gray_relative=0.0,
                                   ghost_max_fraction=1.0),
     'gray rule, leak at full width': dataclasses.replace(SHIPPED, ghost_max_fraction=1.0),
-    'shipped (leak at 1/2 width)': SHIPPED,
+    SHIPPED_NAME: SHIPPED,
     'leak at 0.4 width': dataclasses.replace(SHIPPED, ghost_max_fraction=0.4),
     'leak at 1/3 width': dataclasses.replace(SHIPPED, ghost_max_fraction=1 / 3),
 }
-AFTER_CONFIGS = ('before', 'shipped (leak at 1/2 width)')
+AFTER_CONFIGS = ('before', SHIPPED_NAME)
 
 
 def _detections(first_seed: int, count: int, names, atlas):
@@ -71,7 +72,7 @@ def _section(title, found, names):
   exact = collections.Counter((f[3], f[2]) for f in found if f[1] == f[4])
   total = collections.Counter((f[3], f[2]) for f in found)
   misreads = collections.Counter((f[2], f[1], f[4] or 'refused') for f in found
-                                 if f[3] == 'shipped (leak at 1/2 width)' and f[1] != f[4])
+                                 if f[3] == SHIPPED_NAME and f[1] != f[4])
   return [f'## {title}', '', '| configuration | ' + ' | '.join(CODECS) + ' |',
           '| --- |' + ' --- |' * len(CODECS),
           *(f'| {name} | ' + ' | '.join(f'{exact[(name, c)]} / {total[(name, c)]}'

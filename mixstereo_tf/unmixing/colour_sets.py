@@ -7,7 +7,8 @@ channels of one eye equal), optimized (a plane) and half-colour (a slab 0.299 th
 explain less. The smallest set that explains the samples wins (`choose_variant`).
 
 `config` is a `detection.DetectConfig` (noise, singular_share, gray_blur, gray_relative,
-gray_detail, outside_penalty, share_softness, samples). Images are float32 [h, w, 3] on 0..255 (the detection's copy).
+gray_detail, outside_penalty, share_softness, samples). Images are float32 [h, w, 3] on
+0..255 (the detection's copy).
 """
 
 from typing import Dict, Sequence, Tuple

@@ -66,10 +66,12 @@ class DetectConfig:
     noise: the colour residual's standard deviation, [0, 1] units.
     singular_share: a gray encoding is chosen when this share of pixels has the two
       channels of one eye equal within noise / 2 ...
-    gray_blur: ... on a copy box-blurred over this many pixels, or within gray_relative
-      of the detail (the copy minus its gray_detail-px box blur) of the odd channel's
-      difference from the others (`colour_sets.gray_tolerance`; for 4:2:0 images, JPEG
-      and video: 1 and 0 before, `DESIGN.md`) ...
+    gray_blur: ... on a copy box-blurred over this many pixels (1 before; the three
+      gray_ fields are for 4:2:0 images, JPEG and video: `DESIGN.md`) ...
+    gray_relative: ... or within this fraction of the detail of the odd channel's
+      difference from the others (`colour_sets.gray_tolerance`; 0 before) ...
+    gray_detail: ... that detail being the difference minus its box blur over this many
+      pixels ...
     outside_penalty: ... another smaller encoding by its share of colour samples outside
       it, each costing this many nats (step 2).
     share_softness: the logistic's scale on the explained share's margin.
@@ -77,7 +79,9 @@ class DetectConfig:
     ghost_width: the ghost regression's copy is area-downsampled to at most this width
       (matched anew there): 960 (320 before), chosen on FFmpeg anaglyphs of training photo
       warps, where the colour encodings' leak reached 0.60 / 0.43 / 0.40 / 0.21 of the
-      expected at 320 / 480 / 640 / 960 px (DESIGN.md, unmixing: the misreads).
+      expected at 320 / 480 / 640 / 960 px (DESIGN.md, unmixing: the misreads) ...
+    ghost_max_fraction: ... and to at most this fraction of the image's width (1 before):
+      4:2:0 images keep colour at half the width (DESIGN.md, unmixing: stored images).
     ghost_sigma: the Gaussian high-pass of the ghost regression, pixels of its copy.
     ghost_correlation: ... over pixels matched with at least this correlation ...
     ghost_min_shift: ... at least this many pixels of displacement ...
@@ -152,10 +156,11 @@ def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
 
 def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int,
                matched: channel_matching.Matched, config: DetectConfig) -> np.ndarray:
-  """`dubois_leak.observed` (step 3) on a copy of `image` up to config.ghost_width px and
-  half the image's width wide (module docstring), its eyes matched anew there (in 2 strips) over the dense range of `matched`'s disparities
-  scaled to it (`channel_matching.rescaled_search`); on `small` and its `matched` pixels
-  when that copy is no wider."""
+  """`dubois_leak.observed` (step 3) on a copy of `image` at most config.ghost_width px
+  and config.ghost_max_fraction of the image's width wide, its eyes matched anew there
+  (in 2 strips) over the dense range of `matched`'s disparities scaled to it
+  (`channel_matching.rescaled_search`); on `small` and its `matched` pixels when that
+  copy is no wider."""
   wide = channel_matching.downsampled(
       image, min(config.ghost_width, int(image.shape[1] * config.ghost_max_fraction)))
   if wide.shape[1] > small.shape[1]:
