@@ -52,13 +52,13 @@ def census_rows(padded, height, width, out):
 
 
 @numba.njit(**INNER)
-def cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
-  """out[x, i] (uint8 [W, >= widths]) = mean Hamming cost of left (y, x) against right
-  (y, x - lo - i). The right codes are reversed (rev[b, k] = cr[b, y, W-1-k]) so the loop
-  over i reads consecutive words and vectorises (indexed by unsigned ints: numba wraps
-  negative signed indices, a branch that kept LLVM from vectorising; 720p x 96 lags of
-  one row block: 0.12 -> 0.06 s); 1x1, 1x2 and 2x1 channel pairs (plain and
-  colour anaglyphs) have their own loops."""
+def cost_row(cl, cr, lo, nds, y, oob, rev, acc, out, starts):
+  """out[starts[x] + i] (uint8, flat: pixel x's window from starts[x] on) = mean Hamming
+  cost of left (y, x) against right (y, x - lo - i). The right codes are reversed (rev[b,
+  k] = cr[b, y, W-1-k]) so the loop over i reads consecutive words and vectorises
+  (indexed by unsigned ints: numba wraps negative signed indices, a branch that kept LLVM
+  from vectorising; 720p x 96 lags of one row block: 0.12 -> 0.06 s); 1x1, 1x2 and 2x1
+  channel pairs (plain and colour anaglyphs) have their own loops."""
   kl, _, w = cl.shape
   kr = cr.shape[0]
   pairs = kl * kr
@@ -72,25 +72,26 @@ def cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
     ia = min(nd, max(0, x - d0 - w + 1))  # i < ia: the match is right of the image.
     ib = max(ia, min(nd, x - d0 + 1))  # i >= ib: the match is left of the image.
     k0 = w - 1 - x + d0  # Window position i reads rev[., k0 + i].
+    o = np.uint64(starts[x])  # Unsigned, as k below.
     for i in range(ia):
-      out[x, i] = oob
+      out[o + i] = oob
     for i in range(ib, nd):
-      out[x, i] = oob
+      out[o + i] = oob
     ca = cl[0, y, x]
     if pairs == 1:
       for i in range(ia, ib):
         k = np.uint64(k0 + i)
-        out[x, i] = np.uint8(_popcount(ca ^ rev[0, k]))
+        out[o + i] = np.uint8(_popcount(ca ^ rev[0, k]))
     elif kl == 1 and kr == 2:
       for i in range(ia, ib):
         k = np.uint64(k0 + i)
-        out[x, i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k])) +
+        out[o + i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k])) +
                               np.uint32(_popcount(ca ^ rev[1, k])) + one) >> one)
     elif kl == 2 and kr == 1:
       cb = cl[1, y, x]
       for i in range(ia, ib):
         k = np.uint64(k0 + i)
-        out[x, i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k])) +
+        out[o + i] = np.uint8((np.uint32(_popcount(ca ^ rev[0, k])) +
                               np.uint32(_popcount(cb ^ rev[0, k])) + one) >> one)
     else:
       for i in range(ia, ib):
@@ -101,7 +102,7 @@ def cost_row(cl, cr, lo, nds, y, oob, rev, acc, out):
           for i in range(ia, ib):
             acc[i] += np.uint32(_popcount(ca ^ rev[b, np.uint64(k0 + i)]))
       for i in range(ia, ib):
-        out[x, i] = np.uint8((acc[i] + half) // np.uint32(pairs))
+        out[o + i] = np.uint8((acc[i] + half) // np.uint32(pairs))
 
 
 @numba.njit(**JIT)
@@ -113,5 +114,6 @@ def volume_rows(cl, cr, low, y0, y1, oob, out):
   nds = np.full((h, w), nd, np.int32)
   rev = np.empty((cr.shape[0], w), np.uint64)
   acc = np.zeros(nd, np.uint32)
+  starts = np.arange(w) * nd
   for y in range(y0, y1):
-    cost_row(cl, cr, lo, nds, y, oob, rev, acc, out[y])
+    cost_row(cl, cr, lo, nds, y, oob, rev, acc, out[y].reshape(w * nd), starts)

@@ -34,13 +34,15 @@ _JIT = census_costs.JIT
 
 
 @numba.njit(**_INNER)
-def _start(cost_all, ci, cur_all, di, nd):
-  """First pixel of a path: cur[i + 1] = cost[i] (cost = cost_all[ci], cur = cur_all[di]);
-  returns min. Rows are passed as (2-D array, index) and taken here: a row view made by
-  the caller and passed in costs numba reference counting at every call."""
-  cost = cost_all[ci]
-  cur = cur_all[di]
+def _start(cost_all, co, cur_all, do, nd):
+  """First pixel of a path: cur[1 + i] = cost[i], i < nd, between _BIG guards at 0 and
+  nd + 1, where cost = cost_all[co:], cur = cur_all[do:]; returns min. Rows are flat
+  arrays and a pixel's window an offset into them (`_strip`); the views are taken here
+  (the caller's views would cost numba reference counting at every call)."""
+  cost = cost_all[co:co + nd]
+  cur = cur_all[do:do + nd + 2]
   m = _BIG
+  cur[0] = _BIG
   for i in range(nd):
     v = np.int32(cost[i])
     cur[i + 1] = v
@@ -50,19 +52,20 @@ def _start(cost_all, ci, cur_all, di, nd):
 
 
 @numba.njit(**_INNER)
-def _step(prev_all, pi, pm, shift, nprev, cost_all, ci, cur_all, di, nd, p1, p2, tmp):
+def _step(prev_all, po, pm, shift, nprev, cost_all, co, cur_all, do, nd, p1, p2, tmp):
   """One SGM recursion L(d) = C(d) + min(L'(d), L'(d +- 1) + P1, min L' + P2) - min L'.
 
-  prev = prev_all[pi], cur = cur_all[di]: int32 [>= nd + 2] with _BIG guards at 0 and
-  nd + 1 (index i + 1 = window position i); cost = cost_all[ci] (rows taken here, see
-  `_start`). The neighbour's window starts `shift` disparities lower and has nprev
-  positions; a shifted or resized one is first copied into `tmp`, aligned with the current
-  window, so the recursion is always the same branch-free loop (selects on int32
-  vectorise, numba's float min does not). Returns min L.
+  prev = prev_all[po:], cur = cur_all[do:]: the neighbour's and this pixel's path costs
+  as `_start` lays them out (window position i at index 1 + i, _BIG guards around);
+  cost = cost_all[co:], this pixel's costs. The neighbour's window starts `shift`
+  disparities lower and has nprev positions; a shifted or resized one is first copied
+  into `tmp`, aligned with the current window, so the recursion is always the same
+  branch-free loop (selects on int32 vectorise, numba's float min does not). Returns
+  min L.
   """
-  prev = prev_all[pi]
-  cost = cost_all[ci]
-  cur = cur_all[di]
+  prev = prev_all[po:po + nprev + 2]
+  cost = cost_all[co:co + nd]
+  cur = cur_all[do:do + nd + 2]
   src = prev
   if shift != 0 or nprev != nd:
     a = min(nd + 2, max(0, 1 - shift))  # tmp[k] = prev[k + shift] for k in [a, b).
@@ -76,6 +79,7 @@ def _step(prev_all, pi, pm, shift, nprev, cost_all, ci, cur_all, di, nd, p1, p2,
     src = tmp
   lim = np.int32(pm + p2)
   m = _BIG
+  cur[0] = _BIG
   for i in range(nd):
     same, lower, upper = src[i + 1], src[i], src[i + 2]
     q = np.int32((lower if lower < upper else upper) + p1)
@@ -149,60 +153,75 @@ def _winners(s, offsets, lo, nds, y, dl, dr, best):
 
 @numba.njit(**_JIT)
 def _window_offsets(nds, y0, n, w):
-  """(offsets, widest window) of rows [y0, y0 + n): pixel (y0 + k, x) at offsets[k * w + x]."""
+  """(offsets, widest window, most cells of a row) of rows [y0, y0 + n): pixel
+  (y0 + k, x) at offsets[k * w + x]."""
   offsets = np.zeros(n * w + 1, np.int64)
-  nd = 1
+  nd, row = 1, 1
   for k in range(n):
     for x in range(w):
       offsets[k * w + x + 1] = offsets[k * w + x] + nds[y0 + k, x]
       nd = max(nd, nds[y0 + k, x])
-  return offsets, nd
+    row = max(row, offsets[(k + 1) * w] - offsets[k * w])
+  return offsets, nd, row
+
+
+@numba.njit(**_INNER)
+def _row_starts(offsets, k, w, cs, gs):
+  """Row k's flat layouts: pixel x's costs at cs[x] (its cells before it), its path costs
+  with their two guards at gs[x] = cs[x] + 2 x."""
+  base = offsets[k * w]
+  for x in range(w):
+    cs[x] = offsets[k * w + x] - base
+    gs[x] = cs[x] + 2 * x
 
 
 @numba.njit(**_JIT)
 def _down_row(crow, lo, nds, y, first, pen1, pen2, hor, vprev, vcur, vpm, t12, tmp, total,
-              base_offsets):
-  """Pass 1 on row y: left-to-right (hor), top-down (vcur), right-to-left (t12) paths;
-  their sum goes to total at base_offsets (this row's offsets)."""
+              base, cs, gs, gs_prev):
+  """Pass 1 on row y: left-to-right (hor), top-down (vcur), right-to-left (t12: two
+  pixels' rows of len(tmp) each) paths; their sum goes to total[base + cs[x] + i]. Row
+  layouts cs, gs (this row), gs_prev (vprev's, the row above) as `_row_starts`'."""
   w = lo.shape[1]
-  pm = _start(crow, 0, hor, 0, nds[y, 0])
+  tw = tmp.shape[0]
+  pm = _start(crow, cs[0], hor, gs[0], nds[y, 0])
   for x in range(1, w):
-    pm = _step(hor, x - 1, pm, lo[y, x] - lo[y, x - 1], nds[y, x - 1], crow, x, hor, x,
-               nds[y, x], pen1, pen2, tmp)
+    pm = _step(hor, gs[x - 1], pm, lo[y, x] - lo[y, x - 1], nds[y, x - 1], crow, cs[x], hor,
+               gs[x], nds[y, x], pen1, pen2, tmp)
   for x in range(w):
     if first:
-      vpm[x] = _start(crow, x, vcur, x, nds[y, x])
+      vpm[x] = _start(crow, cs[x], vcur, gs[x], nds[y, x])
     else:
-      vpm[x] = _step(vprev, x, vpm[x], lo[y, x] - lo[y - 1, x], nds[y - 1, x], crow, x,
-                     vcur, x, nds[y, x], pen1, pen2, tmp)
+      vpm[x] = _step(vprev, gs_prev[x], vpm[x], lo[y, x] - lo[y - 1, x], nds[y - 1, x], crow,
+                     cs[x], vcur, gs[x], nds[y, x], pen1, pen2, tmp)
   for x in range(w - 1, -1, -1):
-    now = x & 1  # This pixel's row of t12; pixel x + 1 used the other one.
+    now = (x & 1) * tw  # This pixel's row of t12; pixel x + 1 used the other one.
     if x == w - 1:
-      pm = _start(crow, x, t12, now, nds[y, x])
+      pm = _start(crow, cs[x], t12, now, nds[y, x])
     else:
-      pm = _step(t12, 1 - now, pm, lo[y, x] - lo[y, x + 1], nds[y, x + 1], crow, x, t12,
+      pm = _step(t12, tw - now, pm, lo[y, x] - lo[y, x + 1], nds[y, x + 1], crow, cs[x], t12,
                  now, nds[y, x], pen1, pen2, tmp)
-    base = base_offsets[x]
+    out, g = np.uint64(base + cs[x]), np.uint64(gs[x] + 1)
     for i in range(nds[y, x]):  # Unsigned indices vectorise (`_winners`).
-      total[np.uint64(base + i)] = np.uint16(t12[now, i + 1] + hor[x, i + 1] + vcur[x, i + 1])
+      k = np.uint64(i)
+      total[out + k] = np.uint16(t12[np.uint64(now + 1) + k] + hor[g + k] + vcur[g + k])
 
 
 @numba.njit(**_JIT)
-def _up_row(crow, lo, nds, y, first, pen1, pen2, vprev, vcur, vpm, total, base_offsets, srow,
-            row_offsets, tmp):
-  """Pass 2 on row y: the bottom-up path; srow = total + L_up, laid out by row_offsets."""
+def _up_row(crow, lo, nds, y, first, pen1, pen2, vprev, vcur, vpm, total, base, srow, cs, gs,
+            gs_prev, tmp):
+  """Pass 2 on row y: the bottom-up path (vprev laid out by gs_prev, the row below);
+  srow[cs[x] + i] = total[base + cs[x] + i] + L_up."""
   w = lo.shape[1]
-  row_offsets[0] = 0
   for x in range(w):
     if first:
-      vpm[x] = _start(crow, x, vcur, x, nds[y, x])
+      vpm[x] = _start(crow, cs[x], vcur, gs[x], nds[y, x])
     else:
-      vpm[x] = _step(vprev, x, vpm[x], lo[y, x] - lo[y + 1, x], nds[y + 1, x], crow, x,
-                     vcur, x, nds[y, x], pen1, pen2, tmp)
-    base, row_base = base_offsets[x], row_offsets[x]
-    row_offsets[x + 1] = row_base + nds[y, x]
+      vpm[x] = _step(vprev, gs_prev[x], vpm[x], lo[y, x] - lo[y + 1, x], nds[y + 1, x], crow,
+                     cs[x], vcur, gs[x], nds[y, x], pen1, pen2, tmp)
+    c, g = np.uint64(cs[x]), np.uint64(gs[x] + 1)
     for i in range(nds[y, x]):  # Unsigned indices vectorise (`_winners`).
-      srow[np.uint64(row_base + i)] = np.int32(total[np.uint64(base + i)]) + vcur[x, i + 1]
+      k = np.uint64(i)
+      srow[c + k] = np.int32(total[np.uint64(base) + c + k]) + vcur[g + k]
 
 
 @numba.njit(**_JIT)
@@ -242,47 +261,55 @@ def volume_sgm(volume, min_disparity, p1, p2, dl, dr, rows=None):
 
 
 @numba.njit(**_JIT)
-def _cost_rows(volume, cl, cr, lo, nds, y, oob, rev, acc, crow):
-  """Row y's costs into crow: the census codes' (`census_costs.cost_row`), or the stored
-  volume's row when `volume` has rows."""
+def _cost_rows(volume, cl, cr, lo, nds, y, oob, rev, acc, crow, cs):
+  """Row y's costs into crow (pixel x's from cs[x] on): the census codes'
+  (`census_costs.cost_row`), or the stored volume's row when `volume` has rows."""
   if volume.shape[0] == 0:
-    census_costs.cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow)
+    census_costs.cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow, cs)
     return
   for x in range(volume.shape[1]):
     for i in range(volume.shape[2]):
-      crow[x, i] = volume[y, x, i]
+      crow[cs[x] + i] = volume[y, x, i]
 
 
 @numba.njit(**_JIT)
 def _strip(cl, cr, volume, lo, nds, y0, y1, w0, w1, p1, p2, oob, dl, dr):
-  """`sgm_strip` on the costs of the codes cl, cr or, when it has rows, of `volume`."""
+  """`sgm_strip` on the costs of the codes cl, cr or, when it has rows, of `volume`. Row
+  buffers hold one image row's windows back to back (`_row_starts`), so they scale with
+  the row's cells, not with its widest window times the width."""
   _, _, w = cl.shape
   n = y1 - y0
   pen1, pen2 = np.int32(p1), np.int32(p2)
-  offsets, nd = _window_offsets(nds, y0, n, w)
+  offsets, nd, row = _window_offsets(nds, y0, n, w)
   total = np.empty(offsets[n * w], np.uint16)
-  crow = np.empty((w, nd), np.uint8)
+  crow = np.empty(row, np.uint8)
   rev = np.empty((cr.shape[0], w), np.uint64)
   acc = np.zeros(nd, np.uint32)
-  hor = np.full((w, nd + 2), _BIG, np.int32)
-  vprev = np.full((w, nd + 2), _BIG, np.int32)
-  vcur = np.full((w, nd + 2), _BIG, np.int32)
+  hor = np.empty(row + 2 * w, np.int32)
+  vprev = np.empty(row + 2 * w, np.int32)
+  vcur = np.empty(row + 2 * w, np.int32)
   vpm = np.zeros(w, np.int32)
-  t12 = np.full((2, nd + 2), _BIG, np.int32)
-  tmp = np.full(nd + 2, _BIG, np.int32)
+  t12 = np.empty(2 * (nd + 2), np.int32)
+  tmp = np.empty(nd + 2, np.int32)
+  cs = np.empty(w, np.int64)
+  gs = np.empty(w, np.int64)
+  gs_prev = np.empty(w, np.int64)
   for k in range(n):
-    _cost_rows(volume, cl, cr, lo, nds, y0 + k, oob, rev, acc, crow)
+    _row_starts(offsets, k, w, cs, gs)
+    _cost_rows(volume, cl, cr, lo, nds, y0 + k, oob, rev, acc, crow, cs)
     _down_row(crow, lo, nds, y0 + k, k == 0, pen1, pen2, hor, vprev, vcur, vpm, t12, tmp,
-              total, offsets[k * w:(k + 1) * w])
+              total, offsets[k * w], cs, gs, gs_prev)
     vprev, vcur = vcur, vprev
-  srow = np.empty(w * nd, np.int32)
-  row_offsets = np.empty(w + 1, np.int64)
+    gs, gs_prev = gs_prev, gs
+  srow = np.empty(row, np.int32)
   best = np.empty(w, np.int64)
   for k in range(n - 1, -1, -1):
     y = y0 + k
-    _cost_rows(volume, cl, cr, lo, nds, y, oob, rev, acc, crow)
-    _up_row(crow, lo, nds, y, k == n - 1, pen1, pen2, vprev, vcur, vpm, total,
-            offsets[k * w:(k + 1) * w], srow, row_offsets, tmp)
+    _row_starts(offsets, k, w, cs, gs)
+    _cost_rows(volume, cl, cr, lo, nds, y, oob, rev, acc, crow, cs)
+    _up_row(crow, lo, nds, y, k == n - 1, pen1, pen2, vprev, vcur, vpm, total, offsets[k * w],
+            srow, cs, gs, gs_prev, tmp)
     vprev, vcur = vcur, vprev
+    gs, gs_prev = gs_prev, gs
     if w0 <= y < w1:
-      _winners(srow, row_offsets, lo, nds, y, dl, dr, best)
+      _winners(srow, cs, lo, nds, y, dl, dr, best)

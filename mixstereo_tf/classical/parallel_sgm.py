@@ -5,8 +5,8 @@ Python threads; the kernels release the GIL, so they run in parallel without num
 threading layer (nothing to configure, and no clash with TensorFlow's thread pools).
 
 Memory: a running strip holds 2 bytes per searched cell of its rows (the sum of its
-window widths) plus row buffers of 17 bytes per cell of its widest window over one image
-row; at most `threads` strips run at a time. `strip_bounds` cuts the strips so that they
+window widths) plus row buffers of 17 bytes per cell of its fullest row (the windows of
+one image row back to back, `census_sgm`); at most `threads` strips run at a time. `strip_bounds` cuts the strips so that they
 hold equal numbers of cells (equal work too), at least one per thread and more where one
 would pass `max_strip_bytes`. Each strip aggregates `overlap` extra rows above and below,
 where its vertical paths start; one strip (no overlap) reproduces `sgm.match` exactly.
