@@ -12,7 +12,7 @@ no public code). For an encoding of `mixtures.ANAGLYPH_NAMES`:
 """
 
 import dataclasses
-from typing import Dict, Optional, Tuple
+from typing import Callable, Dict, Optional, Tuple
 
 import numpy as np
 
@@ -40,7 +40,9 @@ def eye_images(mixture01: np.ndarray, mixture_name: str) -> Tuple[np.ndarray, np
 def unmix_anaglyph(mixture, mixture_name: str,
                    disparity_range: Optional[Tuple[int, int]] = None,
                    config: AnaglyphConfig = AnaglyphConfig(),
-                   prior: Optional[np.ndarray] = None) -> Dict[str, object]:
+                   prior: Optional[np.ndarray] = None,
+                   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None
+                   ) -> Dict[str, object]:
   """Separates an anaglyph into two views and disparities.
 
   Args:
@@ -50,6 +52,8 @@ def unmix_anaglyph(mixture, mixture_name: str,
     config: matching and restoration parameters.
     prior: optional [H, W] left disparity to search around (a previous video frame's;
       NaN: no prior there, `search_windows.around_prior`).
+    on_disparity: called with the disparities and 'consistent_left' once they are
+      matched, before the views are restored (`hints.FrameHint.on_disparity`).
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
@@ -68,6 +72,9 @@ def unmix_anaglyph(mixture, mixture_name: str,
   if disparity_range is None:
     disparity_range = matcher.estimate_range(left_eye, right_eye, config.matching)
   matched = matcher.match(left_eye, right_eye, *disparity_range, config.matching, prior)
+  if on_disparity is not None:
+    on_disparity({key: matched[key] for key in ('disparity_left', 'disparity_right',
+                                                 'consistent_left')})
   restored = views.restore_views(image, mixture_name, matched['disparity_left'],
                                  matched['disparity_right'], config=config.restore)
   return {'left': image_range.unit_to_u8(restored['left']),

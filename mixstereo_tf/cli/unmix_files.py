@@ -29,7 +29,7 @@ import dataclasses
 import json
 import os
 import time
-from typing import Dict, List, Optional, TextIO, Tuple
+from typing import Callable, Dict, List, Optional, TextIO, Tuple
 
 from absl import logging
 import cv2
@@ -42,6 +42,7 @@ from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import streams
 from mixstereo_tf.video import temporal
@@ -49,7 +50,9 @@ from mixstereo_tf.video import temporal
 
 @dataclasses.dataclass
 class UnmixReport:
-  """What `unmix_inputs` did: counts, failures as (path, reason), timings in seconds."""
+  """What `unmix_inputs` did: counts, failures as (path, reason), timings in seconds
+  (unmix_seconds: what the image or frame loop waited for the unmixer; a video frame's
+  restoration that runs beside the next frame's matching is not counted)."""
   processed: int = 0
   frames: int = 0
   failures: List[Tuple[str, str]] = dataclasses.field(default_factory=list)
@@ -121,6 +124,23 @@ def _frame_images(result: Dict[str, object], layout: str, max_disparity: float,
   return images
 
 
+def _drawn_when_done(pending, state: Dict[str, object], layout: str, max_disparity: float,
+                     drawn: Tuple[str, ...]) -> Callable[[], Dict[str, object]]:
+  """The call that draws a frame's images once its unmixing (`pending`, a Future) is done,
+  made in frame order on the video writer's thread (`jobs.Rendered`); it records the first
+  frame's info and the progress in `state`."""
+  def images():
+    result = pending.result()
+    if state['info'] is None:
+      state['info'] = dict(result.get('info', {}))
+    drawn_images = _frame_images(result, layout, max_disparity, drawn)
+    state['rendered'] += 1
+    state['bar'].update(state['done'] + state['rendered'], state['rendered'])
+    return drawn_images
+
+  return images
+
+
 def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
                  layout: str, max_disparity: float, settings: Dict[str, object],
                  video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
@@ -131,11 +151,14 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   `<name>_info.json`; returns the frames unmixed in this run.
 
   Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
-  encoding, range and prior; each segment's first frame starts a shot)."""
+  encoding, range and prior; each segment's first frame starts a shot), a shot's frames
+  side by side (`frame_pipeline`); their images are drawn and written in order on the
+  writer's thread."""
   start = time.perf_counter()
   shots = temporal.VideoState(temporal_config)
   outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
-  state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
+  state = {'bar': None, 'done': 0, 'submitted': 0, 'rendered': 0, 'info': None}
+  pipeline = frame_pipeline.FramePipeline(unmixer, shots)
 
   def on_start(info, done):
     state['bar'] = progress.ProgressBar(info.frame_count, os.path.basename(item.path),
@@ -144,19 +167,13 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
 
   def render(frame):
     unmix_start = time.perf_counter()
-    index = state['done'] + state['rendered']
+    index = state['done'] + state['submitted']
     # A video writes the views and the left disparity: the right one is not read.
-    hint = dataclasses.replace(shots.begin(frame, cut=index % video_config.segment_frames == 0),
-                               unread='disparity_right')
-    result = unmixer(frame, hint=hint)
-    shots.end(result)
+    pending = pipeline.submit(frame, cut=index % video_config.segment_frames == 0,
+                              unread='disparity_right')
+    state['submitted'] += 1
     report.unmix_seconds += time.perf_counter() - unmix_start
-    if state['info'] is None:
-      state['info'] = dict(result.get('info', {}))
-    images = _frame_images(result, layout, max_disparity, drawn)
-    state['rendered'] += 1
-    state['bar'].update(state['done'] + state['rendered'], state['rendered'])
-    return images
+    return _drawn_when_done(pending, state, layout, max_disparity, drawn)
 
   job = jobs.VideoJob(item.path, outputs,
                       dict(settings, layout=layout, max_disparity=max_disparity,
@@ -164,7 +181,8 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
                       video_config, {layout: media.STEREO_MODES[layout]}
                       if layout in media.STEREO_MODES else {})
   try:
-    done = jobs.run(job, render, on_start)
+    with pipeline:
+      done = jobs.run(job, render, on_start)
     # The container's frame count may be wrong or missing.
     state['bar'].update(done['frames'], state['rendered'], force=True)
   finally:

@@ -7,7 +7,7 @@ object under one name from the video loop down to the matcher's configuration.
 """
 
 import dataclasses
-from typing import Dict, Optional, Tuple, Union
+from typing import Callable, Dict, Optional, Tuple, Union
 
 import numpy as np
 
@@ -35,6 +35,12 @@ class FrameHint:
     unread: an output the caller does not read ('disparity_right': a video's frames,
       which write the views and the left disparity): a stage may return its first stage's
       value there instead of refining it (`steps.refiner_unmix`); None: every output.
+    on_disparity: called once with {'disparity_left', 'disparity_right',
+      'consistent_left'} as soon as the frame's disparities are final, before its views
+      are restored, by the stage that makes them (the anaglyph matcher,
+      `classical.anaglyph.unmix_anaglyph`; a stage that refines them afterwards passes
+      it on to no one): the video loop then starts the next frame
+      (`video.frame_pipeline`). None: nobody is told early.
   """
   mixture: Optional[str] = None
   detection: Optional[Dict[str, object]] = None
@@ -46,3 +52,4 @@ class FrameHint:
   matcher_strips: Optional[int] = None
   mixing_weight: Union[None, float, str] = None
   unread: Optional[str] = None
+  on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None

@@ -192,9 +192,13 @@ _OTHER_EYE = {'left': 'right', 'right': 'left', 'disparity_left': 'disparity_rig
 def mirror_hint(hint: hints.FrameHint) -> hints.FrameHint:
   """A frame hint for the mirrored image: its prior (the previous frame's left disparity)
   becomes the mirrored problem's left disparity, the mirrored right one; an unread output
-  of one eye becomes the other eye's."""
+  of one eye becomes the other eye's; `on_disparity` is told the disparities mapped back
+  (`unmirror`)."""
   if hint.unread in _OTHER_EYE:
     hint = dataclasses.replace(hint, unread=_OTHER_EYE[hint.unread])
+  if hint.on_disparity is not None:
+    told = hint.on_disparity
+    hint = dataclasses.replace(hint, on_disparity=lambda found: told(unmirror(found)))
   if hint.prior is None:
     return hint
   return dataclasses.replace(hint, prior=_flip(right_from_left(hint.prior)))
@@ -203,9 +207,11 @@ def mirror_hint(hint: hints.FrameHint) -> hints.FrameHint:
 def unmirror(outputs: Dict[str, object],
              lr_threshold: float = matcher.MatcherConfig().lr_threshold) -> Dict[str, object]:
   """Outputs of the mirrored image mapped back (module docstring); 'consistent_left', when
-  given, becomes the left-right check (lr_threshold px) of the mapped disparities."""
+  given, becomes the left-right check (lr_threshold px) of the mapped disparities. The
+  views may be absent (`hints.FrameHint.on_disparity`'s disparities)."""
   mapped = dict(outputs)
-  mapped['left'], mapped['right'] = _flip(outputs['right']), _flip(outputs['left'])
+  if 'left' in outputs:
+    mapped['left'], mapped['right'] = _flip(outputs['right']), _flip(outputs['left'])
   mapped['disparity_left'] = _flip(outputs['disparity_right'])
   mapped['disparity_right'] = _flip(outputs['disparity_left'])
   if 'consistent_left' in outputs:

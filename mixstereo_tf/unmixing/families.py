@@ -129,10 +129,12 @@ class Anaglyph(Family):
     return matcher.estimate_range(left_eye, right_eye, self.matching(hint))
 
   def classical(self, image, name, search=None, hint=None):
-    """`anaglyph.unmix_anaglyph` with the hint's matcher options and prior."""
+    """`anaglyph.unmix_anaglyph` with the hint's matcher options, prior and
+    on_disparity."""
     config = anaglyph.AnaglyphConfig(matching=self.matching(hint))
-    prior = hint.prior if hint is not None else None
-    return anaglyph.unmix_anaglyph(image, name, search, config=config, prior=prior)
+    hint = hint or hints.FrameHint()
+    return anaglyph.unmix_anaglyph(image, name, search, config=config, prior=hint.prior,
+                                   on_disparity=hint.on_disparity)
 
   def right_eye(self, name):
     """`MixtureSpec.eye_channels`' right eye."""

@@ -2,7 +2,8 @@
 
     frames = run(VideoJob(input_path, {'sbs': 'out/a_sbs.mp4'}, settings), render)
 
-`render(image)` returns {output key: uint8 RGB frame} for one input frame. Frames are
+`render(image)` returns {output key: uint8 RGB frame} for one input frame (or a call that
+returns them, made in order on the encoding thread: `Rendered`). Frames are
 encoded in segments of `VideoConfig.segment_frames` into `<folder>/<key>_<k>.mov` (a MOV
 part holds exact timestamps for every codec), where `<folder>` is the first output path +
 '.segments'. `manifest.json` there records the input (path, size, mtime), the settings and
@@ -19,7 +20,7 @@ import fractions
 import json
 import os
 import shutil
-from typing import Callable, Dict, Optional
+from typing import Callable, Dict, Optional, Union
 
 import numpy as np
 
@@ -28,6 +29,9 @@ from mixstereo_tf.video import pipelining
 from mixstereo_tf.video import streams
 
 Fraction = fractions.Fraction
+# What `render` gives for a frame: its images, or a call that gives them (run in order on
+# the writer's thread: a frame still being finished, `frame_pipeline`).
+Rendered = Union[Dict[str, np.ndarray], Callable[[], Dict[str, np.ndarray]]]
 MANIFEST = 'manifest.json'
 _VERSION = 1
 
@@ -140,7 +144,10 @@ class _Segment:
                                                   path, job.stereo_modes.get(key)))
                     for key, path in job.outputs.items()}
 
-  def write(self, frame: streams.Frame, images: Dict[str, np.ndarray]) -> None:
+  def write(self, frame: streams.Frame, images: Rendered) -> None:
+    """Encodes one frame's images (`run`'s `render` result: calling it gives them)."""
+    if callable(images):
+      images = images()
     for key, writer in self.writers.items():
       writer.write(images[key], frame.time - self.start)
     self.frames += 1
@@ -197,14 +204,15 @@ def _render_segments(job, manifest, info, frames, done, render) -> None:
       segment.abort()
 
 
-def run(job: VideoJob, render: Callable[[np.ndarray], Dict[str, np.ndarray]],
+def run(job: VideoJob, render: Callable[[np.ndarray], Rendered],
         on_start: Optional[Callable[[streams.VideoInfo, int], None]] = None
         ) -> Dict[str, object]:
   """Renders every frame of `job.input_path` into `job.outputs`, resuming a previous run.
 
   Args:
     job: the input, outputs and settings.
-    render: uint8 RGB input frame -> {output key: uint8 RGB frame}; a frame's outputs may
+    render: uint8 RGB input frame -> {output key: uint8 RGB frame}, or a call returning
+      them (`Rendered`, called on the writer's thread in frame order); a frame's outputs may
       differ in size from each other but not between frames.
     on_start: called with the VideoInfo and the number of frames already done before any
       frame is rendered (e.g. to start a progress bar).

@@ -139,3 +139,17 @@ def test_a_bad_swap_eyes_value_is_named():
   with pytest.raises(ValueError, match=r"PredictorConfig.swap_eyes='yes'"):
     predictors.build_unmixer(predictors.PredictorConfig(
         'classical', mixture='anaglyph', swap_eyes='yes'))
+
+
+def test_a_mirrored_hint_tells_the_disparities_mapped_back():
+  told = []
+  hint = eye_order.mirror_hint(hints.FrameHint(on_disparity=told.append))
+  d_left = np.tile(np.array([[2, 2, 2, 5, 5, 2, 2, 2]], np.float32), (3, 1))
+  d_right = eye_order.right_from_left(d_left)
+  flip = lambda x: x[:, ::-1]
+  hint.on_disparity({'disparity_left': flip(d_right), 'disparity_right': flip(d_left),
+                     'consistent_left': np.ones_like(d_left, bool)})
+  (back,) = told
+  np.testing.assert_array_equal(back['disparity_left'], d_left)
+  np.testing.assert_array_equal(back['disparity_right'], d_right)
+  assert 'left' not in back  # No views yet.

@@ -1,0 +1,83 @@
+"""Consecutive frames of a shot unmixed side by side: one frame's views are restored
+while the next frame is matched.
+
+Within a shot, frame t + 1 needs only frame t's disparities (its prior,
+`temporal.VideoState`), not its views. The stage that has the final disparities before
+it restores the views (the anaglyph matcher, `classical.anaglyph.unmix_anaglyph`) reports
+them through the hint's `on_disparity`; `FramePipeline.submit` returns as soon as that
+happens, so the next frame's matching runs beside this frame's restoration, and both
+share the kernels' threads (`core.workers`): the single-threaded parts of one fill the
+cores the other leaves idle. Frames that report nothing early (a shot's first frame,
+whose decisions the next frame needs; stages that refine their disparities, double
+images) are waited for whole, as before. Every frame starts from the same prior as one at
+a time, so the outputs are the same.
+
+    pipeline = FramePipeline(unmixer, temporal.VideoState(config))
+    for image in frames:
+      pending = pipeline.submit(image)   # returns once the next frame may start
+      ...                                # pending.result(): the frame's outputs
+    pipeline.close()
+"""
+
+import concurrent.futures
+import dataclasses
+import threading
+from typing import Callable, Dict
+
+import numpy as np
+
+from mixstereo_tf.video import temporal
+
+# Frames in flight: one being restored, the next being matched.
+_FRAMES = 2
+
+
+class FramePipeline:
+  """Runs `unmixer(image, hint=...)` of consecutive frames in threads, overlapping each
+  frame's restoration with the next frame's matching (module docstring).
+
+  Attributes:
+    state: the VideoState whose hints the frames get (begun in submission order).
+  """
+
+  def __init__(self, unmixer: Callable[..., Dict[str, object]], state: temporal.VideoState):
+    self.state = state
+    self._unmixer = unmixer
+    self._executor = concurrent.futures.ThreadPoolExecutor(
+        _FRAMES, thread_name_prefix='mixstereo-frames')
+
+  def submit(self, image: np.ndarray, cut: bool = False,
+             **hint_fields) -> concurrent.futures.Future:
+    """Starts unmixing `image` (`state.begin(image, cut)`'s hint, with `hint_fields`
+    replaced) and returns its Future once the next frame may start: when its disparities
+    are reported (`hints.FrameHint.on_disparity`) or it is done.
+
+    Raises:
+      The frame's own error when it failed before reporting its disparities.
+    """
+    hint = dataclasses.replace(self.state.begin(image, cut=cut), **hint_fields)
+    ready, told = threading.Event(), []
+    if hint.mixture is not None:  # The shot's decisions are made: only the prior is new.
+
+      def on_disparity(found):
+        self.state.end(found)
+        told.append(True)
+        ready.set()
+
+      hint = dataclasses.replace(hint, on_disparity=on_disparity)
+    pending = self._executor.submit(self._unmixer, image, hint=hint)
+    pending.add_done_callback(lambda _: ready.set())
+    ready.wait()
+    if not told:
+      self.state.end(pending.result())
+    return pending
+
+  def close(self) -> None:
+    """Waits for the frames in flight, then stops the threads."""
+    self._executor.shutdown(wait=True)
+
+  def __enter__(self) -> 'FramePipeline':
+    return self
+
+  def __exit__(self, *exc) -> None:
+    self.close()

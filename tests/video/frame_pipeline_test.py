@@ -1,0 +1,101 @@
+"""Tests for consecutive frames unmixed side by side (video.frame_pipeline)."""
+
+import threading
+
+import numpy as np
+import pytest
+
+from mixstereo_tf.classical import anaglyph
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import frame_pipeline
+from mixstereo_tf.video import temporal
+from tests.unmixing import eye_order_test
+from tests.video import temporal_test
+
+H, W = 6, 8
+
+
+class _Recorder:
+  """A fake unmixer: frame k's disparity is k everywhere (consistent but for column 0);
+  it reports it through on_disparity, then waits for `release[k]` before it returns."""
+
+  def __init__(self, frames):
+    self.hints, self.release = [], [threading.Event() for _ in range(frames)]
+    self.started = [threading.Event() for _ in range(frames)]
+
+  def __call__(self, image, hint):
+    k = int(image[0, 0, 0])
+    self.hints.append(hint)
+    self.started[k].set()
+    found = {'disparity_left': np.full((H, W), float(k), np.float32),
+             'disparity_right': np.full((H, W), float(k), np.float32),
+             'consistent_left': np.arange(W)[None].repeat(H, 0) > 0}
+    if hint.on_disparity is not None:
+      hint.on_disparity(found)
+    assert self.release[k].wait(10)
+    return dict(found, info={'mixture': 'anaglyph', 'disparity_range': [0, 9]})
+
+
+def _frame(k):
+  return np.full((H, W, 3), k, np.uint8)
+
+
+def test_the_next_frame_is_matched_while_this_one_is_restored():
+  unmixer = _Recorder(3)
+  unmixer.release[0].set()  # A shot's first frame is waited for whole.
+  with frame_pipeline.FramePipeline(unmixer, temporal.VideoState()) as pipeline:
+    first = pipeline.submit(_frame(0))
+    assert first.done() and unmixer.hints[0].on_disparity is None
+    second = pipeline.submit(_frame(1))  # Returns once frame 1 reported its disparities,
+    third = pipeline.submit(_frame(2))  # so frame 2 starts while frame 1 still runs.
+    assert unmixer.started[2].wait(10) and not second.done() and not third.done()
+    unmixer.release[1].set()
+    unmixer.release[2].set()
+    assert second.result()['disparity_left'][0, 0] == 1 and third.result()
+  # Frame 2's prior: frame 1's reported disparity, NaN where its check failed.
+  prior = unmixer.hints[2].prior
+  assert np.isnan(prior[:, 0]).all() and (prior[:, 1:] == 1).all()
+  assert unmixer.hints[1].mixture == 'anaglyph'
+
+
+def test_a_frame_failing_before_its_disparities_raises_from_submit():
+  def failing(image, hint):
+    raise ValueError(f'frame {int(image[0, 0, 0])} is broken')
+  with frame_pipeline.FramePipeline(failing, temporal.VideoState()) as pipeline:
+    with pytest.raises(ValueError, match='frame 3 is broken'):
+      pipeline.submit(_frame(3))
+
+
+@pytest.mark.parametrize('method,swapped,pretrained', [
+    ('classical', False, None), ('classical', True, None), ('model', False, None),
+    ('model', False, 'anaglyph')])  # The learned stage; the refiner, told of nothing.
+def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, swapped, pretrained,
+                                                               monkeypatch):
+  if swapped:  # Cyan-red frames: the matcher runs on the mirrored image.
+    left, right, _ = eye_order_test._pair()  # pylint: disable=protected-access
+    frames = [temporal_test._anaglyph(right, left)] * 3  # pylint: disable=protected-access
+  else:
+    frames = temporal_test._shot(3, 5)  # pylint: disable=protected-access
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      method, mixture='anaglyph', swap_eyes='auto' if swapped else False,
+      pretrained=pretrained))
+  state, alone = temporal.VideoState(), []
+  for frame in frames:
+    alone.append(unmixer(frame, hint=state.begin(frame)))
+    state.end(alone[-1])
+  told, unmix = [], anaglyph.unmix_anaglyph
+
+  def counting(*args, **kwargs):
+    told.append(kwargs.get('on_disparity'))
+    return unmix(*args, **kwargs)
+
+  monkeypatch.setattr(anaglyph, 'unmix_anaglyph', counting)
+  with frame_pipeline.FramePipeline(unmixer, temporal.VideoState()) as pipeline:
+    pending = [pipeline.submit(frame) for frame in frames]
+    together = [p.result() for p in pending]
+  # Every frame after the shot's first one was told early, but the refiner's base.
+  assert sum(t is not None for t in told) == (0 if pretrained else len(frames) - 1)
+  assert {o['info']['eye_order'] for o in together} == {'swapped' if swapped else 'as_given'}
+  for one, other in zip(alone, together):
+    for key in ('left', 'right', 'disparity_left', 'consistent_left'):
+      np.testing.assert_array_equal(one[key], other[key])
