@@ -12,7 +12,9 @@ Speed (`video_speed`): the first shot of that clip upscaled (bicubic) to 1280x72
 as `mixstereo-unmix --input=clip.mp4 --layout=sbs` does (decoding, unmixing, encoding the
 side-by-side and disparity videos, segments and manifest), after one warm-up frame
 (numba's cache, tf.function tracing). Frames/s = frames / wall seconds of the whole call;
-"unmix only" = frames / seconds inside the unmixer. Methods: classical; model, the shipped
+"unmix only" = frames / seconds the frame loop waited for the unmixer (since 2026-11-27 a
+frame's views are restored beside the next frame's matching, which it does not count).
+Methods: classical; model, the shipped
 default (the learned matching stage, `--pretrained=anaglyph_matching`; with the temporal
 prior only a shot's first frame is matched by it, the others around the prior); refiner,
 the previous default (`--pretrained=anaglyph`; rows "model" before 2026-11-25).
