@@ -79,9 +79,15 @@ def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, swapped, 
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(
       method, mixture='anaglyph', swap_eyes='auto' if swapped else False,
       pretrained=pretrained))
+  shots = []  # Each frame's shot decisions, as its hint gives them.
+
+  def recording(image, hint):
+    shots.append((hint.mixture, hint.disparity_range, hint.swap_eyes))
+    return unmixer(image, hint=hint)
+
   state, alone = temporal.VideoState(), []
   for frame in frames:
-    alone.append(unmixer(frame, hint=state.begin(frame)))
+    alone.append(recording(frame, hint=state.begin(frame)))
     state.end(alone[-1])
   told, unmix = [], anaglyph.unmix_anaglyph
 
@@ -90,11 +96,13 @@ def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, swapped, 
     return unmix(*args, **kwargs)
 
   monkeypatch.setattr(anaglyph, 'unmix_anaglyph', counting)
-  with frame_pipeline.FramePipeline(unmixer, temporal.VideoState()) as pipeline:
+  with frame_pipeline.FramePipeline(recording, temporal.VideoState()) as pipeline:
     pending = [pipeline.submit(frame) for frame in frames]
     together = [p.result() for p in pending]
-  # Every frame after the shot's first one was told early, but the refiner's base.
+  # Every frame after the shot's first one was told early, but the refiner's base; the
+  # shot was decided once, by its first frame, as one frame at a time.
   assert sum(t is not None for t in told) == (0 if pretrained else len(frames) - 1)
+  assert shots[len(frames):] == shots[:len(frames)] and shots[1][0] == 'anaglyph'
   assert {o['info']['eye_order'] for o in together} == {'swapped' if swapped else 'as_given'}
   for one, other in zip(alone, together):
     for key in ('left', 'right', 'disparity_left', 'consistent_left'):
