@@ -10,7 +10,9 @@ share the kernels' threads (`core.workers`): the single-threaded parts of one fi
 cores the other leaves idle. Frames that report nothing early (a shot's first frame,
 whose decisions the next frame needs; stages that refine their disparities, double
 images) are waited for whole, as before. Every frame starts from the same prior as one at
-a time, so the outputs are the same.
+a time, so the outputs are the same. With temporal consistency off (`--notemporal`: every
+frame decided alone) the next frame needs nothing of this one and starts at once; at most
+two frames are in flight either way.
 
     pipeline = FramePipeline(unmixer, temporal.VideoState(config))
     for image in frames:
@@ -45,17 +47,24 @@ class FramePipeline:
     self._unmixer = unmixer
     self._executor = concurrent.futures.ThreadPoolExecutor(
         _FRAMES, thread_name_prefix='mixstereo-frames')
+    self._slots = threading.Semaphore(_FRAMES)
 
   def submit(self, image: np.ndarray, cut: bool = False,
              **hint_fields) -> concurrent.futures.Future:
     """Starts unmixing `image` (`state.begin(image, cut)`'s hint, with `hint_fields`
     replaced) and returns its Future once the next frame may start: when its disparities
-    are reported (`hints.FrameHint.on_disparity`) or it is done.
+    are reported (`hints.FrameHint.on_disparity`) or it is done; with the state's temporal
+    consistency off (every frame alone) as soon as fewer than two frames are in flight.
 
     Raises:
       The frame's own error when it failed before reporting its disparities.
     """
     hint = dataclasses.replace(self.state.begin(image, cut=cut), **hint_fields)
+    self._slots.acquire()
+    if not self.state.config.enabled:  # The next frame needs nothing of this one.
+      pending = self._executor.submit(self._unmixer, image, hint=hint)
+      pending.add_done_callback(lambda _: self._slots.release())
+      return pending
     ready, told = threading.Event(), []
     if hint.mixture is not None:  # The shot's decisions are made: only the prior is new.
 
@@ -66,7 +75,7 @@ class FramePipeline:
 
       hint = dataclasses.replace(hint, on_disparity=on_disparity)
     pending = self._executor.submit(self._unmixer, image, hint=hint)
-    pending.add_done_callback(lambda _: ready.set())
+    pending.add_done_callback(lambda _: (self._slots.release(), ready.set()))
     ready.wait()
     if not told:
       self.state.end(pending.result())

@@ -31,7 +31,7 @@ class _Recorder:
              'disparity_right': np.full((H, W), float(k), np.float32),
              'consistent_left': np.arange(W)[None].repeat(H, 0) > 0}
     if hint.on_disparity is not None:
-      hint.on_disparity(found)
+      hint.on_disparity(found)  # Never for frames alone (temporal consistency off).
     assert self.release[k].wait(10)
     return dict(found, info={'mixture': 'anaglyph', 'disparity_range': [0, 9]})
 
@@ -58,6 +58,25 @@ def test_the_next_frame_is_matched_while_this_one_is_restored():
   assert unmixer.hints[1].mixture == 'anaglyph'
 
 
+def test_frames_alone_run_two_at_a_time_without_waiting_for_each_other():
+  unmixer = _Recorder(3)
+  state = temporal.VideoState(temporal.TemporalConfig(enabled=False))
+  with frame_pipeline.FramePipeline(unmixer, state) as pipeline:
+    first, second = pipeline.submit(_frame(0)), pipeline.submit(_frame(1))
+    assert unmixer.started[1].wait(10) and not first.done()
+    third = []
+    submitting = threading.Thread(target=lambda: third.append(pipeline.submit(_frame(2))))
+    submitting.start()
+    assert not unmixer.started[2].wait(0.3)  # No third frame in flight,
+    unmixer.release[1].set()  # until one of the two is done.
+    assert unmixer.started[2].wait(10)
+    unmixer.release[0].set()
+    unmixer.release[2].set()
+    submitting.join()
+    assert [p.result()['disparity_left'][0, 0] for p in (first, second, third[0])] == [0, 1, 2]
+  assert all(hint.on_disparity is None and hint.prior is None for hint in unmixer.hints)
+
+
 def test_a_frame_failing_before_its_disparities_raises_from_submit():
   def failing(image, hint):
     raise ValueError(f'frame {int(image[0, 0, 0])} is broken')
@@ -66,11 +85,13 @@ def test_a_frame_failing_before_its_disparities_raises_from_submit():
       pipeline.submit(_frame(3))
 
 
-@pytest.mark.parametrize('method,swapped,pretrained', [
-    ('classical', False, None), ('classical', True, None), ('model', False, None),
-    ('model', False, 'anaglyph')])  # The learned stage; the refiner, told of nothing.
+@pytest.mark.parametrize('method,swapped,pretrained,alone', [
+    ('classical', False, None, False), ('classical', True, None, False),
+    ('model', False, None, False),  # The learned stage,
+    ('model', False, 'anaglyph', False),  # the refiner, told of nothing,
+    ('model', False, None, True)])  # the learned stage on every frame alone.
 def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, swapped, pretrained,
-                                                               monkeypatch):
+                                                               alone, monkeypatch):
   if swapped:  # Cyan-red frames: the matcher runs on the mirrored image.
     left, right, _ = eye_order_test._pair()  # pylint: disable=protected-access
     frames = [temporal_test._anaglyph(right, left)] * 3  # pylint: disable=protected-access
@@ -85,10 +106,11 @@ def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, swapped, 
     shots.append((hint.mixture, hint.disparity_range, hint.swap_eyes))
     return unmixer(image, hint=hint)
 
-  state, alone = temporal.VideoState(), []
+  config = temporal.TemporalConfig(enabled=not alone)
+  state, single = temporal.VideoState(config), []
   for frame in frames:
-    alone.append(recording(frame, hint=state.begin(frame)))
-    state.end(alone[-1])
+    single.append(recording(frame, hint=state.begin(frame)))
+    state.end(single[-1])
   told, unmix = [], anaglyph.unmix_anaglyph
 
   def counting(*args, **kwargs):
@@ -96,14 +118,15 @@ def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, swapped, 
     return unmix(*args, **kwargs)
 
   monkeypatch.setattr(anaglyph, 'unmix_anaglyph', counting)
-  with frame_pipeline.FramePipeline(recording, temporal.VideoState()) as pipeline:
+  with frame_pipeline.FramePipeline(recording, temporal.VideoState(config)) as pipeline:
     pending = [pipeline.submit(frame) for frame in frames]
     together = [p.result() for p in pending]
   # Every frame after the shot's first one was told early, but the refiner's base; the
   # shot was decided once, by its first frame, as one frame at a time.
-  assert sum(t is not None for t in told) == (0 if pretrained else len(frames) - 1)
-  assert shots[len(frames):] == shots[:len(frames)] and shots[1][0] == 'anaglyph'
+  assert sum(t is not None for t in told) == (0 if pretrained or alone else len(frames) - 1)
+  assert shots[len(frames):] == shots[:len(frames)]
+  assert shots[1][0] == (None if alone else 'anaglyph')
   assert {o['info']['eye_order'] for o in together} == {'swapped' if swapped else 'as_given'}
-  for one, other in zip(alone, together):
+  for one, other in zip(single, together):
     for key in ('left', 'right', 'disparity_left', 'consistent_left'):
       np.testing.assert_array_equal(one[key], other[key])
