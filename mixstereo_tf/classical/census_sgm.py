@@ -263,13 +263,13 @@ def volume_sgm(volume, min_disparity, p1, p2, dl, dr, rows=None):
 @numba.njit(**_JIT)
 def _cost_rows(volume, cl, cr, lo, nds, y, oob, rev, acc, crow, cs):
   """Row y's costs into crow (pixel x's from cs[x] on): the census codes'
-  (`census_costs.cost_row`), or the stored volume's row when `volume` has rows."""
+  (`census_costs.cost_row`), or the stored volume's row when `volume` has rows (all
+  windows its depth wide, so the row is laid out as stored: one copy)."""
   if volume.shape[0] == 0:
     census_costs.cost_row(cl, cr, lo, nds, y, oob, rev, acc, crow, cs)
     return
-  for x in range(volume.shape[1]):
-    for i in range(volume.shape[2]):
-      crow[cs[x] + i] = volume[y, x, i]
+  cells = volume.shape[1] * volume.shape[2]
+  crow[:cells] = volume[y].reshape(cells)
 
 
 @numba.njit(**_JIT)
