@@ -157,7 +157,7 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   start = time.perf_counter()
   shots = temporal.VideoState(temporal_config)
   outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
-  state = {'bar': None, 'done': 0, 'submitted': 0, 'rendered': 0, 'info': None}
+  state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
   pipeline = frame_pipeline.FramePipeline(unmixer, shots)
 
   def on_start(info, done):
@@ -167,11 +167,10 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
 
   def render(frame):
     unmix_start = time.perf_counter()
-    index = state['done'] + state['submitted']
+    index = state['done'] + shots.frames  # This run's frames begun before this one.
     # A video writes the views and the left disparity: the right one is not read.
     pending = pipeline.submit(frame, cut=index % video_config.segment_frames == 0,
                               unread='disparity_right')
-    state['submitted'] += 1
     report.unmix_seconds += time.perf_counter() - unmix_start
     return _drawn_when_done(pending, state, layout, max_disparity, drawn)
 

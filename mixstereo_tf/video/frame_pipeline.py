@@ -60,13 +60,10 @@ class FramePipeline:
       The frame's own error when it failed before reporting its disparities.
     """
     hint = dataclasses.replace(self.state.begin(image, cut=cut), **hint_fields)
-    self._slots.acquire()
-    if not self.state.config.enabled:  # The next frame needs nothing of this one.
-      pending = self._executor.submit(self._unmixer, image, hint=hint)
-      pending.add_done_callback(lambda _: self._slots.release())
-      return pending
     ready, told = threading.Event(), []
-    if hint.mixture is not None:  # The shot's decisions are made: only the prior is new.
+    # The shot's decisions are made (never so with temporal consistency off): only the
+    # prior is new.
+    if hint.mixture is not None:
 
       def on_disparity(found):
         self.state.end(found)
@@ -74,8 +71,11 @@ class FramePipeline:
         ready.set()
 
       hint = dataclasses.replace(hint, on_disparity=on_disparity)
+    self._slots.acquire()
     pending = self._executor.submit(self._unmixer, image, hint=hint)
     pending.add_done_callback(lambda _: (self._slots.release(), ready.set()))
+    if not self.state.config.enabled:  # The next frame needs nothing of this one.
+      return pending
     ready.wait()
     if not told:
       self.state.end(pending.result())
