@@ -42,6 +42,7 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import temporal
 
 FLAGS = flags.FLAGS
@@ -89,13 +90,12 @@ def make_clip(frames_per_shot: int, mixture_name: str = 'anaglyph'):
 
 
 def unmix_clip(unmixer, frames, config):
-  """Outputs of every frame, in order, with the per-shot state of `config`."""
-  state, outputs = temporal.VideoState(config), []
-  for frame in frames:
-    hint = state.begin(frame)
-    outputs.append(unmixer(frame, hint=hint))
-    state.end(outputs[-1])
-  return outputs, state
+  """Outputs of every frame, in order, with the per-shot state of `config`, as the video
+  loop runs them (`frame_pipeline`: a frame's prior is what the one before reported)."""
+  state = temporal.VideoState(config)
+  with frame_pipeline.FramePipeline(unmixer, state) as pipeline:
+    pending = [pipeline.submit(frame) for frame in frames]
+  return [p.result() for p in pending], state
 
 
 def flicker(clip, outputs):

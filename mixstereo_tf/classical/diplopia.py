@@ -254,7 +254,9 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
                    config: Optional[DiplopiaConfig] = None,
                    weight: Union[None, float, str] = None,
                    costs: Optional[Costs] = None, prior: Optional[np.ndarray] = None,
-                   prior_window: Optional[Tuple[int, int]] = None) -> Dict[str, object]:
+                   prior_window: Optional[Tuple[int, int]] = None,
+                   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None
+                   ) -> Dict[str, object]:
   """Separates a double image I = a L + (1 - a) R into two views and disparities.
 
   Args:
@@ -269,6 +271,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     prior: float [H, W], the previous video frame's left disparity (NaN: none there), or
       None; lags outside its window are penalised (`add_prior`), not excluded;
       prior_window: (radius, spread) of `search_windows.around_prior` (None: 1, 2).
+    on_disparity: called with both disparities once they are matched, before the layers
+      are solved (`hints.FrameHint.on_disparity`).
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
@@ -288,6 +292,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
         config.matching, min_disparity=int(low), max_disparity=int(high)))
   image = image_range.as_unit_float(mixture, 'mixture')
   matched, weight = _self_match(image, config, weight, costs, prior, prior_window)
+  if on_disparity is not None:
+    on_disparity(dict(matched))
   layers = diplopia_layers.separate_layers(image, matched['disparity_right'], config.layers,
                                            weight)
   return {'left': image_range.unit_to_u8(layers['left']),

@@ -35,11 +35,12 @@ class FrameHint:
     unread: an output the caller does not read ('disparity_right': a video's frames,
       which write the views and the left disparity): a stage may return its first stage's
       value there instead of refining it (`steps.refiner_unmix`); None: every output.
-    on_disparity: called once with {'disparity_left', 'disparity_right',
-      'consistent_left'} as soon as the frame's disparities are final, before its views
-      are restored, by the stage that makes them (the anaglyph matcher,
-      `classical.anaglyph.unmix_anaglyph`; a stage that refines them afterwards passes
-      it on to no one): the video loop then starts the next frame
+    on_disparity: called once with {'disparity_left', 'disparity_right'} (and
+      'consistent_left' where the stage checks them) as soon as the frame's first stage
+      has matched them, before its views are restored or refined (the anaglyph matcher,
+      `classical.anaglyph.unmix_anaglyph`; the double images' self-matching,
+      `classical.diplopia.unmix_diplopia`; a refiner passes it to its base stage): the
+      video loop takes them as the next frame's prior and starts that frame
       (`video.frame_pipeline`). None: nobody is told early.
   """
   mixture: Optional[str] = None

@@ -162,11 +162,13 @@ class Diplopia(Family):
 
   def classical(self, image, name, search=None, hint=None):
     """`diplopia.unmix_diplopia` over `search` (None: its configured range) with the
-    hint's mixing weight (None: 1/2) and its prior (a video frame's), in its window."""
+    hint's mixing weight (None: 1/2), its prior (a video frame's), in its window, and
+    on_disparity."""
     del name
     hint = hint or hints.FrameHint()
     return diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
-                                   prior=hint.prior, prior_window=hint.prior_window)
+                                   prior=hint.prior, prior_window=hint.prior_window,
+                                   on_disparity=hint.on_disparity)
 
   def display_range(self):
     """The self-matching's largest configured lag."""

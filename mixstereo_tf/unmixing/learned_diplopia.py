@@ -92,7 +92,8 @@ def learned_unmix(echo: Echo, image: np.ndarray, name: str, search: Tuple[int, i
   out = diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
                                 config=dataclasses.replace(classical, matching=matching),
                                 costs=echo_costs(echo, config), prior=hint.prior,
-                                prior_window=hint.prior_window)
+                                prior_window=hint.prior_window,
+                                on_disparity=hint.on_disparity)
   outputs = {key: out[key] for key in _KEYS}
   outputs['info'] = {'mixing_weight': round(out['mixing_weight'], 3)}
   return outputs

@@ -150,9 +150,10 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   as the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
   the rest of the classical colour transfer (each alone was worse on some encodings),
   and the colour-line pass (+0.1 to +0.8 dB on validation examples); 'consistent_left'
-  is that restoration's left-right check of the refined disparities."""
-  if hint is not None:  # The base's disparities are not final: nobody is told of them.
-    hint = dataclasses.replace(hint, on_disparity=None)
+  is that restoration's left-right check of the refined disparities. The hint's
+  on_disparity is the base stage's: a video's next frame searches around the base's
+  disparities and starts while these are refined (measured on temporal.py's clips,
+  docs/DESIGN.md)."""
   base = (base_stage or classical_unmix)(image, name, search, hint)
   family = families.of(name)
   unread = hint and hint.unread

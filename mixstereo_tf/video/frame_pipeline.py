@@ -2,17 +2,20 @@
 while the next frame is matched.
 
 Within a shot, frame t + 1 needs only frame t's disparities (its prior,
-`temporal.VideoState`), not its views. The stage that has the final disparities before
-it restores the views (the anaglyph matcher, `classical.anaglyph.unmix_anaglyph`) reports
-them through the hint's `on_disparity`; `FramePipeline.submit` returns as soon as that
-happens, so the next frame's matching runs beside this frame's restoration, and both
-share the kernels' threads (`core.workers`): the single-threaded parts of one fill the
-cores the other leaves idle. Frames that report nothing early (a shot's first frame,
-whose decisions the next frame needs; stages that refine their disparities, double
-images) are waited for whole, as before. Every frame starts from the same prior as one at
-a time, so the outputs are the same. With temporal consistency off (`--notemporal`: every
-frame decided alone) the next frame needs nothing of this one and starts at once; at most
-two frames are in flight either way.
+`temporal.VideoState`), not its views. The first stage reports its disparities through the
+hint's `on_disparity` before it restores the views (the anaglyph matcher,
+`classical.anaglyph.unmix_anaglyph`) or solves the layers (double images,
+`classical.diplopia.unmix_diplopia`), and before a refiner refines them;
+`FramePipeline.submit` returns as soon as that happens, so the next frame's matching runs
+beside this frame's restoration or refinement, and both share the kernels' threads
+(`core.workers`): the single-threaded parts of one fill the cores the other leaves idle.
+The reported disparities are the next frame's prior, not the frame's final ones, also
+when a refiner changes them. Frames that report nothing early (a shot's first frame,
+whose decisions the next frame needs) are waited for whole, and their outputs are the
+prior. Run one at a time with these priors (`temporal_test`), the outputs are the same.
+With temporal consistency off (`--notemporal`: every frame decided alone) the next frame
+needs nothing of this one and starts at once; at most two frames are in flight either
+way.
 
     pipeline = FramePipeline(unmixer, temporal.VideoState(config))
     for image in frames:

@@ -6,11 +6,12 @@ change and consecutive disparities are close, so `VideoState` keeps, per shot:
     frame;
   * the disparity range, estimated once at the shot's first frame;
   * a double image's mixing weight (`--mixing_weight=auto`: estimated at its first frame);
-  * the previous frame's left disparity, handed to the solver as a prior (the classical
-    matcher searches around it, `matcher.match(..., prior)`; a double image's
-    self-matching penalises lags away from it, `diplopia.add_prior`), except where that
-    frame's match failed the left-right check (NaN: those pixels search the valid prior's
-    range nearby, or the whole range where none is near).
+  * the previous frame's left disparity (its first stage's, before any refiner:
+    `hints.FrameHint.on_disparity`, `video.frame_pipeline`), handed to the solver as a
+    prior (the classical matcher searches around it, `matcher.match(..., prior)`; a double
+    image's self-matching penalises lags away from it, `diplopia.add_prior`), except where
+    that frame's match failed the left-right check (NaN: those pixels search the valid
+    prior's range nearby, or the whole range where none is near).
 Everything is reset at a scene cut. A cut is found between consecutive frames when the
 distance of their colour histograms exceeds `TemporalConfig.cut_threshold`
 (`histogram_distance`): per channel, 16-bin histograms of a copy at most 160 px wide,
@@ -23,6 +24,7 @@ barely moves them while a change of scene does.
       hint = state.begin(image)             # FrameHint: None fields at a shot's start
       outputs = unmixer(image, hint=hint)   # uses hint.mixture, .disparity_range, .prior
       state.end(outputs)                    # records what the shot decided
+                                            # (frame_pipeline: the disparities reported)
 """
 
 import dataclasses

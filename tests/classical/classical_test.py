@@ -106,6 +106,21 @@ def test_diplopia_constant_shift_and_layers():
     assert gain >= 1.0, (view, gain)
 
 
+def test_diplopia_reports_its_disparities_before_solving_the_layers(monkeypatch):
+  left, right, _, _ = _scene(d_bg=5, d_fg=5)
+  told, solve = [], diplopia_layers.separate_layers
+
+  def layers(*args, **kwargs):
+    assert len(told) == 1  # Told once, before the layer solve (a video's next frame
+    return solve(*args, **kwargs)  # starts then, `hints.FrameHint.on_disparity`).
+
+  monkeypatch.setattr(diplopia_layers, 'separate_layers', layers)
+  out = diplopia.unmix_diplopia(_mix('diplopia', left, right), on_disparity=told.append)
+  assert sorted(told[0]) == ['disparity_left', 'disparity_right']
+  for key in told[0]:
+    np.testing.assert_array_equal(told[0][key], out[key])
+
+
 def test_a_noisy_echo_is_found_by_the_shipped_window_and_missed_by_7x7():
   """The echo shares half of each window's signal: with noise the 7 x 7 ZNCC (the window
   before 2026-11-26) loses the lag where the shipped 15 x 15 one keeps it."""

@@ -1,11 +1,13 @@
 """Tests for consecutive frames unmixed side by side (video.frame_pipeline)."""
 
+import dataclasses
 import threading
 
 import numpy as np
 import pytest
 
 from mixstereo_tf.classical import anaglyph
+from mixstereo_tf.classical import diplopia
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import temporal
@@ -85,48 +87,74 @@ def test_a_frame_failing_before_its_disparities_raises_from_submit():
       pipeline.submit(_frame(3))
 
 
-@pytest.mark.parametrize('method,swapped,pretrained,alone', [
-    ('classical', False, None, False), ('classical', True, None, False),
-    ('model', False, None, False),  # The learned stage,
-    ('model', False, 'anaglyph', False),  # the refiner, told of nothing,
-    ('model', False, None, True)])  # the learned stage on every frame alone.
-def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, swapped, pretrained,
-                                                               alone, monkeypatch):
+def _one_at_a_time(unmixer, frames, config):
+  """Each frame whole before the next starts; the next frame's prior is what this frame
+  reported through on_disparity (its outputs where it reported nothing: a shot's first)."""
+  state, outputs = temporal.VideoState(config), []
+  for frame in frames:
+    hint, told = state.begin(frame), []
+    if hint.mixture is not None:
+      hint = dataclasses.replace(hint, on_disparity=told.append)
+    outputs.append(unmixer(frame, hint=hint))
+    state.end(told[0] if told else outputs[-1])
+  return outputs
+
+
+@pytest.mark.parametrize('method,mixture,swapped,pretrained,alone', [
+    ('classical', 'anaglyph', False, None, False),
+    ('classical', 'anaglyph', True, None, False),
+    ('model', 'anaglyph', False, None, False),  # The learned stage,
+    ('model', 'anaglyph', False, 'anaglyph', False),  # the refiner on its base's report,
+    ('model', 'anaglyph', False, None, True),  # the learned stage on every frame alone,
+    ('classical', 'diplopia', False, None, False),  # double images, told before the layers,
+    ('model', 'diplopia', False, 'diplopia_weighted_penalised', False)])  # and refined.
+def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, mixture, swapped,
+                                                               pretrained, alone,
+                                                               monkeypatch):
   if swapped:  # Cyan-red frames: the matcher runs on the mirrored image.
     left, right, _ = eye_order_test._pair()  # pylint: disable=protected-access
     frames = [temporal_test._anaglyph(right, left)] * 3  # pylint: disable=protected-access
   else:
-    frames = temporal_test._shot(3, 5)  # pylint: disable=protected-access
+    frames = temporal_test._shot(3, 5, name=mixture)  # pylint: disable=protected-access
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(
-      method, mixture='anaglyph', swap_eyes='auto' if swapped else False,
+      method, mixture=mixture, swap_eyes='auto' if swapped else False,
       pretrained=pretrained))
-  shots = []  # Each frame's shot decisions, as its hint gives them.
+  shots, priors = [], []  # Each frame's shot decisions and prior, as its hint gives them.
 
   def recording(image, hint):
     shots.append((hint.mixture, hint.disparity_range, hint.swap_eyes))
+    priors.append(hint.prior)
     return unmixer(image, hint=hint)
 
   config = temporal.TemporalConfig(enabled=not alone)
-  state, single = temporal.VideoState(config), []
-  for frame in frames:
-    single.append(recording(frame, hint=state.begin(frame)))
-    state.end(single[-1])
-  told, unmix = [], anaglyph.unmix_anaglyph
+  single = _one_at_a_time(recording, frames, config)
+  module, name = (diplopia, 'unmix_diplopia') if mixture == 'diplopia' else (
+      anaglyph, 'unmix_anaglyph')
+  told, first, unmix = [], {}, getattr(module, name)
 
-  def counting(*args, **kwargs):
+  def counting(*args, **kwargs):  # Frames start in order; they may end in any.
+    index = len(told)
     told.append(kwargs.get('on_disparity'))
-    return unmix(*args, **kwargs)
+    first[index] = unmix(*args, **kwargs)
+    return first[index]
 
-  monkeypatch.setattr(anaglyph, 'unmix_anaglyph', counting)
+  monkeypatch.setattr(module, name, counting)
   with frame_pipeline.FramePipeline(recording, temporal.VideoState(config)) as pipeline:
     pending = [pipeline.submit(frame) for frame in frames]
     together = [p.result() for p in pending]
-  # Every frame after the shot's first one was told early, but the refiner's base; the
+  # Every frame after the shot's first one was told early, the refiners' bases too; the
   # shot was decided once, by its first frame, as one frame at a time.
-  assert sum(t is not None for t in told) == (0 if pretrained or alone else len(frames) - 1)
+  assert sum(t is not None for t in told) == (0 if alone else len(frames) - 1)
   assert shots[len(frames):] == shots[:len(frames)]
-  assert shots[1][0] == (None if alone else 'anaglyph')
-  assert {o['info']['eye_order'] for o in together} == {'swapped' if swapped else 'as_given'}
+  assert shots[1][0] == (None if alone else mixture)
+  if mixture == 'anaglyph':
+    assert {o['info']['eye_order'] for o in together} == {
+        'swapped' if swapped else 'as_given'}
   for one, other in zip(single, together):
     for key in ('left', 'right', 'disparity_left', 'consistent_left'):
-      np.testing.assert_array_equal(one[key], other[key])
+      if key in one:
+        np.testing.assert_array_equal(one[key], other[key])
+  if pretrained == 'diplopia_weighted_penalised':  # Frame 2 searched around frame 1's
+    prior = priors[len(frames) + 2]  # first stage, not around the refined disparity.
+    np.testing.assert_array_equal(prior, first[1]['disparity_left'])
+    assert np.abs(prior - together[1]['disparity_left']).max() > 0.1

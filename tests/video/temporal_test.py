@@ -23,13 +23,13 @@ def _anaglyph(left, right, name='anaglyph'):
   return image_range.signed_to_u8(mixed.numpy())
 
 
-def _shot(seed, frames, pan=PAN, noise=0.0):
-  """`frames` anaglyphs of a camera panning `pan` px per frame over procedural scene
-  `seed` (held-out textures), with Gaussian noise of `noise` levels per frame."""
+def _shot(seed, frames, pan=PAN, noise=0.0, name='anaglyph'):
+  """`frames` mixtures (`name`) seen by a camera panning `pan` px per frame over procedural
+  scene `seed` (held-out textures), with Gaussian noise of `noise` levels per frame."""
   config = synthetic.SceneConfig(max_disparity=12, height=HEIGHT,
                                  width=WIDTH + pan * (frames - 1))
   scene = synthetic.render_scene(seed, config, texture_atlas.load_textures('heldout'))
-  mixture = _anaglyph(scene['left'], scene['right'])
+  mixture = _anaglyph(scene['left'], scene['right'], name)
   rng = np.random.RandomState(seed)
   shot = []
   for index in range(frames):
