@@ -20,6 +20,22 @@ matching_ablations_3000.md; runs/pretrained_features is the shipped model's run)
 no photo warps (procedural scenes) at 3000 steps=runs/nowarp_3000" \
         --ablation_output=experiments/results/matching_ablations_3000.md
 
+The width at the recipe's full length (experiments/results/matching_width*.md; 2026-11-27,
+55 min on 2 cores with AVX-512), against the shipped width-32 model of the same recipe,
+on the colour anaglyphs and on the gray ones (the same-channel reference):
+    python -m mixstereo_tf.train --flagfile=experiments/pretrained_features.flags \
+        --feature_width=64 --model_dir=runs/features_w64
+    runs="shipped (width 32; 3000 steps)=mixstereo_tf/artifacts/pretrained/anaglyph_matching,\
+width 64 (3000 steps)=runs/features_w64"
+    python -m experiments.matching_ablations --shared_dir=../shared/stereo_samples \
+        --ablation_runs="$runs" --ablation_output=experiments/results/matching_width.md
+    python -m experiments.matching_ablations --shared_dir=../shared/stereo_samples \
+        --ablation_runs="$runs" --ablation_encoding=gray \
+        --ablation_output=experiments/results/matching_width_gray.md
+    python -m experiments.matching_validation --photo_dir=photos/warps \
+        --variants="learned (shipped; width 32)=shipped,learned width 64 (3000 steps)=\
+runs/features_w64" --validation_output=experiments/results/matching_validation_width.md
+
 Every run is cut to the same number of steps (the shipped recipe trains 3000), so the rows
 compare the choices, not the training time. Each run's newest checkpoint is scored as the
 learned stage of the tools (`shipped.pretrained_unmixer`) on the colour anaglyphs of
@@ -47,16 +63,18 @@ from experiments import validation
 flags.DEFINE_list('ablation_runs', None, 'label=run folder, comma-separated.')
 flags.DEFINE_string('ablation_output', 'experiments/results/matching_ablations.md',
                     'Markdown report.')
+flags.DEFINE_enum('ablation_encoding', 'anaglyph', ['anaglyph', 'gray'],
+                  "The anaglyphs scored: colour, or 'gray' (the same-channel reference).")
 flags.mark_flag_as_required('ablation_runs')
 FLAGS = flags.FLAGS
-ENCODING = 'anaglyph'
 
 
-def _unmixers(runs_spec, folder):
-  """{label: Unmixer}: classical, then each run exported to `folder` and loaded."""
-  config = predictors.PredictorConfig(mixture=ENCODING, method='model')
+def _unmixers(runs_spec, folder, encoding):
+  """{label: Unmixer} of `encoding`: classical, then each run exported to `folder` and
+  loaded."""
+  config = predictors.PredictorConfig(mixture=encoding, method='model')
   built = {'classical': predictors.build_unmixer(predictors.PredictorConfig(
-      mixture=ENCODING, method='classical'))}
+      mixture=encoding, method='classical'))}
   for index, item in enumerate(runs_spec):
     label, _, path = item.rpartition('=')
     if not label or not os.path.isdir(path):
@@ -66,11 +84,11 @@ def _unmixers(runs_spec, folder):
   return built
 
 
-def _evaluate(unmixers, shared_dir):
+def _evaluate(unmixers, shared_dir, encoding):
   rows = []
   for scene, data in same_channel.scenes(shared_dir):
     pair = realworld.window_align(data, same_channel.FRACTION)
-    image = realworld.make_anaglyph(pair, ENCODING, 'ffmpeg')
+    image = realworld.make_anaglyph(pair, encoding, 'ffmpeg')
     for label, unmix in unmixers.items():
       out = unmix(image)
       rows.append(dict(scene=scene, method=label, **realworld.score(
@@ -83,12 +101,13 @@ def main(argv):
   del argv
   start = time.perf_counter()
   with tempfile.TemporaryDirectory() as folder:
-    unmixers = _unmixers(FLAGS.ablation_runs, folder)
-    rows = _evaluate(unmixers, FLAGS.shared_dir)
+    unmixers = _unmixers(FLAGS.ablation_runs, folder, FLAGS.ablation_encoding)
+    rows = _evaluate(unmixers, FLAGS.shared_dir, FLAGS.ablation_encoding)
   text = ['# Learned matching stage: ablations', '',
           f'Written by `python -m experiments.matching_ablations` in '
           f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores. Runs: '
-          + ', '.join(f'`{r}`' for r in FLAGS.ablation_runs) + '. Colour anaglyphs by '
+          + ', '.join(f'`{r}`' for r in FLAGS.ablation_runs) + '. '
+          + ('Colour' if FLAGS.ablation_encoding == 'anaglyph' else 'Gray') + ' anaglyphs by '
           'FFmpeg of the same_channel scenes, window-aligned at 30%; the learned rows are '
           'the stage alone (no refiner); see experiments/results/same_channel.md for the '
           'refiner on / off.', '', *same_channel.method_table(rows, list(unmixers), 'stage'), '']
