@@ -12,10 +12,9 @@ beside this frame's restoration or refinement, and both share the kernels' threa
 The reported disparities are the next frame's prior, not the frame's final ones, also
 when a refiner changes them. Frames that report nothing early (a shot's first frame,
 whose decisions the next frame needs) are waited for whole, and their outputs are the
-prior. Run one at a time with these priors (`temporal_test`), the outputs are the same.
-With temporal consistency off (`--notemporal`: every frame decided alone) the next frame
-needs nothing of this one and starts at once; at most two frames are in flight either
-way.
+prior. Run one at a time with these priors, the outputs are the same (tests). With
+temporal consistency off (`--notemporal`: every frame decided alone) the next frame needs
+nothing of this one and starts at once; at most two frames are in flight either way.
 
     pipeline = FramePipeline(unmixer, temporal.VideoState(config))
     for image in frames:
