@@ -50,7 +50,7 @@ def video_quality(method: str, frames_per_shot: int = 20) -> dict:
   for name, enabled in QUALITY_VARIANTS:
     outputs, _ = clip_lib.unmix_clip(unmixer, frames, temporal.TemporalConfig(enabled=enabled))
     flicker_d, flicker_v = clip_lib.flicker(clip, outputs)
-    bad1, epe = clip_lib.accuracy(clip, outputs)
+    bad1, epe, _ = clip_lib.accuracy(clip, outputs)
     result[name] = {'flicker_px': flicker_d, 'flicker_levels': flicker_v, 'bad1': bad1,
                     'epe': epe}
   return result

@@ -41,6 +41,7 @@ from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
 from mixstereo_tf.data import texture_atlas
+from mixstereo_tf.evaluation import metrics
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import temporal
@@ -120,10 +121,13 @@ def flicker(clip, outputs):
 
 
 def accuracy(clip, outputs):
-  """(bad-1 %, EPE px) over the non-occluded pixels of every frame."""
+  """(bad-1 %, EPE px) over the non-occluded pixels of every frame, and the left view's
+  RGB PSNR against the clean left view (dB, the frames' mean)."""
   errors = np.concatenate([np.abs(out['disparity_left'] - gt)[nonocc]
                            for (_, gt, nonocc, *_), out in zip(clip, outputs)])
-  return 100.0 * float(np.mean(errors > 1.0)), float(errors.mean())
+  psnr = np.mean([metrics.psnr(out['left'], clean)
+                  for (_, _, _, clean, *_), out in zip(clip, outputs)])
+  return 100.0 * float(np.mean(errors > 1.0)), float(errors.mean()), float(psnr)
 
 
 def speed(unmixer, frames, config, size):
@@ -171,14 +175,16 @@ def main(argv):
       f'{cuts} (planted: [{planted}]).', '',
       'Flicker: motion-compensated mean absolute change between consecutive frames of a shot '
       'on pixels whose ground-truth disparity and colour do not change (disparity in px, '
-      'restored left view in levels 0..255). bad-1 / EPE: non-occluded pixels, all frames. '
+      'restored left view in levels 0..255). bad-1 / EPE: non-occluded pixels, all frames; '
+      'left PSNR: the restored left view against the clean one, RGB, mean over frames. '
       f'Frames/s: the unmixer alone on the first {FLAGS.speed_frames} frames upscaled '
       '(bicubic; the pan becomes 8 / 12 px per frame), kernels compiled beforehand, 2 '
       'shared CPU cores (noisy; `nan`: not timed).', '',
       '| variant | disparity flicker (px) | left-view flicker | bad-1 (%) | EPE (px) | '
-      'fps 1280x720 | fps 1920x1080 |', '| --- | ---: | ---: | ---: | ---: | ---: | ---: |']
-  for name, f_d, f_v, bad, epe, fps_720, fps_1080 in rows:
-    lines.append(f'| {name} | {f_d:.3f} | {f_v:.2f} | {bad:.2f} | {epe:.3f} | '
+      'left PSNR (dB) | fps 1280x720 | fps 1920x1080 |',
+      '| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |']
+  for name, f_d, f_v, bad, epe, psnr, fps_720, fps_1080 in rows:
+    lines.append(f'| {name} | {f_d:.3f} | {f_v:.2f} | {bad:.2f} | {epe:.3f} | {psnr:.2f} | '
                  f'{fps_720:.2f} | {fps_1080:.2f} |')
   lines += ['', f'Total run time {time.perf_counter() - start:.0f} s.', '']
   os.makedirs(os.path.dirname(FLAGS.temporal_output), exist_ok=True)
