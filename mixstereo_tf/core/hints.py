@@ -18,6 +18,9 @@ class FrameHint:
 
   Attributes:
     mixture: the shot's encoding.
+    may_be: a larger encoding the shot may still turn out to be (its detection's
+      'also_fits': the colours seen so far fit both): each frame is detected again and
+      read as `may_be` where that alone explains it (`steps.run`); None: settled.
     detection: the detection info of the shot's first frame ({'detected', 'confidence'} and
       'also_fits', 'eye_order_score' when detection gave them).
     disparity_range: the shot's (min, max) signed pixels.
@@ -44,6 +47,7 @@ class FrameHint:
       (`video.frame_pipeline`). None: nobody is told early.
   """
   mixture: Optional[str] = None
+  may_be: Optional[str] = None
   detection: Optional[Dict[str, object]] = None
   disparity_range: Optional[Tuple[int, int]] = None
   swap_eyes: Optional[bool] = None

@@ -57,6 +57,17 @@ Range = Union[None, str, Tuple[int, int]]  # disparity_range.parse's values.
 Planner = Callable[[np.ndarray, str, Optional[hints.FrameHint]], Tuple[int, int]]
 
 
+def _settle(image: np.ndarray, name: str, info: Dict[str, object],
+            may_be: str) -> Tuple[str, Dict[str, object]]:
+  """(encoding, detection info) of a frame of a shot read as `name` that may be `may_be`:
+  `may_be` where the frame's detection gives it (its colours are more than `name` can
+  explain), else the shot's."""
+  found = detection.detect(image)
+  if found.name == may_be:
+    return may_be, {'detected': found.name, 'confidence': round(found.confidence, 3)}
+  return name, info
+
+
 def resolve_mixture(image: np.ndarray, requested: str,
                     allowed: Sequence[str]) -> Tuple[str, Dict[str, object]]:
   """(encoding to unmix with, detection info) for an image.
@@ -247,6 +258,8 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
     hint = dataclasses.replace(hint, mixing_weight=mixing_weight)
   if hint.mixture is not None:
     name, info = hint.mixture, dict(hint.detection or {})
+    if hint.may_be is not None:
+      name, info = _settle(image, name, info, hint.may_be)
   else:
     name, info = resolve_mixture(image, requested_mixture, allowed)
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)

@@ -11,10 +11,11 @@ beside this frame's restoration or refinement, and both share the kernels' threa
 (`core.workers`): the single-threaded parts of one fill the cores the other leaves idle.
 The reported disparities are the next frame's prior, not the frame's final ones, also
 when a refiner changes them. Frames that report nothing early (a shot's first frame,
-whose decisions the next frame needs) are waited for whole, and their outputs are the
-prior. Run one at a time with these priors, the outputs are the same (tests). With
-temporal consistency off (`--notemporal`: every frame decided alone) the next frame needs
-nothing of this one and starts at once; at most two frames are in flight either way.
+whose decisions the next frame needs, and frames of a shot whose encoding is not settled,
+`hints.FrameHint.may_be`) are waited for whole, and their outputs are the prior. Run one
+at a time with these priors, the outputs are the same (tests). With temporal consistency
+off (`--notemporal`: every frame decided alone) the next frame needs nothing of this one
+and starts at once; at most two frames are in flight either way.
 
     pipeline = FramePipeline(unmixer, temporal.VideoState(config))
     for image in frames:
@@ -63,9 +64,9 @@ class FramePipeline:
     """
     hint = dataclasses.replace(self.state.begin(image, cut=cut), **hint_fields)
     ready, told = threading.Event(), []
-    # The shot's decisions are made (never so with temporal consistency off): only the
-    # prior is new.
-    if hint.mixture is not None:
+    # The shot's decisions are made (never so with temporal consistency off, nor while
+    # its encoding may still change): only the prior is new.
+    if hint.mixture is not None and hint.may_be is None:
 
       def on_disparity(found):
         self.state.end(found)

@@ -3,7 +3,9 @@
 A video is a sequence of shots. Within a shot the encoding and the disparity range do not
 change and consecutive disparities are close, so `VideoState` keeps, per shot:
   * the encoding and the eye order, resolved (detected for 'auto') once at the shot's first
-    frame;
+    frame; where its colours fit a larger encoding as well (detection's 'also_fits', e.g.
+    half-colour or colour anaglyph), every frame is detected again until one shows colours
+    only the larger explains, and the shot is read as that from there on;
   * the disparity range, estimated once at the shot's first frame;
   * a double image's mixing weight (`--mixing_weight=auto`: estimated at its first frame);
   * the previous frame's left disparity (its first stage's, before any refiner:
@@ -156,7 +158,8 @@ class VideoState:
     prior = self._prior if self.config.use_prior else None
     if prior is not None and prior.shape != image.shape[:2]:
       prior = None
-    return hints.FrameHint(mixture=self._shot.get('mixture'), detection=self._shot.get('detection'),
+    return hints.FrameHint(mixture=self._shot.get('mixture'), may_be=self._shot.get('may_be'),
+                     detection=self._shot.get('detection'),
                      disparity_range=self._shot.get('disparity_range'),
                      swap_eyes=self._shot.get('swap_eyes'), prior=prior,
                      prior_window=(self.config.prior_radius, self.config.prior_spread),
@@ -165,21 +168,25 @@ class VideoState:
 
   def end(self, outputs: Dict[str, object]) -> None:
     """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range,
-    mixing weight) when it started the shot, and its 'disparity_left' as the next frame's prior, NaN where its
-    'consistent_left' (when given) says the match failed the left-right check: there the
-    next frame searches the valid prior's range nearby (or everything), so a wrong
-    disparity is not inherited."""
+    mixing weight) when it started the shot, or when its mixture is the larger encoding
+    the shot may still be (`hints.FrameHint.may_be`: the shot settles on it); and its
+    'disparity_left' as the next frame's prior, NaN where its 'consistent_left' (when
+    given) says the match failed the left-right check: there the next frame searches the
+    valid prior's range nearby (or everything), so a wrong disparity is not inherited."""
     if not self.config.enabled:
       return
     info = outputs.get('info', {})
+    kept = ('detected', 'confidence', 'also_fits', 'eye_order_score')
     if not self._shot and 'mixture' in info:
       search = info.get('disparity_range')
-      kept = ('detected', 'confidence', 'also_fits', 'eye_order_score')
-      self._shot = {'mixture': info['mixture'],
+      self._shot = {'mixture': info['mixture'], 'may_be': info.get('also_fits'),
                     'detection': {k: info[k] for k in kept if k in info},
                     'disparity_range': tuple(int(d) for d in search) if search else None,
                     'swap_eyes': info['eye_order'] == 'swapped' if 'eye_order' in info else None,
                     'mixing_weight': info.get('mixing_weight')}
+    elif self._shot.get('may_be') and info.get('mixture') == self._shot['may_be']:
+      self._shot.update(mixture=info['mixture'], may_be=None,  # Settled by this frame.
+                        detection={k: info[k] for k in kept if k in info})
     disparity = outputs.get('disparity_left')
     if disparity is None or not np.isfinite(disparity).all():
       self._prior = None

@@ -60,6 +60,21 @@ def test_the_next_frame_is_matched_while_this_one_is_restored():
   assert unmixer.hints[1].mixture == 'anaglyph'
 
 
+def test_frames_of_a_shot_whose_encoding_may_change_are_waited_for_whole():
+  class Unsettled(_Recorder):
+    def __call__(self, image, hint):
+      return dict(super().__call__(image, hint), info={
+          'mixture': 'half_color', 'also_fits': 'anaglyph', 'disparity_range': [0, 9]})
+
+  unmixer = Unsettled(3)
+  for release in unmixer.release:
+    release.set()
+  with frame_pipeline.FramePipeline(unmixer, temporal.VideoState()) as pipeline:
+    assert all(pipeline.submit(_frame(k)).done() for k in range(3))
+  assert [hint.on_disparity for hint in unmixer.hints] == [None] * 3
+  assert [hint.may_be for hint in unmixer.hints] == [None, 'anaglyph', 'anaglyph']
+
+
 def test_frames_alone_run_two_at_a_time_without_waiting_for_each_other():
   unmixer = _Recorder(3)
   state = temporal.VideoState(temporal.TemporalConfig(enabled=False))

@@ -5,6 +5,7 @@ import pytest
 
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
@@ -190,3 +191,40 @@ def test_eye_order_decided_once_per_shot_and_the_prior_mirrored(monkeypatch):
       outputs[0]['consistent_left'], outputs[0]['disparity_left'], np.nan))[:, ::-1])
   for out in outputs:
     assert np.mean(np.abs(out['disparity_left'] - disparity) > 1) < 0.05
+
+
+def test_an_encoding_that_also_fits_a_larger_one_settles_on_the_first_frame_showing_it():
+  """A shot whose first frame reads half-colour (also fitting the colour anaglyph) is read
+  as half-colour, each frame detected again, until a frame's colours need the colour
+  anaglyph: from then on the shot is read as that, and detected no more; a cut forgets."""
+  state, frame = temporal.VideoState(), np.zeros((8, 8, 3), np.uint8)
+  state.begin(frame)
+  state.end({'info': {'mixture': 'half_color', 'detected': 'half_color', 'confidence': 0.8,
+                      'also_fits': 'anaglyph'}})
+  hint = state.begin(frame)
+  assert (hint.mixture, hint.may_be) == ('half_color', 'anaglyph')
+  state.end({'info': {'mixture': 'half_color'}})  # Still fits both.
+  assert state.begin(frame).may_be == 'anaglyph'
+  state.end({'info': {'mixture': 'anaglyph', 'detected': 'anaglyph', 'confidence': 0.5}})
+  hint = state.begin(frame)
+  assert (hint.mixture, hint.may_be) == ('anaglyph', None)
+  assert hint.detection == {'detected': 'anaglyph', 'confidence': 0.5}
+  state.end({'info': {'mixture': 'anaglyph'}})
+  assert state.begin(frame, cut=True).mixture is None
+
+
+@pytest.mark.parametrize('found,read', [('anaglyph', 'anaglyph'), ('half_color', 'half_color'),
+                                        (None, 'half_color')])
+def test_a_frame_of_an_unsettled_shot_is_read_as_the_larger_encoding_only_when_detected(
+    found, read, monkeypatch):
+  left, right, _ = eye_order_test._pair()  # pylint: disable=protected-access
+  image = _anaglyph(left, right)
+  monkeypatch.setattr(detection, 'detect', lambda image: detection.Detection(
+      found, 0.7, 'test', {}, 'anaglyph' if found == 'half_color' else None))
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='auto'))
+  hint = hints.FrameHint(mixture='half_color', may_be='anaglyph',
+                         detection={'detected': 'half_color'}, disparity_range=(0, 12),
+                         swap_eyes=False)
+  info = unmixer(image, hint=hint)['info']
+  assert info['mixture'] == read
+  assert info['detected'] == (found if read == 'anaglyph' else 'half_color')
