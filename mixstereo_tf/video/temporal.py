@@ -4,8 +4,8 @@ A video is a sequence of shots. Within a shot the encoding and the disparity ran
 change and consecutive disparities are close, so `VideoState` keeps, per shot:
   * the encoding and the eye order, resolved (detected for 'auto') once at the shot's first
     frame; where its colours fit a larger encoding as well (detection's 'also_fits', e.g.
-    half-colour or colour anaglyph), every frame is detected again until one shows colours
-    only the larger explains, and the shot is read as that from there on;
+    half-colour or colour anaglyph), every `settle_every`-th frame is detected again until
+    one shows colours only the larger explains, and the shot is read as that from there on;
   * the disparity range, estimated once at the shot's first frame;
   * a double image's mixing weight (`--mixing_weight=auto`: estimated at its first frame);
   * the previous frame's left disparity (its first stage's, before any refiner:
@@ -58,6 +58,9 @@ class TemporalConfig:
       refine its disparities through the prior. On the 1280x720 benchmark clip (~120 px
       range) a full search of the first frame took 1.7 s, four later frames' time, and was
       less accurate than coarse-to-fine (docs/DESIGN.md).
+    settle_every: a shot whose encoding also fits a larger one (`hints.FrameHint.may_be`)
+      is detected again on every settle_every-th frame (a detection costs about half a
+      720p frame's unmixing, and such frames are waited for whole); 1: every frame.
   """
   enabled: bool = True
   cut_threshold: float = 0.3
@@ -67,6 +70,7 @@ class TemporalConfig:
   prior_radius: int = 1
   prior_spread: int = 2
   first_frame_cells: int = 20_000_000
+  settle_every: int = 4
 
   def __post_init__(self):
     if not 0.0 < self.cut_threshold < 1.0:
@@ -78,9 +82,9 @@ class TemporalConfig:
     if self.bins < 2 or self.analysis_width < 8:
       raise ValueError(f'TemporalConfig needs bins >= 2 and analysis_width >= 8, got '
                        f'{self.bins} and {self.analysis_width}.')
-    if self.first_frame_cells < 1:
-      raise ValueError(f'TemporalConfig.first_frame_cells must be >= 1, got '
-                       f'{self.first_frame_cells}.')
+    if self.first_frame_cells < 1 or self.settle_every < 1:
+      raise ValueError(f'TemporalConfig.first_frame_cells and settle_every must be >= 1, '
+                       f'got {self.first_frame_cells} and {self.settle_every}.')
 
 
 def colour_histograms(image: np.ndarray, config: TemporalConfig = TemporalConfig()
@@ -153,12 +157,14 @@ class VideoState:
     if starts:
       self.shot_starts.append(self.frames)
       self._shot, self._prior = {}, None
+    settling = (self.frames - self.shot_starts[-1]) % self.config.settle_every == 0
     self._histograms = histograms
     self.frames += 1
     prior = self._prior if self.config.use_prior else None
     if prior is not None and prior.shape != image.shape[:2]:
       prior = None
-    return hints.FrameHint(mixture=self._shot.get('mixture'), may_be=self._shot.get('may_be'),
+    return hints.FrameHint(mixture=self._shot.get('mixture'),
+                     may_be=self._shot.get('may_be') if settling else None,
                      detection=self._shot.get('detection'),
                      disparity_range=self._shot.get('disparity_range'),
                      swap_eyes=self._shot.get('swap_eyes'), prior=prior,

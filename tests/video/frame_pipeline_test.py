@@ -69,7 +69,8 @@ def test_frames_of_a_shot_whose_encoding_may_change_are_waited_for_whole():
   unmixer = Unsettled(3)
   for release in unmixer.release:
     release.set()
-  with frame_pipeline.FramePipeline(unmixer, temporal.VideoState()) as pipeline:
+  state = temporal.VideoState(temporal.TemporalConfig(settle_every=1))
+  with frame_pipeline.FramePipeline(unmixer, state) as pipeline:
     assert all(pipeline.submit(_frame(k)).done() for k in range(3))
   assert [hint.on_disparity for hint in unmixer.hints] == [None] * 3
   assert [hint.may_be for hint in unmixer.hints] == [None, 'anaglyph', 'anaglyph']
