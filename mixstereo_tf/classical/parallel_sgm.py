@@ -8,8 +8,9 @@ Memory: a running strip holds 2 bytes per searched cell of its rows (the sum of 
 window widths) plus row buffers of 17 bytes per cell of its fullest row (the windows of
 one image row back to back, `census_sgm`); at most `threads` strips run at a time.
 `strip_bounds` cuts the strips so that they hold equal numbers of cells (equal work too),
-at least one per thread and more where one would pass `max_strip_bytes`. Each strip aggregates `overlap` extra rows above and below,
-where its vertical paths start; one strip (no overlap) reproduces `sgm.match` exactly.
+at least one per thread and more where one would pass `max_strip_bytes`. Each strip
+aggregates `overlap` extra rows above and below, where its vertical paths start; one strip
+(no overlap) reproduces `sgm.match` exactly.
 A stored cost volume (`match_volume`) runs in one strip by default, so it reproduces
 `sgm.match_volume` exactly; asked for `threads` > 1 it runs as many strips with the same
 overlap rule.

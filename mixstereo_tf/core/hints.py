@@ -19,8 +19,9 @@ class FrameHint:
   Attributes:
     mixture: the shot's encoding.
     may_be: a larger encoding the shot may still turn out to be (its detection's
-      'also_fits': the colours seen so far fit both): each frame is detected again and
-      read as `may_be` where that alone explains it (`steps.run`); None: settled.
+      'also_fits': the colours seen so far fit both): this frame is detected again and
+      read as `may_be` where detection gives it (`steps.run`; `VideoState` sets it on
+      every `settle_every`-th frame of an unsettled shot); None: read as `mixture`.
     detection: the detection info of the shot's first frame ({'detected', 'confidence'} and
       'also_fits', 'eye_order_score' when detection gave them).
     disparity_range: the shot's (min, max) signed pixels.

@@ -63,9 +63,12 @@ def _settle(image: np.ndarray, name: str, info: Dict[str, object],
   `may_be` where the frame's detection gives it (its colours are more than `name` can
   explain), else the shot's."""
   found = detection.detect(image)
-  if found.name == may_be:
-    return may_be, {'detected': found.name, 'confidence': round(found.confidence, 3)}
-  return name, info
+  return (may_be, _detection_info(found)) if found.name == may_be else (name, info)
+
+
+def _detection_info(found: detection.Detection) -> Dict[str, object]:
+  """The info a frame records of its detection: {'detected', 'confidence'}."""
+  return {'detected': found.name, 'confidence': round(found.confidence, 3)}
 
 
 def resolve_mixture(image: np.ndarray, requested: str,
@@ -82,7 +85,7 @@ def resolve_mixture(image: np.ndarray, requested: str,
       `allowed`.
   """
   found = detection.detect(image)
-  info = {'detected': found.name, 'confidence': round(found.confidence, 3)}
+  info = _detection_info(found)
   if requested == AUTO:
     if found.name is None:
       raise ValueError(f'This image does not look like an anaglyph ({found.reason}); name '

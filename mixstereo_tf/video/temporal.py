@@ -37,6 +37,14 @@ import numpy as np
 
 from mixstereo_tf.core import hints
 
+# What a shot keeps of its deciding frame's detection info (`hints.FrameHint.detection`).
+_DETECTION_KEYS = ('detected', 'confidence', 'also_fits', 'eye_order_score')
+
+
+def _detection_of(info: Dict[str, object]) -> Dict[str, object]:
+  """The `_DETECTION_KEYS` of a frame's info that it has."""
+  return {key: info[key] for key in _DETECTION_KEYS if key in info}
+
 
 @dataclasses.dataclass(frozen=True)
 class TemporalConfig:
@@ -182,17 +190,16 @@ class VideoState:
     if not self.config.enabled:
       return
     info = outputs.get('info', {})
-    kept = ('detected', 'confidence', 'also_fits', 'eye_order_score')
     if not self._shot and 'mixture' in info:
       search = info.get('disparity_range')
       self._shot = {'mixture': info['mixture'], 'may_be': info.get('also_fits'),
-                    'detection': {k: info[k] for k in kept if k in info},
+                    'detection': _detection_of(info),
                     'disparity_range': tuple(int(d) for d in search) if search else None,
                     'swap_eyes': info['eye_order'] == 'swapped' if 'eye_order' in info else None,
                     'mixing_weight': info.get('mixing_weight')}
     elif self._shot.get('may_be') and info.get('mixture') == self._shot['may_be']:
       self._shot.update(mixture=info['mixture'], may_be=None,  # Settled by this frame.
-                        detection={k: info[k] for k in kept if k in info})
+                        detection=_detection_of(info))
     disparity = outputs.get('disparity_left')
     if disparity is None or not np.isfinite(disparity).all():
       self._prior = None
