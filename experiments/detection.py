@@ -5,7 +5,7 @@
 
 Pairs: Middlebury 2014 Motorcycle (scikit-image) and the real frames of --shared_dir
 (KITTI 2015 #151, a KITTI object frame, a SceneFlow frame), each as captured and
-window-aligned as anaglyph makers publish them (30 % of the disparities in front of the
+window-aligned as anaglyph makers publish them (30 % of the disparities behind the
 screen, `realworld.window_align`, placed by `realworld.estimated_disparities`: no ground
 truth needed; scene names ending ' @30%'). Each pair is encoded by FFmpeg
 in every mode of `ffmpeg_encoder.FFMPEG_MODES` and given to `detection.detect`; the left
@@ -46,7 +46,7 @@ flags.DEFINE_list('detection_codecs', ['png', 'jpeg', 'h264'],
                   f'{", ".join(ffmpeg_encoder.CODECS)}.')
 FLAGS = flags.FLAGS
 
-WINDOW = 0.3  # Share of the disparities in front of the screen in the aligned copies.
+WINDOW = 0.3  # Share of the disparities behind the screen in the aligned copies.
 SHARED = (('kitti2015_000151', 'kitti2015_aanet_000151', 'image_2.png', 'image_3.png'),
           ('kitti_object', 'kitti_object_velodyne', 'left.png', 'right.png'),
           ('sceneflow_A-0032-0006', 'sceneflow_A-0032-0006', 'left.png', 'right.png'))

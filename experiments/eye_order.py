@@ -6,8 +6,8 @@
 Sets: --eye_order_scenes procedural held-out `sample` scenes (128x256, disparities up to
 77 px), Motorcycle (scikit-image, 741 px wide) and, from --shared_dir, the SceneFlow frame and
 the two KITTI frames (pairs reduced to at most 640 px wide, the detector's own width). Each
-pair as it is and window-aligned (`realworld.window_align` at 30 %: a third of the range in
-front of the screen; the shift from the ground truth, or for the KITTI frames from the
+pair as it is and window-aligned (`realworld.window_align` at 30 %: a third of the range
+behind the screen; the shift from the ground truth, or for the KITTI frames from the
 classical matcher's left-right consistent disparities), each as an anaglyph of every
 encoding (our operators), with the eyes as given and swapped: `eye_order.detect` must say
 swapped exactly for the swapped ones. The threshold was chosen on the procedural *training*
@@ -183,7 +183,7 @@ def _report(train, held, end_to_end, seconds):
           'ends of the occlusion bands of both views, on a copy at most '
           f'{config.width} px wide; swapped when the score (a z value) is below '
           f'-{config.threshold}. Cells: right / total; every condition x encoding of a set '
-          'counts once per scene. Window-aligned: 30 % of the range in front of the screen '
+          'counts once per scene. Window-aligned: 30 % of the range behind the screen '
           '(disparities of both signs).', '',
           f'Threshold: on {FLAGS.eye_order_scenes} procedural *training* scenes (other '
           f'textures) the lowest score of an original was {lowest:+.2f}; '

@@ -36,7 +36,7 @@ _KEYWORDS = {'pretrained': 'model'}
 class Unmixed:
   """What `unmix` returns.
 
-  Disparities are signed pixels of the input (negative = in front of the screen): the left
+  Disparities are signed pixels of the input (negative = behind the screen): the left
   pixel x matches the right pixel x - disparity[y, x]; the right pixel x matches the left
   pixel x + disparity_right[y, x].
 

@@ -167,8 +167,8 @@ def define_predictor() -> None:
                        '(paper 4.2); default: on for channel anaglyphs. --method=model only.')
   flags.DEFINE_alias('restore_colors', 'restore_colour')
   flags.DEFINE_string('disparity_range', 'auto', "'auto' (estimated per image), MIN,MAX: "
-                      'the signed disparities to search, pixels of the input (negative = in '
-                      "front of the screen), or 'network': the method's own range (a model's "
+                      'the signed disparities to search, pixels of the input (negative = '
+                      "behind the screen), or 'network': the method's own range (a model's "
                       "levels [0, D - 1], the image as it is; evaluate's default).")
   flags.DEFINE_integer('max_network_pixels', defaults.max_network_pixels,
                        "A model's input is reduced to at most this many pixels.",

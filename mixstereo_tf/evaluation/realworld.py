@@ -9,7 +9,7 @@ Window alignment (anaglyph makers place the zero-parallax plane inside the scene
 [lo, hi] the 1st-99th percentiles of the valid left disparities and s = round(lo +
 fraction (hi - lo)), the left view keeps columns [s, W) and the right view [0, W - s)
 (s >= 0; for s < 0 the other way round), so every disparity becomes d - s: a `fraction` of
-the range is negative (in front of the screen). Luma PSNR compares Y = 0.299 R + 0.587 G +
+the range is negative (behind the screen). Luma PSNR compares Y = 0.299 R + 0.587 G +
 0.114 B (`mixtures.LUMA`), the one thing a gray anaglyph transmits. A pair without ground
 truth gets its window from `estimated_disparities`.
 """

@@ -1,6 +1,6 @@
 """Signed disparity ranges and how a network with D levels is fitted around one.
 
-Published anaglyphs are window-aligned: disparities are signed (negative = in front of the
+Published anaglyphs are window-aligned: disparities are signed (negative = behind the
 screen) and at photo resolution span 100-300 px, while the stereo network regresses
 d in [0, D - 1] (D = `ModelConfig.max_disparity`). `plan` chooses, for a range [lo, hi] in
 pixels of the input image:
