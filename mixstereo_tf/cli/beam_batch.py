@@ -210,7 +210,7 @@ def run(items: Sequence[media.MediaItem], config: predictors.PredictorConfig,
   Returns:
     {status: inputs} for `STATUSES`, from the job's metrics.
   """
-  os.makedirs(output_dir, exist_ok=True)
+  media.prepare_output_dir(items, output_dir)
   pipeline = beam.Pipeline(options=beam_options or pipeline_options([]))
   build(pipeline, items, config, output_dir, options)
   result = pipeline.run()

@@ -218,19 +218,20 @@ def iter_inputs(spec: str) -> Iterator[MediaItem]:
   """Expands an input specification into items, without reading them.
 
   Args:
-    spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images, sorted
-      by name; other files ignored) or a glob pattern (matching images and videos, sorted).
-      Items are named by `output_names`.
+    spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images and
+      videos, sorted by name; other files ignored) or a glob pattern (matching images and
+      videos, sorted). Items are named by `output_names`.
 
   Raises:
     ValueError: nothing exists at `spec`, or the folder / pattern holds no usable file.
   """
   if os.path.isdir(spec):
     paths = sorted(os.path.join(spec, name) for name in os.listdir(spec)
-                   if _extension(name) in IMAGE_EXTENSIONS
+                   if _extension(name) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS
                    and os.path.isfile(os.path.join(spec, name)))
     if not paths:
-      raise ValueError(f'No images ({" ".join(IMAGE_EXTENSIONS)}) in folder {spec}')
+      raise ValueError(f'No images or videos '
+                       f'({" ".join(IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)}) in folder {spec}')
   elif os.path.isfile(spec):
     paths = [spec]
   elif glob.has_magic(spec):
@@ -242,6 +243,33 @@ def iter_inputs(spec: str) -> Iterator[MediaItem]:
     raise ValueError(f'Input not found: {spec}')
   for path, name in zip(paths, output_names(paths)):
     yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS, name)
+
+
+def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:
+  """Creates `output_dir` once nothing of the run can be lost by writing into it.
+
+  Every output of an item named n is `n_*` or `n.*` in `output_dir` (`write_image_outputs`,
+  `stereo_formats`, the video jobs), so an input file in that folder whose name starts
+  with another item's `n_` could be overwritten before it is read (`pic_left.png` by
+  `pic.png`'s left view): refused, naming both.
+
+  Raises:
+    ValueError: `output_dir` is an existing file, or holds such an input.
+  """
+  if os.path.exists(output_dir) and not os.path.isdir(output_dir):
+    raise ValueError(f'The output folder --output_dir={output_dir} is an existing file, '
+                     'not a folder.')
+  folder = os.path.realpath(output_dir)
+  inside = [item for item in items if os.path.dirname(os.path.realpath(item.path)) == folder]
+  for item in inside:
+    file_name = os.path.basename(item.path).casefold()
+    for other in items:
+      if file_name.startswith(other.name.casefold() + '_'):
+        raise ValueError(
+            f'--output_dir={output_dir} holds the input {item.path}, which the outputs of '
+            f'{other.path} (named {other.name}_*) could overwrite before it is read; write '
+            'the results to another folder.')
+  os.makedirs(output_dir, exist_ok=True)
 
 
 def read_image(path: str) -> np.ndarray:

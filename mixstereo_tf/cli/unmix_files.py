@@ -256,10 +256,11 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
   drawn on `progress_stream` when it is a terminal, else logged.
 
   Raises:
-    ValueError: `input_spec` names nothing usable.
+    ValueError: `input_spec` names nothing usable, or `output_dir` cannot take the results
+      (`media.prepare_output_dir`).
   """
   items = list(media.iter_inputs(input_spec))
-  os.makedirs(output_dir, exist_ok=True)
+  media.prepare_output_dir(items, output_dir)
   report = UnmixReport()
   run_start = time.perf_counter()
   bar = progress.ProgressBar(len(items), stream=progress_stream) if len(items) > 1 else None

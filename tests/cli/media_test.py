@@ -85,6 +85,42 @@ def test_iter_inputs_folder_glob_single(tmp_path):
   assert len(single) == 1 and single[0].path == str(tmp_path / 'a.jpg')
 
 
+def test_iter_inputs_folder_lists_videos_too(tmp_path):
+  _write_png(tmp_path / 'b.png', 10)
+  (tmp_path / 'a.mp4').write_bytes(b'not decoded when listed')
+  items = list(media.iter_inputs(str(tmp_path)))
+  assert [(os.path.basename(i.path), i.is_video) for i in items] == [('a.mp4', True),
+                                                                      ('b.png', False)]
+
+
+def _items(folder, *names):
+  return [media.MediaItem(str(folder / n), n.endswith('.mp4'), os.path.splitext(n)[0])
+          for n in names]
+
+
+def test_prepare_output_dir_refuses_to_overwrite_an_input(tmp_path):
+  _write_png(tmp_path / 'pic.png', 10)
+  _write_png(tmp_path / 'pic_left.png', 20)
+  before = (tmp_path / 'pic_left.png').read_bytes()
+  with pytest.raises(ValueError, match=r'pic_left\.png.*outputs of .*pic\.png'):
+    media.prepare_output_dir(_items(tmp_path, 'pic.png', 'pic_left.png'), str(tmp_path))
+  assert (tmp_path / 'pic_left.png').read_bytes() == before
+  # Case-insensitive file systems: PIC_left.png would be overwritten as well.
+  with pytest.raises(ValueError, match='PIC_left'):
+    media.prepare_output_dir(_items(tmp_path, 'pic.png', 'PIC_left.png'), str(tmp_path))
+  # Inputs whose names no output takes, or outputs in another folder, are fine.
+  media.prepare_output_dir(_items(tmp_path, 'pic.png', 'picture.png'), str(tmp_path))
+  media.prepare_output_dir(_items(tmp_path, 'pic.png', 'pic_left.png'),
+                           str(tmp_path / 'out'))
+  assert (tmp_path / 'out').is_dir()
+
+
+def test_prepare_output_dir_names_an_existing_file(tmp_path):
+  (tmp_path / 'target.png').write_bytes(b'x')
+  with pytest.raises(ValueError, match=r'--output_dir=.*target\.png is an existing file'):
+    media.prepare_output_dir([], str(tmp_path / 'target.png'))
+
+
 def test_output_names_are_unique_when_stems_collide():
   assert media.output_names(['in/a.png', 'in/b.jpg']) == ['a', 'b']
   # Shared stem: the extension joins the name (its case kept).
@@ -113,7 +149,7 @@ def test_iter_inputs_names_collisions_in_a_folder(tmp_path):
 def test_iter_inputs_errors(tmp_path):
   with pytest.raises(ValueError, match='not found'):
     list(media.iter_inputs(str(tmp_path / 'missing.png')))
-  with pytest.raises(ValueError, match='No images'):
+  with pytest.raises(ValueError, match='No images or videos'):
     list(media.iter_inputs(str(tmp_path)))
   with pytest.raises(ValueError, match='match'):
     list(media.iter_inputs(str(tmp_path / '*.png')))

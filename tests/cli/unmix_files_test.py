@@ -288,6 +288,26 @@ def test_tensorflow_and_file_system_errors_skip_only_their_input(tmp_path):
     unmix_files.unmix_inputs(unmixer, str(folder), str(tmp_path / 'out2'))
 
 
+def test_results_into_the_input_folder_never_overwrite_an_input(tmp_path):
+  calls = []
+
+  def unmix(image):
+    calls.append(image)
+    return {'left': image, 'right': image,
+            'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  unmixer = predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+  media.write_image(str(tmp_path / 'pic.png'), np.full((8, 8, 3), 10, np.uint8))
+  media.write_image(str(tmp_path / 'pic_left.png'), np.full((8, 8, 3), 20, np.uint8))
+  before = (tmp_path / 'pic_left.png').read_bytes()
+  with pytest.raises(ValueError, match='pic_left.png'):
+    unmix_files.unmix_inputs(unmixer, str(tmp_path), str(tmp_path))
+  assert not calls and (tmp_path / 'pic_left.png').read_bytes() == before
+  # Alone, pic.png writes its results beside itself (pic_left.png is no input then).
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path / 'pic.png'), str(tmp_path))
+  assert report.processed == 1 and len(calls) == 1
+
+
 def test_failure_message_names_at_most_five_inputs():
   assert unmix_files.failure_message(unmix_files.UnmixReport(processed=3)) is None
   report = unmix_files.UnmixReport(processed=1, failures=[(f'{i}.png', 'bad') for i in range(7)])
