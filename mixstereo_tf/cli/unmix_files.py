@@ -9,12 +9,13 @@ when every disparity lies in 0..255.996 px) and float32 signed pixels
 `<name>_disparity.npy`, the stereo formats asked for (`OutputOptions.formats`,
 `stereo_formats`), and a side-car `<name>_info.json` (mixture used and detected, range
 searched, scale, method, seconds, files; `write_info`). Per video, in the input's container
-(`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps, rotation and audio streams
-(copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`; side by side and
+(`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps and audio streams (copied),
+frames a player turns by quarter turns (portrait phone videos) turned upright before they
+are unmixed and written so (other rotations copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`; side by side and
 top-bottom tagged as such: `streams.STEREO_MODES`), `<name>_disparity<ext>`,
 `<name>_<format><ext>` for the formats drawn as videos (rgbd, anaglyphs; the others are
 skipped, saying why) and `<name>_info.json` (the first unmixed frame's info, frames, frame
-rate, rotation, audio streams, the scene cuts found in this run, files). Videos are written
+rate, rotation left to players, `turned_upright` degrees, audio streams, the scene cuts found in this run, files). Videos are written
 resumably (`video.jobs`). Progress (`progress.ProgressBar`) is shown for several inputs
 and for every video's frames.
 
@@ -190,7 +191,7 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   info = done['info']
   write_info(output_dir, item, dict(
       state['info'] or {}, frames=done['frames'], resumed_frames=done['resumed_frames'],
-      frame_rate=str(info.frame_rate), rotation=info.rotation,
+      frame_rate=str(info.frame_rate), rotation=info.rotation, turned_upright=info.turned,
       temporal=temporal_config.enabled,
       scene_cuts=[state['done'] + index for index in shots.cuts],
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),

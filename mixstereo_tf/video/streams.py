@@ -83,13 +83,17 @@ class VideoInfo:
   """What `open_video` found.
 
   Attributes:
-    width, height: frame size in pixels (as stored, before any rotation).
+    width, height: frame size in pixels, as the frames are delivered (upright when
+      `turned`).
     frame_rate: frames per second, exact (the stream's average rate; DEFAULT_FRAME_RATE
       when it reports none).
     time_base: the video stream's time base (the unit of its timestamps).
     frame_count: the container's count, None when it does not say.
-    rotation: degrees counter-clockwise a player turns the frames (display matrix), 0 if none.
+    rotation: degrees counter-clockwise a player still turns the delivered frames (the
+      display matrix; 0 once they are turned upright, or if the file has none).
     audio_streams: how many audio streams the file holds.
+    turned: degrees counter-clockwise the reader turned the stored frames, so that they
+      arrive as a player shows them: 90, 180 or -90 (0: as stored).
   """
   width: int
   height: int
@@ -98,6 +102,7 @@ class VideoInfo:
   frame_count: Optional[int]
   rotation: int
   audio_streams: int
+  turned: int = 0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,8 +115,9 @@ class Frame:
 
 
 def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFrame],
-            rate: Fraction, skip: int) -> Iterator[Frame]:
-  """Frames of `decoded`; those before `skip` are not converted to RGB.
+            rate: Fraction, skip: int, quarter_turns: int = 0) -> Iterator[Frame]:
+  """Frames of `decoded`, turned `quarter_turns` x 90 degrees counter-clockwise; those
+  before `skip` are not converted to RGB.
 
   Times come from the frames' pts (when missing: the previous time + 1 / rate) and are
   made strictly increasing, as every encoder needs. Closes the container at the end.
@@ -127,17 +133,24 @@ def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFr
         time = previous + 1 / rate
       previous = time
       image = frame.to_ndarray(format='rgb24') if index >= skip else None
+      if image is not None and quarter_turns:
+        image = np.ascontiguousarray(np.rot90(image, quarter_turns))
       yield Frame(image, time, index)
   finally:
     container.close()
 
 
-def open_video(path: str, skip: int = 0) -> Tuple[VideoInfo, Iterator[Frame]]:
+def open_video(path: str, skip: int = 0,
+               upright: bool = True) -> Tuple[VideoInfo, Iterator[Frame]]:
   """Opens a video: its VideoInfo and an iterator over its frames (`Frame`).
 
   Args:
     path: a video file.
     skip: the first `skip` frames are decoded but yield no image (resuming a job).
+    upright: frames whose display matrix turns them by a multiple of 90 degrees (phones
+      filming in portrait) are turned as a player shows them, so that the eyes of a
+      mixture lie side by side as its viewer saw them (`VideoInfo.turned`); False: as
+      stored.
 
   Raises:
     ValueError: the file cannot be opened, has no video stream or no decodable frame;
@@ -160,10 +173,12 @@ def open_video(path: str, skip: int = 0) -> Tuple[VideoInfo, Iterator[Frame]]:
   # FFmpeg >= 7 attaches the stream's display matrix to every decoded frame (PyAV >= 15
   # reads its angle); older muxers wrote a 'rotate' tag.
   rotation = round(getattr(first, 'rotation', 0)) or int(float(stream.metadata.get('rotate', 0)))
-  info = VideoInfo(first.width, first.height, rate, Fraction(stream.time_base or 1 / rate),
-                   stream.frames or None, rotation,
-                   len(container.streams.audio))
-  return info, _frames(container, itertools.chain([first], decoded), rate, skip)
+  turns = rotation // 90 % 4 if upright and rotation % 90 == 0 else 0
+  size = (first.height, first.width) if turns % 2 else (first.width, first.height)
+  info = VideoInfo(*size, rate, Fraction(stream.time_base or 1 / rate), stream.frames or None,
+                   0 if turns else rotation, len(container.streams.audio),
+                   turned=(rotation % 360 + 179) % 360 - 179 if turns else 0)  # (-180, 180].
+  return info, _frames(container, itertools.chain([first], decoded), rate, skip, turns)
 
 
 class VideoWriter:

@@ -115,9 +115,11 @@ def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
   assert '1 of 1 input(s) failed' in unmix_files.failure_message(report)
 
 
-def _anaglyph_clip(path, mixture, frames=24):
+def _anaglyph_clip(path, mixture, frames=24, rotation=0):
   """A stereo clip (a textured plane 3 px behind a box 6 px, both moving) encoded as
-  `mixture` anaglyph frames, with a sine audio track; returns the path."""
+  `mixture` anaglyph frames, with a sine audio track; returns the path. With `rotation`
+  (degrees counter-clockwise, a multiple of 90) the frames are stored turned back by it
+  and the display matrix turns them upright, as a phone filming in portrait stores them."""
   texture = cv2.resize(np.random.RandomState(4).rand(20, 60, 3).astype(np.float32), (240, 64),
                        interpolation=cv2.INTER_CUBIC)
   images = []
@@ -129,8 +131,9 @@ def _anaglyph_clip(path, mixture, frames=24):
     left_u8, right_u8 = (image_range.unit_to_u8(np.clip(v, 0, 1)) for v in (left, right))
     mixed = mixtures.mix(mixture, image_range.u8_to_signed(left_u8),
                          image_range.u8_to_signed(right_u8))
-    images.append(image_range.signed_to_u8(mixed.numpy()))
-  return streams_test.make_video(path, images)
+    images.append(np.ascontiguousarray(np.rot90(image_range.signed_to_u8(mixed.numpy()),
+                                                -(rotation // 90))))
+  return streams_test.make_video(path, images, rotation=rotation)
 
 
 class Interrupted(Exception):
@@ -193,6 +196,30 @@ def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extensio
     assert [f.time for f in once] == [f.time for f in again]
     for a, b in zip(once, again):
       np.testing.assert_array_equal(a.image, b.image)
+
+
+@pytest.mark.parametrize('rotation', [90, -90])
+def test_portrait_video_is_unmixed_upright(tmp_path, rotation):
+  """A phone's portrait clip: the eyes lie side by side only as a player shows the frames,
+  so they are turned upright before unmixing and written so, with no rotation left."""
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', disparity_range=(0, 8)))
+  outputs = {}
+  for turn in (0, rotation):
+    source = _anaglyph_clip(tmp_path / f'clip{turn}.mp4', 'anaglyph', frames=6,
+                            rotation=turn)
+    unmix_files.unmix_inputs(unmixer, source, str(tmp_path / f'out{turn}'),
+                             media.OutputOptions('sbs'))
+    outputs[turn] = streams_test.read_all(tmp_path / f'out{turn}' / f'clip{turn}_sbs.mp4',
+                                          upright=False)
+    info = json.loads((tmp_path / f'out{turn}' / f'clip{turn}_info.json').read_text())
+    assert (info['rotation'], info['turned_upright']) == (0, turn)
+  (info, turned), (_, plain) = outputs[rotation], outputs[0]
+  assert info.rotation == 0 and turned[0].image.shape == plain[0].image.shape == (64, 192, 3)
+  # The same views but for the chroma subsampling of the turned grid; flipped ones differ.
+  for a, b in zip(turned, plain):
+    assert np.abs(a.image.astype(int) - b.image).mean() < 8
+    assert np.abs(a.image.astype(int) - b.image[::-1, ::-1]).mean() > 30
 
 
 def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_path):

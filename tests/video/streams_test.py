@@ -1,8 +1,11 @@
 """Tests for mixstereo_tf.video.streams: decoding, encoding, remuxing with the audio copied."""
 
 import fractions
+import subprocess
 
 import av
+import cv2
+import imageio_ffmpeg
 import numpy as np
 import pytest
 
@@ -61,9 +64,9 @@ def audio_samples(path):
     return np.concatenate([f.to_ndarray() for f in container.decode(audio=0)], axis=1)
 
 
-def read_all(path):
+def read_all(path, upright=True):
   """(VideoInfo, [Frame]) of a whole video."""
-  info, frames = streams.open_video(str(path))
+  info, frames = streams.open_video(str(path), upright=upright)
   return info, list(frames)
 
 
@@ -102,8 +105,8 @@ def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
   rate = Fraction(30000, 1001)
   source = make_video(tmp_path / 'in.mp4', [pattern(i, 34, 48) for i in range(6)], rate,
                       rotation=90)
-  info, frames = read_all(source)
-  assert info.frame_rate == rate and info.rotation == 90
+  info, frames = read_all(source, upright=False)
+  assert info.frame_rate == rate and info.rotation == 90 and info.turned == 0
   part = str(tmp_path / 'part.mp4')
   with streams.VideoWriter(part, rate, info.time_base) as writer:
     for frame in frames:
@@ -112,11 +115,30 @@ def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
       writer.write(odd, frame.time)
   assembly.assemble([assembly.Part(part)], str(tmp_path / 'out.mp4'), rate, info.time_base,
                     rotation=info.rotation)
-  out_info, out_frames = read_all(tmp_path / 'out.mp4')
+  out_info, out_frames = read_all(tmp_path / 'out.mp4', upright=False)
   assert out_info.frame_rate == rate and out_info.rotation == 90
   assert (out_info.height, out_info.width, out_info.audio_streams) == (34, 48, 0)
   assert [f.time for f in out_frames] == [Fraction(i * 1001, 30000) for i in range(6)]
   assert out_frames[2].image[33].min() > 220 and out_frames[2].image[:, 47].min() > 220
+
+
+@pytest.mark.parametrize('degrees', [90, -90, 180])
+def test_frames_come_upright_as_ffmpeg_shows_them(tmp_path, degrees):
+  """A display matrix of quarter turns (a phone filming in portrait): the frames arrive as
+  FFmpeg's own command line shows them (its autorotation, an independent reference)."""
+  frames = [pattern(i, 34, 48) for i in range(3)]
+  for image in frames:
+    image[:6, :6] = 255  # A corner mark: any wrong turn or mirror moves it.
+  source = make_video(tmp_path / 'in.mp4', frames, rotation=degrees)
+  info, got = read_all(source)
+  shown = str(tmp_path / 'shown.png')
+  subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), '-loglevel', 'error', '-i', source,
+                  '-frames:v', '1', shown], check=True)
+  reference = cv2.imread(shown)[..., ::-1]
+  assert (info.height, info.width) == reference.shape[:2] == got[0].image.shape[:2]
+  assert info.turned == degrees and info.rotation == 0
+  assert np.abs(got[0].image.astype(int) - reference).mean() < 4
+  assert (info.width, info.height) == ((34, 48) if degrees % 180 else (48, 34))
 
 
 def test_writer_keeps_timestamps_increasing_and_one_size(tmp_path):
