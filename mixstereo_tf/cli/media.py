@@ -12,6 +12,7 @@ from typing import Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 import cv2
 import numpy as np
+from PIL import Image
 
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
@@ -272,6 +273,34 @@ def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:
   os.makedirs(output_dir, exist_ok=True)
 
 
+# EXIF orientation (tag 0x0112) -> the stored pixels as viewers show them (the TIFF / EXIF
+# values; 1 is as stored).
+_ORIENTATIONS = {2: lambda a: a[:, ::-1], 3: lambda a: a[::-1, ::-1], 4: lambda a: a[::-1],
+                 5: lambda a: a.transpose(1, 0, 2), 6: lambda a: np.rot90(a, -1),
+                 7: lambda a: np.rot90(a, 2).transpose(1, 0, 2), 8: lambda a: np.rot90(a, 1)}
+
+
+def exif_orientation(path: str) -> int:
+  """The EXIF orientation of an image file, 1-8 (1: none, or a file Pillow cannot read)."""
+  try:
+    with Image.open(path) as image:
+      value = image.getexif().get(0x0112, 1)
+  except (OSError, ValueError, SyntaxError):
+    return 1
+  return value if value in _ORIENTATIONS else 1
+
+
+def read_upright(path: str) -> Tuple[np.ndarray, int]:
+  """(uint8 RGB [H, W, 3] as viewers show the file, its EXIF orientation): a phone's
+  portrait photo of an anaglyph has its eyes side by side only once turned. Gray and
+  alpha images are converted (`image_io.read_image`); ValueError naming bad files."""
+  image = image_io.read_image(path)
+  orientation = exif_orientation(path)
+  if orientation == 1:
+    return image, orientation
+  return np.ascontiguousarray(_ORIENTATIONS[orientation](image)), orientation
+
+
 def read_image(path: str) -> np.ndarray:
-  """uint8 RGB [H, W, 3] (gray and alpha images converted); ValueError naming bad files."""
-  return image_io.read_image(path)
+  """The image of `read_upright`."""
+  return read_upright(path)[0]

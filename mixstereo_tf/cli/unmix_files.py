@@ -1,5 +1,6 @@
 """Unmixing files: every image and video of an input specification, results to a folder.
 
+Images are read as viewers show them (EXIF orientation applied: `media.read_upright`).
 Outputs per input `<name>` in the output folder, where `<name>` is the file stem, or stem
 + '_' + extension when inputs share a stem (`media.output_names`): the views
 (`<name>_left.png` and `<name>_right.png` for the 'separate' layout, else
@@ -8,7 +9,7 @@ range found, or a fixed one), KITTI-style `<name>_disparity16.png` (uint16, d * 
 when every disparity lies in 0..255.996 px) and float32 signed pixels
 `<name>_disparity.npy`, the stereo formats asked for (`OutputOptions.formats`,
 `stereo_formats`), and a side-car `<name>_info.json` (mixture used and detected, range
-searched, scale, method, seconds, files; `write_info`). Per video, in the input's container
+searched, scale, method, seconds, files, the EXIF orientation applied; `write_info`). Per video, in the input's container
 (`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps and audio streams (copied),
 frames a player turns by quarter turns (portrait phone videos) turned upright before they
 are unmixed and written so (other rotations copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`; side by side and
@@ -215,12 +216,14 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
                  report: UnmixReport, formats: Tuple[str, ...] = ()) -> int:
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
-  image = media.read_image(item.path)
+  image, orientation = media.read_upright(item.path)
   unmix_start = time.perf_counter()
   outputs = unmixer(image)
   report.unmix_seconds += time.perf_counter() - unmix_start
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,
                                       max_display_disparity, formats, image)
+  if orientation != 1:
+    written['exif_orientation'] = orientation  # Applied: the outputs are upright.
   write_info(output_dir, item, dict(outputs.get('info', {}), **written))
   return 1
 

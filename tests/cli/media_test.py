@@ -4,6 +4,7 @@ import os
 
 import cv2
 import numpy as np
+from PIL import Image
 import pytest
 
 from mixstereo_tf.cli import media
@@ -119,6 +120,23 @@ def test_prepare_output_dir_names_an_existing_file(tmp_path):
   (tmp_path / 'target.png').write_bytes(b'x')
   with pytest.raises(ValueError, match=r'--output_dir=.*target\.png is an existing file'):
     media.prepare_output_dir([], str(tmp_path / 'target.png'))
+
+
+@pytest.mark.parametrize('orientation', range(1, 9))
+def test_read_upright_applies_the_exif_orientation_as_opencv_does(tmp_path, orientation):
+  """OpenCV's colour reader applies EXIF orientation itself: an independent reference."""
+  stored = np.zeros((12, 20, 3), np.uint8)
+  stored[:4, :4] = 255  # A corner mark: every turn and mirror moves it.
+  stored[:, 10:, 1] = 120
+  exif = Image.Exif()
+  exif[0x0112] = orientation
+  path = str(tmp_path / 'phone.jpg')
+  Image.fromarray(stored).save(path, exif=exif, quality=100)
+  image, found = media.read_upright(path)
+  reference = cv2.imread(path, cv2.IMREAD_COLOR)[..., ::-1]
+  assert found == orientation and image.shape == reference.shape
+  assert image.shape[:2] == ((20, 12) if orientation >= 5 else (12, 20))
+  assert np.abs(image.astype(int) - reference).max() <= 2
 
 
 def test_output_names_are_unique_when_stems_collide():
