@@ -81,10 +81,15 @@ def resolve_mixture(image: np.ndarray, requested: str,
     allowed: the encodings the predictor can unmix.
 
   Raises:
-    ValueError: 'auto' on an image that is not an anaglyph, or an encoding outside
-      `allowed`.
+    ValueError: 'auto' on an image that is not an anaglyph or too small to tell, or an
+      encoding outside `allowed`.
   """
-  found = detection.detect(image)
+  try:
+    found = detection.detect(image)
+  except ValueError as e:  # Too small or thin to detect: a named mixture needs no check.
+    if requested == AUTO:
+      raise
+    return _allowed(requested, allowed), {'detected': None, 'detection': str(e)}
   info = _detection_info(found)
   if requested == AUTO:
     if found.name is None:
@@ -103,10 +108,15 @@ def resolve_mixture(image: np.ndarray, requested: str,
         found.name is not None or families.of(name).detectable):
       logging.warning('The image was given as %r but looks like %s (confidence %.2f).',
                       name, found.name or 'no anaglyph', found.confidence)
+  return _allowed(name, allowed), info
+
+
+def _allowed(name: str, allowed: Sequence[str]) -> str:
+  """`name`, or a ValueError when the predictor cannot unmix it."""
   if name not in allowed:
     raise ValueError(f'The image is a {name!r} mixture; this predictor unmixes '
                      f'{", ".join(allowed)}.')
-  return name, info
+  return name
 
 
 def estimate_range(image: np.ndarray, name: str, requested: Range,

@@ -52,6 +52,17 @@ def test_a_wrong_explicit_mixture_warns_with_the_detected_one(monkeypatch):
   assert not warnings
 
 
+def test_a_named_mixture_needs_no_detection_of_a_thin_image():
+  """Detection needs 16 px rows at 320 px wide; a named encoding only warns from it."""
+  thin = np.random.default_rng(0).integers(0, 256, (60, 4440, 3), dtype=np.uint8)
+  name, info = steps.resolve_mixture(thin, 'anaglyph', mixtures.ANAGLYPH_NAMES)
+  assert name == 'anaglyph' and info['detected'] is None and '16x16' in info['detection']
+  with pytest.raises(ValueError, match='16x16'):
+    steps.resolve_mixture(thin, 'auto', mixtures.ANAGLYPH_NAMES)
+  with pytest.raises(ValueError, match='this predictor unmixes'):
+    steps.resolve_mixture(thin, 'diplopia', mixtures.ANAGLYPH_NAMES)
+
+
 def test_classical_auto_recovers_signed_disparities():
   """The pair's disparities are 4..14 px; window-shifted by 9 px they straddle zero."""
   image, _ = _anaglyph()
