@@ -226,7 +226,12 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Rendered],
   """
   manifest = load_progress(job)
   done = sum(entry['frames'] for entry in manifest['segments'])
-  info, frames = streams.open_video(job.input_path, skip=done)
+  try:
+    info, frames = streams.open_video(job.input_path, skip=done)
+  except ValueError:
+    if not manifest['segments']:  # Nothing to resume: no folder left behind.
+      shutil.rmtree(job.folder, ignore_errors=True)
+    raise
   if on_start:
     on_start(info, done)
   if not manifest['complete']:

@@ -89,6 +89,15 @@ def test_changed_settings_or_input_start_afresh(tmp_path):
   assert streams_test.read_all(job.outputs['sbs'])[0].width == 192
 
 
+def test_an_unreadable_input_leaves_no_job_folder(tmp_path):
+  source = tmp_path / 'broken.mp4'
+  source.write_bytes(b'\x00\x00\x00\x18ftypmp42 truncated')
+  job = _job(tmp_path, str(source), 'out')
+  with pytest.raises(ValueError, match='broken.mp4'):
+    jobs.run(job, _renderer([]))
+  assert sorted(os.listdir(tmp_path)) == ['broken.mp4']
+
+
 def test_segment_length_must_be_positive():
   with pytest.raises(ValueError, match='segment_frames'):
     jobs.VideoConfig(segment_frames=0)
