@@ -135,6 +135,10 @@ def build_unmixer(config: PredictorConfig) -> Unmixer:
     raise ValueError("PredictorConfig.pretrained applies to method 'model' only.")
   if config.method != 'model' and config.restore_colour is not None:
     raise ValueError("PredictorConfig.restore_colour applies to method 'model' only.")
+  if (config.mixing_weight is not None and config.mixture not in (None, steps.AUTO)
+      and not families.of(config.mixture).weighted):
+    raise ValueError(f'PredictorConfig.mixing_weight applies to double images; a '
+                     f'{config.mixture!r} mixture has no mixing weight.')
   if config.swap_eyes not in eye_order.SWAP_EYES:
     raise ValueError(f'PredictorConfig.swap_eyes={config.swap_eyes!r}; give False, True or '
                      f'{eye_order.AUTO!r}.')

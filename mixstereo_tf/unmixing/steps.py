@@ -275,6 +275,10 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
       name, info = _settle(image, name, info, hint.may_be)
   else:
     name, info = resolve_mixture(image, requested_mixture, allowed)
+    if hint.mixing_weight is not None and not families.of(name).weighted:
+      info['mixing_weight_unused'] = hint.mixing_weight
+      logging.warning('The mixing weight %s is not used: a %s mixture has none (double '
+                      'images do).', hint.mixing_weight, name)
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)
   if swapped:
     image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)

@@ -63,6 +63,14 @@ def test_a_named_mixture_needs_no_detection_of_a_thin_image():
     steps.resolve_mixture(thin, 'diplopia', mixtures.ANAGLYPH_NAMES)
 
 
+def test_a_mixing_weight_on_a_detected_anaglyph_is_reported_unused():
+  image, _ = _anaglyph('gray')
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='auto', mixing_weight=0.3, disparity_range=(0, 16)))
+  info = unmixer(image)['info']
+  assert info['mixture'] == 'gray' and info['mixing_weight_unused'] == 0.3
+
+
 def test_classical_auto_recovers_signed_disparities():
   """The pair's disparities are 4..14 px; window-shifted by 9 px they straddle zero."""
   image, _ = _anaglyph()
