@@ -19,15 +19,19 @@ Outputs = Dict[str, np.ndarray]
 
 
 def as_rgb(image) -> np.ndarray:
-  """A uint8 mixture as [H, W, 3]; gray [H, W] / [H, W, 1] is replicated to RGB."""
+  """A uint8 mixture as [H, W, 3]; gray [H, W] / [H, W, 1] is replicated to RGB and an
+  alpha channel dropped (gray + alpha [H, W, 2], RGBA [H, W, 4]), as image files are read."""
   image = np.asarray(image)
   if image.dtype != np.uint8:
     raise ValueError(f'Unmixer expects a uint8 image, got {image.dtype}.')
   if image.ndim == 2:
     image = image[:, :, None]
-  if image.ndim != 3 or image.shape[2] not in (1, 3):
-    raise ValueError(f'Unmixer expects [H, W, 3] or gray [H, W], got {image.shape}.')
-  return np.repeat(image, 3, axis=2) if image.shape[2] == 1 else image
+  if image.ndim != 3 or image.shape[2] not in (1, 2, 3, 4):
+    raise ValueError(f'Unmixer expects [H, W, 3] (RGB), [H, W, 4] (RGBA) or gray [H, W], '
+                     f'got {image.shape}.')
+  if image.shape[2] in (1, 2):
+    return np.repeat(image[:, :, :1], 3, axis=2)
+  return image[:, :, :3]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,6 +71,9 @@ class PredictorConfig:
   mixing_weight: Union[None, float, str] = None
 
   def __post_init__(self):
+    if self.max_network_pixels is not None and not self.max_network_pixels >= 1:
+      raise ValueError('PredictorConfig.max_network_pixels must be at least 1 (or None: no '
+                       f'limit), got {self.max_network_pixels}.')
     weight = self.mixing_weight
     if weight is None or weight == diplopia_layers.AUTO:
       return
