@@ -28,7 +28,8 @@ NETWORK = 'network'
 
 
 def parse(text: str) -> Union[None, str, Range]:
-  """'auto' -> None; 'network' -> NETWORK; 'MIN,MAX' -> (MIN, MAX) integers, MIN < MAX.
+  """'auto' -> None; 'network' -> NETWORK; 'MIN,MAX' -> (MIN, MAX) integers, MIN < MAX:
+  fractional bounds widen to the whole pixels around them (0.5,10.5 -> 0,11).
 
   Raises:
     ValueError: anything else, naming the text.
@@ -39,8 +40,9 @@ def parse(text: str) -> Union[None, str, Range]:
     return NETWORK
   parts = text.split(',')
   try:
-    low, high = (int(round(float(p))) for p in parts)
-  except ValueError:
+    low, high = (float(p) for p in parts)
+    low, high = math.floor(low), math.ceil(high)
+  except (ValueError, OverflowError):
     raise ValueError("disparity range must be 'auto', 'network' or MIN,MAX in pixels (e.g. "
                      f'-40,120), got {text!r}.') from None
   if low >= high:

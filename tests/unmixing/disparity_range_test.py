@@ -11,7 +11,10 @@ def test_parse():
   assert disparity_range.parse(' Network ') == disparity_range.NETWORK
   assert disparity_range.parse(' AUTO ') is None
   assert disparity_range.parse('-40,120') == (-40, 120)
-  for bad in ('5,5', '10,2', 'a,b', '1,2,3', '7'):
+  # Fractional bounds widen to cover the range asked (rounding cut 10.5 off).
+  assert disparity_range.parse('0.5,10.5') == (0, 11)
+  assert disparity_range.parse('-2.5,-0.2') == (-3, 0)
+  for bad in ('5,5', '10,2', 'a,b', '1,2,3', '7', 'nan,4', '0,inf'):
     with pytest.raises(ValueError, match='disparity range'):
       disparity_range.parse(bad)
 
