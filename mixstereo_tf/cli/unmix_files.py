@@ -197,8 +197,17 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
       scene_cuts=[state['done'] + index for index in shots.cuts],
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
       files=[os.path.basename(path) for path in outputs.values()],
-      **({'skipped_formats': skipped} if skipped else {})))
+      **({'skipped_formats': skipped} if skipped else {}), **_odd_size_note(info)))
   return state['rendered']
+
+
+def _odd_size_note(info) -> Dict[str, str]:
+  """{'padding': why an output video is a row or column larger than the input}, if it is."""
+  if info.width % 2 == 0 and info.height % 2 == 0:
+    return {}
+  return {'padding': f'{info.width}x{info.height} frames: an output video whose width or '
+                     'height is odd gets one more column or row, copied from its edge (4:2:0 '
+                     'video needs even sizes); crop it to recover the input size'}
 
 
 def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object]) -> str:

@@ -213,13 +213,30 @@ def test_portrait_video_is_unmixed_upright(tmp_path, rotation):
     outputs[turn] = streams_test.read_all(tmp_path / f'out{turn}' / f'clip{turn}_sbs.mp4',
                                           upright=False)
     info = json.loads((tmp_path / f'out{turn}' / f'clip{turn}_info.json').read_text())
-    assert (info['rotation'], info['turned_upright']) == (0, turn)
+    assert (info['rotation'], info['turned_upright']) == (0, turn) and 'padding' not in info
   (info, turned), (_, plain) = outputs[rotation], outputs[0]
   assert info.rotation == 0 and turned[0].image.shape == plain[0].image.shape == (64, 192, 3)
   # The same views but for the chroma subsampling of the turned grid; flipped ones differ.
   for a, b in zip(turned, plain):
     assert np.abs(a.image.astype(int) - b.image).mean() < 8
     assert np.abs(a.image.astype(int) - b.image[::-1, ::-1]).mean() > 30
+
+
+def test_an_odd_sized_video_says_its_outputs_are_padded(tmp_path):
+  def unmix(image, **hint):
+    del hint
+    return {'left': image, 'right': image, 'info': {},
+            'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  source = streams_test.make_video(tmp_path / 'odd.avi',  # MJPEG takes odd sizes.
+                                   [streams_test.pattern(i, 33, 47) for i in range(3)])
+  unmixer = predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+  unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'out'),
+                           media.OutputOptions('sbs_half'))
+  info = json.loads((tmp_path / 'out' / 'odd_info.json').read_text())
+  assert info['padding'].startswith('47x33 frames')
+  out_info, _ = streams_test.read_all(tmp_path / 'out' / 'odd_sbs_half.avi')
+  assert (out_info.width, out_info.height) == (48, 34)
 
 
 def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_path):
