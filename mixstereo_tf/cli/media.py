@@ -301,6 +301,16 @@ def read_upright(path: str) -> Tuple[np.ndarray, int]:
   return np.ascontiguousarray(_ORIENTATIONS[orientation](image)), orientation
 
 
+def truncated_jpeg(path: str) -> bool:
+  """Whether `path` is a JPEG without its end marker (FF D9, trailing zeros allowed): a file
+  cut short, whose missing rows the decoder fills with gray and only reports on stderr."""
+  with open(path, 'rb') as f:
+    if f.read(2) != b'\xff\xd8':
+      return False
+    f.seek(max(0, os.path.getsize(path) - 4096))
+    return not f.read().rstrip(b'\x00').endswith(b'\xff\xd9')
+
+
 def read_image(path: str) -> np.ndarray:
   """The image of `read_upright`."""
   return read_upright(path)[0]

@@ -233,6 +233,9 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
                                       max_display_disparity, formats, image)
   if orientation != 1:
     written['exif_orientation'] = orientation  # Applied: the outputs are upright.
+  if media.truncated_jpeg(item.path):
+    written['warning'] = 'the JPEG file ends before its end marker: rows may be missing'
+    logging.warning('%s: %s.', item.path, written['warning'])
   write_info(output_dir, item, dict(outputs.get('info', {}), **written))
   return 1
 

@@ -139,6 +139,21 @@ def test_read_upright_applies_the_exif_orientation_as_opencv_does(tmp_path, orie
   assert np.abs(image.astype(int) - reference).max() <= 2
 
 
+def test_truncated_jpeg_is_told_apart(tmp_path):
+  image = np.random.default_rng(0).integers(0, 256, (64, 64, 3), dtype=np.uint8)
+  whole = str(tmp_path / 'whole.jpg')
+  cv2.imwrite(whole, image)
+  data = open(whole, 'rb').read()
+  (tmp_path / 'padded.jpg').write_bytes(data + b'\x00' * 10)
+  (tmp_path / 'cut.jpg').write_bytes(data[:len(data) * 2 // 3])
+  assert not media.truncated_jpeg(whole)
+  assert not media.truncated_jpeg(str(tmp_path / 'padded.jpg'))
+  assert media.truncated_jpeg(str(tmp_path / 'cut.jpg'))
+  assert media.read_image(str(tmp_path / 'cut.jpg')).shape == (64, 64, 3)  # Still read.
+  _write_png(tmp_path / 'a.png', 10)
+  assert not media.truncated_jpeg(str(tmp_path / 'a.png'))
+
+
 def test_output_names_are_unique_when_stems_collide():
   assert media.output_names(['in/a.png', 'in/b.jpg']) == ['a', 'b']
   # Shared stem: the extension joins the name (its case kept).
