@@ -73,18 +73,19 @@ def match(left_u8: np.ndarray, right_u8: np.ndarray, min_disparity: int,
 
   Args:
     left_u8, right_u8: uint8 [H, W] images.
-    min_disparity, max_disparity: the signed range to search, pixels (the search covers
-      at least [min, max]: SGBM's level count is rounded up to a multiple of 16).
+    min_disparity, max_disparity: the signed range to search, pixels (SGBM's level count
+      is rounded up to a multiple of 16; what it finds beyond max is not kept).
 
   Returns:
-    (disparity float32 [H, W], signed pixels, left x matches right x - d; valid bool
-    [H, W]: the pixels SGBM answered before the filling).
+    (disparity float32 [H, W], signed pixels within [min, max], left x matches right
+    x - d; valid bool [H, W]: the pixels SGBM answered within [min, max] before the
+    filling: answers beyond max, from the levels rounded up, are filled like holes).
   """
   low, levels = sgbm_levels(min_disparity, max_disparity)
   matcher = cv2.StereoSGBM.create(minDisparity=low, numDisparities=levels,
                                   blockSize=BLOCK_SIZE, P1=P1, P2=P2)
   raw = matcher.compute(np.ascontiguousarray(left_u8), np.ascontiguousarray(right_u8))
-  valid = raw >= low * 16
+  valid = (raw >= low * 16) & (raw <= int(max_disparity) * 16)
   disparity = raw.astype(np.float32) / 16.0
   return fill_from_left(disparity, valid), valid
 

@@ -43,6 +43,15 @@ def test_match_anaglyph_recovers_a_constant_shift(d, search, name):
   assert np.mean(np.abs(inner(d_right) - d) <= 1.0) > 0.9  # Same sign for the right view.
 
 
+def test_answers_beyond_the_asked_range_are_not_kept():
+  """[0, 20] runs 32 levels; a true shift of 26 px would be found at 26 without the cut."""
+  left, right = shifted_pair(26)
+  for d_map in sgbm.match_anaglyph(anaglyph_of(left, right), 'anaglyph', 0, 20):
+    assert d_map.min() >= 0 and d_map.max() <= 20
+  found, valid = sgbm.match(*sgbm.eye_pair(anaglyph_of(left, right), 'anaglyph'), 0, 31)
+  assert np.mean(np.abs(inner(found) - 26) <= 1.0) > 0.9 and valid.mean() > 0.5
+
+
 def test_eye_pair_is_the_mean_of_each_eyes_channels():
   image = np.zeros((2, 3, 3), np.uint8)
   image[..., 0], image[..., 1], image[..., 2] = 200, 10, 31
