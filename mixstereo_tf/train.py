@@ -18,6 +18,7 @@ from absl import flags
 from absl import logging
 
 from mixstereo_tf import models
+from mixstereo_tf.artifacts import runs
 from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
@@ -63,9 +64,9 @@ flags.DEFINE_float('learning_rate', _TRAIN['learning_rate'], 'RMSProp learning r
 flags.DEFINE_enum('optimizer', _TRAIN['optimizer'], tuple(optimizers.OPTIMIZERS),
                   "rmsprop_tf1: the paper's TF1 RMSProp (accumulator from one, epsilon "
                   "1e-10); rmsprop_keras: Keras 3's RMSprop.")
-flags.DEFINE_integer('num_steps', None, 'Total optimizer steps.')
+flags.DEFINE_integer('num_steps', None, 'Total optimizer steps.', lower_bound=1)
 flags.DEFINE_float('num_epochs', None, 'Epochs over the training list (instead of '
-                   '--num_steps).')
+                   '--num_steps).', lower_bound=0.0)
 flags.DEFINE_enum('mode', _TRAIN['mode'], objective.MODES, 'What to train.')
 flags.DEFINE_string('init_checkpoint', _TRAIN['init_checkpoint'], 'Start from these weights '
                     '(fine-tuning): a checkpoint prefix or a run directory.')
@@ -192,8 +193,8 @@ def main(argv):
         raise ValueError(f'--{name}={getattr(FLAGS, name)} must be a multiple of '
                          f'{model_config.size_multiple} for this architecture.')
     samples = sources.list_samples(data_config, split='train')
-    num_steps = FLAGS.num_steps or math.ceil(
-        FLAGS.num_epochs * len(samples) / FLAGS.batch_size)
+    num_steps = FLAGS.num_steps or max(1, math.ceil(
+        FLAGS.num_epochs * len(samples) / FLAGS.batch_size))
     train_config = _train_config(num_steps)
   except ValueError as e:
     raise flag_errors.usage_error(e, stage_training.RENAMED) from None
@@ -204,6 +205,8 @@ def main(argv):
                         lambda: pipeline.train_dataset(samples, pipeline_config),
                         flags_text=FLAGS.flags_into_string(),
                         extra_configs={'data': data_config, 'pipeline': pipeline_config})
+  except runs.RunDirError as e:
+    raise app.UsageError(str(e)) from None
   except loop.NonFiniteLossError as e:
     logging.error('%s', e)
     sys.exit(f'error: {e}')

@@ -94,6 +94,12 @@ def test_sigterm_leaves_a_checkpoint_and_a_second_run_resumes_from_it(tmp_path):
     change = np.abs(later.get_tensor(key) - reader.get_tensor(key)).max()
     assert change <= 10 * config.learning_rate, (key, change)
 
+  # Resuming under another mixture would train it under the old run's label: refused.
+  third = _train_cli(model_dir, f'--num_steps={saved_step + 4}', '--mixture=diplopia')
+  output = third.communicate(timeout=240)[0]
+  assert third.returncode != 0 and "pipeline.mixture: 'anaglyph' -> 'diplopia'" in output
+  assert tf.train.latest_checkpoint(str(model_dir)) == resumed
+
 
 def test_jit_compile_true_trains_on_pipeline_batches(tmp_path):
   process = _train_cli(tmp_path / 'run', '--num_steps=2', '--jit_compile=true',
@@ -109,6 +115,9 @@ def test_bad_flags_are_usage_errors_naming_the_flag(tmp_path):
   output = process.communicate(timeout=120)[0]
   assert process.returncode != 0
   assert '--crop_width=62 must be a multiple of' in output
+  process = _train_cli(tmp_path / 'run', '--num_steps=0')
+  output = process.communicate(timeout=120)[0]
+  assert process.returncode != 0 and '--num_steps=0: 0 is not a positive integer' in output
 
 
 def test_a_few_dozen_steps_on_the_sample_source_lower_the_loss(tmp_path):

@@ -14,7 +14,7 @@ checkpoint) or a checkpoint prefix such as `runs/demo/ckpt-7000` (its folder is 
 import dataclasses
 import json
 import os
-from typing import Any, Dict, Optional, Tuple
+from typing import Any, Dict, Iterator, Optional, Tuple
 
 import tensorflow as tf
 from tensorflow.core.protobuf import trackable_object_graph_pb2
@@ -53,8 +53,57 @@ def to_json(**configs: Any) -> str:
   return json.dumps(out, indent=2, sort_keys=True, default=str)
 
 
+class RunDirError(ValueError):
+  """A run directory or checkpoint that cannot take this run (a file, another run's
+  checkpoints, weights of another architecture)."""
+
+
+# Fields of any section a resumed run may change: how long and how it runs, not what it
+# trains (the architecture, data, loss, optimizer and seed must stay).
+RESUMABLE_FIELDS = frozenset({
+    'num_steps', 'model_dir', 'log_every', 'checkpoint_every', 'summary_every',
+    'image_summary_every', 'jit_compile', 'strategy', 'init_checkpoint', 'init_from'})
+
+
+def _changes(old: Any, new: Any, path: str = '') -> Iterator[str]:
+  """'section.field: old -> new' of every leaf that differs, RESUMABLE_FIELDS aside."""
+  if isinstance(old, dict) and isinstance(new, dict):
+    for key in sorted(set(old) | set(new)):
+      if key not in RESUMABLE_FIELDS:
+        yield from _changes(old.get(key), new.get(key), f'{path}.{key}' if path else key)
+  elif old != new:
+    yield f'{path}: {old!r} -> {new!r}'
+
+
+def check_resumable(model_dir: str, **configs: Any) -> None:
+  """Raises RunDirError when `model_dir` holds a checkpoint of a run whose `config.json`
+  differs from `configs` beyond RESUMABLE_FIELDS (a resumed run would train something
+  else under the old label), naming every difference."""
+  path = os.path.join(model_dir, CONFIG_FILE)
+  if tf.train.latest_checkpoint(model_dir) is None or not tf.io.gfile.exists(path):
+    return
+  with tf.io.gfile.GFile(path) as f:
+    try:
+      old = json.load(f)
+    except json.JSONDecodeError:
+      return  # Nothing to compare: the run is rewritten from these configs.
+  changed = list(_changes(old, json.loads(to_json(**configs))))
+  if changed:
+    raise RunDirError(f'{model_dir} holds checkpoints of another run configuration; resuming '
+                     f'would change {"; ".join(changed)}. Give these flags as that run did, '
+                     'or another --model_dir.')
+
+
 def write_run_files(model_dir: str, flags_text: Optional[str], **configs: Any) -> None:
-  """Creates `model_dir` and writes `config.json` (the configs) and `flags.txt`."""
+  """Creates `model_dir` and writes `config.json` (the configs) and `flags.txt`.
+
+  Raises:
+    RunDirError: `model_dir` is a file, or holds checkpoints of another configuration
+      (`check_resumable`).
+  """
+  if tf.io.gfile.exists(model_dir) and not tf.io.gfile.isdir(model_dir):
+    raise RunDirError(f'--model_dir={model_dir} is an existing file, not a folder.')
+  check_resumable(model_dir, **configs)
   tf.io.gfile.makedirs(model_dir)
   if flags_text is not None:
     with tf.io.gfile.GFile(os.path.join(model_dir, FLAGS_FILE), 'w') as f:

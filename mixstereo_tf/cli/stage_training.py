@@ -9,6 +9,7 @@ from absl import app
 from absl import flags
 from absl import logging
 
+from mixstereo_tf.artifacts import runs
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.data import photo_warps
 from mixstereo_tf.models import matching_features
@@ -97,7 +98,10 @@ def train_refiner() -> None:
     raise flag_errors.usage_error(e, RENAMED) from None
   logging.info('Training the refiner on %d examples for %d steps.',
                config.num_shards * shard_size, config.num_steps)
-  refiner_loop.train(config, examples, architecture, FLAGS.flags_into_string())
+  try:
+    refiner_loop.train(config, examples, architecture, FLAGS.flags_into_string())
+  except runs.RunDirError as e:
+    raise app.UsageError(str(e)) from None
 
 
 def train_features() -> None:
@@ -124,7 +128,10 @@ def train_features() -> None:
   except ValueError as e:
     raise flag_errors.usage_error(e, RENAMED) from None
   logging.info('Training the matching features for %d steps.', config.num_steps)
-  feature_loop.train(config, warp, features, FLAGS.flags_into_string())
+  try:
+    feature_loop.train(config, warp, features, FLAGS.flags_into_string())
+  except runs.RunDirError as e:
+    raise app.UsageError(str(e)) from None
 
 
 # --architecture -> its trainer (the joint network is train.py's own).

@@ -134,8 +134,13 @@ def _restore_or_initialise(session: _Session, config: config_lib.TrainConfig) ->
     logging.info('Resumed from %s at step %d.', latest,
                  int(session.optimizer.iterations.numpy()))
   elif config.init_checkpoint:
-    _, init = runs.resolve_checkpoint(config.init_checkpoint)
-    tf.train.Checkpoint(model=session.model).read(init).expect_partial()
+    try:
+      _, init = runs.resolve_checkpoint(config.init_checkpoint)
+      tf.train.Checkpoint(model=session.model).read(init).expect_partial()
+    except (ValueError, tf.errors.OpError) as e:
+      raise runs.RunDirError(
+          f'--init_checkpoint={config.init_checkpoint}: {str(e).splitlines()[0]} (its '
+          "architecture flags must be this run's; see its config.json)") from None
     logging.info('Initialised the model from %s.', init)
   return int(session.optimizer.iterations.numpy())
 

@@ -71,3 +71,33 @@ def test_write_run_files_and_read_run_info_round_trip(tmp_path):
   assert runs.read_run_info(str(tmp_path / 'r')) == info
   assert (tmp_path / 'r' / runs.FLAGS_FILE).read_text() == '--x=1\n'
   assert json.loads((tmp_path / 'r' / runs.CONFIG_FILE).read_text())['model'] == TINY.to_dict()
+
+
+def test_resuming_refuses_another_configuration(tmp_path):
+  run_dir = str(tmp_path / 'r')
+  train = {'num_steps': 30, 'learning_rate': 1e-4, 'log_every': 5, 'model_dir': run_dir}
+  pipeline = {'mixture': 'anaglyph', 'crop_height': 32, 'crop_width': 64}
+  runs.write_run_files(run_dir, None, train=train, model=TINY, pipeline=pipeline)
+  # No checkpoint yet: nothing trained under the old label, any change is written.
+  runs.write_run_files(run_dir, None, train=train, model=TINY,
+                       pipeline=dict(pipeline, crop_width=128))
+  runs.write_run_files(run_dir, None, train=train, model=TINY, pipeline=pipeline)
+  tf.train.Checkpoint(step=tf.Variable(1)).save(os.path.join(run_dir, 'ckpt'))
+  # How long and how it runs may change on resume...
+  runs.write_run_files(run_dir, None, train=dict(train, num_steps=40, log_every=1,
+                                                 model_dir='moved'), model=TINY,
+                       pipeline=pipeline)
+  # ...what it trains may not: every difference is named, config.json is kept.
+  with pytest.raises(runs.RunDirError,
+                     match=r"pipeline.mixture: 'anaglyph' -> 'diplopia'; train.learning_rate"):
+    runs.write_run_files(run_dir, None, train=dict(train, learning_rate=1e-3), model=TINY,
+                         pipeline=dict(pipeline, mixture='diplopia'))
+  assert json.loads((tmp_path / 'r' / runs.CONFIG_FILE).read_text())['pipeline'] == pipeline
+  with pytest.raises(runs.RunDirError, match='model.'):
+    runs.write_run_files(run_dir, None, train=train, model={'other': 1}, pipeline=pipeline)
+
+
+def test_a_file_as_run_directory_is_named(tmp_path):
+  (tmp_path / 'list.txt').write_text('x')
+  with pytest.raises(runs.RunDirError, match=r'--model_dir=.*list.txt is an existing file'):
+    runs.write_run_files(str(tmp_path / 'list.txt'), None, model=TINY)
