@@ -47,8 +47,9 @@ DEFAULT_RUNNER = 'FnApiRunner'
 
 
 def read_input_list(path: str) -> List[media.MediaItem]:
-  """The items of a text file holding one input path per line (blank lines ignored), on
-  any file system Beam reads (`.gz` and other compressed lists are decompressed).
+  """The items of a text file holding one input path per line (blank lines and lines
+  starting with '#' ignored, a repeated path taken once), on any file system Beam reads
+  (`.gz` and other compressed lists are decompressed).
 
   Raises:
     ValueError: the list cannot be read, is empty, or names a non-local path (workers
@@ -59,7 +60,8 @@ def read_input_list(path: str) -> List[media.MediaItem]:
       lines = f.read().decode('utf-8').splitlines()
   except (OSError, UnicodeDecodeError) as e:
     raise ValueError(f'--input_list: cannot read {path}: {e}') from None
-  paths = [line.strip() for line in lines if line.strip()]
+  paths = list(dict.fromkeys(line.strip() for line in lines  # Repeats once, in order.
+                             if line.strip() and not line.lstrip().startswith('#')))
   if not paths:
     raise ValueError(f'--input_list: no paths in {path}')
   for number, entry in enumerate(paths, 1):
@@ -104,6 +106,21 @@ def completed_info(output_dir: str, name: str) -> Optional[Dict[str, object]]:
   return info
 
 
+def foreign_results(info: Dict[str, object], item: media.MediaItem,
+                    method: str) -> Optional[str]:
+  """Why complete results under `item.name` are not `item`'s by `method` (another input,
+  or another method: a re-run with other options), or None: they are, and are skipped."""
+  written_for = info.get('input')
+  if isinstance(written_for, str) and os.path.abspath(written_for) != os.path.abspath(
+      item.path):
+    return (f'the output folder holds results named {item.name} of another input, '
+            f'{written_for}; use another --output_dir')
+  if info.get('method') not in (None, method):
+    return (f'the output folder holds results of {item.path} by method '
+            f'{info["method"]!r}, not {method!r}; use another --output_dir')
+  return None
+
+
 def summary_row(item: media.MediaItem, status: str, info: Dict[str, object],
                 seconds: float, error: str = '') -> Dict[str, object]:
   """One `SUMMARY_FIELDS` row from an input's info (`{}` when it failed)."""
@@ -133,6 +150,13 @@ class _UnmixFn(beam.DoFn):
   def process(self, element: Tuple[int, str, bool, str]) -> Iterator[object]:
     index, item = element[0], media.MediaItem(*element[1:])
     info = completed_info(self._output_dir, item.name)
+    other = info and foreign_results(info, item, self._unmixer.method)
+    if other:
+      logging.error('failed %s: %s (to the dead-letter list)', item.path, other)
+      beam.metrics.Metrics.counter('mixstereo', 'failed').inc()
+      yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': item.path, 'error': other}))
+      yield index, summary_row(item, 'failed', {}, 0.0, other)
+      return
     if info is not None:
       beam.metrics.Metrics.counter('mixstereo', 'skipped').inc()
       yield index, summary_row(item, 'skipped', info, 0.0)

@@ -105,13 +105,29 @@ def test_input_list_names_like_the_cli(tmp_path):
   with pytest.raises(ValueError, match=r'entry 2 of .*remote.txt, gs://bucket/scan.jpg, is '
                                        'not a local path'):
     beam_batch.list_inputs(None, str(tmp_path / 'remote.txt'))
-  (tmp_path / 'empty.txt').write_text('\n \n')
+  (tmp_path / 'notes.txt').write_text(f'# scans of 1998\n{paths[0]}\n  # {paths[1]}\n'
+                                      f'{paths[2]}\n{paths[0]}\n')
+  items = beam_batch.list_inputs(None, str(tmp_path / 'notes.txt'))
+  assert [item.path for item in items] == [paths[0], paths[2]]  # Comments out, repeat once.
+  assert [item.name for item in items] == ['p', 'clip']
+  (tmp_path / 'empty.txt').write_text('\n \n# only a comment\n')
   with pytest.raises(ValueError, match='--input_list: no paths in .*empty.txt'):
     beam_batch.list_inputs(None, str(tmp_path / 'empty.txt'))
   with pytest.raises(ValueError, match='--input_list: cannot read .*missing.txt'):
     beam_batch.list_inputs(None, str(tmp_path / 'missing.txt'))
   with pytest.raises(ValueError, match='exactly one of --input and --input_list'):
     beam_batch.list_inputs(str(tmp_path), str(tmp_path / 'list.txt.gz'))
+
+
+def test_results_of_another_input_or_method_are_not_skipped_as_done(tmp_path):
+  item = media.MediaItem(str(tmp_path / 'in' / 'p.png'), False, 'p')
+  mine = {'input': item.path, 'method': 'classical'}
+  assert beam_batch.foreign_results(mine, item, 'classical') is None
+  assert beam_batch.foreign_results({'files': []}, item, 'model') is None  # Older infos.
+  assert 'by method \'classical\', not \'model\'' in beam_batch.foreign_results(
+      mine, item, 'model')
+  other = dict(mine, input=str(tmp_path / 'elsewhere' / 'p.png'))
+  assert 'another input' in beam_batch.foreign_results(other, item, 'classical')
 
 
 def test_complete_means_the_info_and_every_file_it_lists(tmp_path):
