@@ -26,7 +26,7 @@ subclass and one `register` call.
 """
 
 import dataclasses
-from typing import Dict, Optional, Tuple
+from typing import Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -230,6 +230,25 @@ def detected() -> Family:
   """The family whose encodings `detection` finds in an image (the anaglyphs): the one a
   mixture asked as 'auto' belongs to."""
   return next(family for family in _REGISTRY.values() if family.detectable)
+
+
+def allowed_name(name: str, allowed: Sequence[str]) -> str:
+  """`name`, or a ValueError when a predictor that unmixes `allowed` cannot unmix it."""
+  if name not in allowed:
+    raise ValueError(f'The image is a {name!r} mixture; this predictor unmixes '
+                     f'{", ".join(allowed)}.')
+  return name
+
+
+def undetectable(allowed: Sequence[str], weighted: bool = False) -> Optional[str]:
+  """What 'auto' reads an image without an anaglyph as, or None (refused): the one
+  encoding of `allowed` when detection can tell none of them (a double image model's
+  'diplopia'), or with `weighted` (a mixing weight given) the one that takes a weight."""
+  if not weighted and any(of(name).detectable for name in allowed):
+    return None
+  names = [name for name in allowed if not of(name).detectable
+           and (of(name).weighted or not weighted)]
+  return names[0] if len(names) == 1 else None
 
 
 def classical_names() -> Tuple[str, ...]:

@@ -71,14 +71,17 @@ def _detection_info(found: detection.Detection) -> Dict[str, object]:
   return {'detected': found.name, 'confidence': round(found.confidence, 3)}
 
 
-def resolve_mixture(image: np.ndarray, requested: str,
-                    allowed: Sequence[str]) -> Tuple[str, Dict[str, object]]:
+def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
+                    weighted: bool = False) -> Tuple[str, Dict[str, object]]:
   """(encoding to unmix with, detection info) for an image.
 
   Args:
     image: uint8 [H, W, 3] mixture.
-    requested: a mixture name, or 'auto' to detect it.
+    requested: a mixture name, or 'auto' to detect it; an image 'auto' finds no anaglyph
+      in is read as the one encoding of `allowed` detection cannot tell, if there is one
+      (`families.undetectable`: a double image model's 'diplopia').
     allowed: the encodings the predictor can unmix.
+    weighted: a mixing weight was given (only weighted encodings take one).
 
   Raises:
     ValueError: 'auto' on an image that is not an anaglyph or too small to tell, or an
@@ -89,9 +92,13 @@ def resolve_mixture(image: np.ndarray, requested: str,
   except ValueError as e:  # Too small or thin to detect: a named mixture needs no check.
     if requested == AUTO:
       raise
-    return _allowed(requested, allowed), {'detected': None, 'detection': str(e)}
+    return families.allowed_name(requested, allowed), {'detected': None, 'detection': str(e)}
   info = _detection_info(found)
   if requested == AUTO:
+    fallback = families.undetectable(allowed, weighted)
+    if found.name is None and fallback:
+      why = 'a mixing weight given' if weighted else 'the only encoding this predictor takes'
+      return fallback, dict(info, read_as=f'{fallback}: no anaglyph found, {why}')
     if found.name is None:
       raise ValueError(f'This image does not look like an anaglyph ({found.reason}); name '
                        'its mixture (e.g. PredictorConfig.mixture=diplopia).')
@@ -108,15 +115,7 @@ def resolve_mixture(image: np.ndarray, requested: str,
         found.name is not None or families.of(name).detectable):
       logging.warning('The image was given as %r but looks like %s (confidence %.2f).',
                       name, found.name or 'no anaglyph', found.confidence)
-  return _allowed(name, allowed), info
-
-
-def _allowed(name: str, allowed: Sequence[str]) -> str:
-  """`name`, or a ValueError when the predictor cannot unmix it."""
-  if name not in allowed:
-    raise ValueError(f'The image is a {name!r} mixture; this predictor unmixes '
-                     f'{", ".join(allowed)}.')
-  return name
+  return families.allowed_name(name, allowed), info
 
 
 def estimate_range(image: np.ndarray, name: str, requested: Range,
@@ -274,7 +273,8 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
     if hint.may_be is not None:
       name, info = _settle(image, name, info, hint.may_be)
   else:
-    name, info = resolve_mixture(image, requested_mixture, allowed)
+    name, info = resolve_mixture(image, requested_mixture, allowed,
+                                 hint.mixing_weight is not None)
     if hint.mixing_weight is not None and not families.of(name).weighted:
       info['mixing_weight_unused'] = hint.mixing_weight
       logging.warning('The mixing weight %s is not used: a %s mixture has none (double '

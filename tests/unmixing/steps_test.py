@@ -40,6 +40,19 @@ def test_auto_refuses_a_plain_photo_with_a_clear_message():
     steps.resolve_mixture(left, 'auto', mixtures.ANAGLYPH_NAMES)
 
 
+def test_auto_reads_a_plain_image_as_the_double_image_a_predictor_expects():
+  left, _, _ = detection_test._pair()  # pylint: disable=protected-access
+  name, info = steps.resolve_mixture(left, 'auto', ('diplopia',))  # A diplopia model.
+  assert name == 'diplopia' and 'only encoding' in info['read_as']
+  both = mixtures.ANAGLYPH_NAMES + ('diplopia',)
+  name, info = steps.resolve_mixture(left, 'auto', both, weighted=True)
+  assert name == 'diplopia' and 'mixing weight' in info['read_as']
+  with pytest.raises(ValueError, match='does not look like an anaglyph'):
+    steps.resolve_mixture(left, 'auto', both)  # Anything else still has to be named.
+  image, _ = _anaglyph('gray')
+  assert steps.resolve_mixture(image, 'auto', both, weighted=True)[0] == 'gray'
+
+
 def test_a_wrong_explicit_mixture_warns_with_the_detected_one(monkeypatch):
   warnings = []
   monkeypatch.setattr(logging, 'warning', lambda msg, *args: warnings.append(msg % args))
