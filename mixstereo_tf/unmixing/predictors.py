@@ -61,6 +61,10 @@ def _model(config: PredictorConfig) -> Unmixer:
     raise ValueError('PredictorConfig.pretrained excludes PredictorConfig.checkpoint and '
                      'PredictorConfig.saved_model.')
   if not config.checkpoint and not config.saved_model:
+    if config.restore_colour is not None:  # The shipped stages always restore both views.
+      raise ValueError('PredictorConfig.restore_colour applies to a trained network '
+                       '(PredictorConfig.checkpoint or PredictorConfig.saved_model), not to '
+                       'the shipped models, which always restore the views.')
     return shipped.pretrained_unmixer(pretrained.choose(config.pretrained, config.mixture),
                                       config)
   if config.checkpoint and not config.saved_model:  # Checked before the model is built.

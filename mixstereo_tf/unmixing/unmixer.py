@@ -71,9 +71,13 @@ class PredictorConfig:
   mixing_weight: Union[None, float, str] = None
 
   def __post_init__(self):
-    if self.max_network_pixels is not None and not self.max_network_pixels >= 1:
-      raise ValueError('PredictorConfig.max_network_pixels must be at least 1 (or None: no '
-                       f'limit), got {self.max_network_pixels}.')
+    if self.restore_colour not in (None, True, False):
+      raise ValueError('PredictorConfig.restore_colour must be None, True or False, got '
+                       f'{self.restore_colour!r}.')
+    if self.max_network_pixels is not None and not (
+        isinstance(self.max_network_pixels, int) and self.max_network_pixels >= 1):
+      raise ValueError('PredictorConfig.max_network_pixels must be a whole number of at '
+                       f'least 1 (or None: no limit), got {self.max_network_pixels!r}.')
     weight = self.mixing_weight
     if weight is None or weight == diplopia_layers.AUTO:
       return

@@ -119,6 +119,8 @@ def test_build_unmixer_checks_its_arguments(tmp_path):
     build(checkpoint='x', mixture='no_such_mixture')
   with pytest.raises(ValueError, match="method 'model' only"):
     build(method='classical', mixture='anaglyph', restore_colour=True)
+  with pytest.raises(ValueError, match='not to the shipped models'):
+    build(restore_colour=False)  # The default: a shipped model, which always restores.
   with pytest.raises(ValueError, match="mixing_weight applies to double images; a 'gray'"):
     build(method='classical', mixture='gray', mixing_weight=0.3)
   assert build(method='classical', mixture='diplopia', mixing_weight=0.3).mixture == 'diplopia'

@@ -21,6 +21,9 @@ def test_as_rgb_takes_what_image_files_hold():
 
 
 def test_config_refuses_a_network_size_below_one_pixel():
-  with pytest.raises(ValueError, match='max_network_pixels must be at least 1'):
-    unmixer.PredictorConfig(max_network_pixels=0)
+  for bad in (0, 'big', 2.5):
+    with pytest.raises(ValueError, match='max_network_pixels must be a whole number'):
+      unmixer.PredictorConfig(max_network_pixels=bad)
+  with pytest.raises(ValueError, match='restore_colour must be None, True or False'):
+    unmixer.PredictorConfig(restore_colour='no')
   assert unmixer.PredictorConfig(max_network_pixels=None).max_network_pixels is None
