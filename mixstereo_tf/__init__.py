@@ -82,12 +82,11 @@ def _search(value: Union[None, str, Tuple[int, int]]) -> Union[None, str, Tuple[
   from mixstereo_tf.unmixing import disparity_range  # pylint: disable=g-import-not-at-top
   if value is None:
     return None
-  if isinstance(value, str):
-    try:
-      return disparity_range.parse(value)
-    except ValueError as e:
-      raise ValueError(f'disparity_range={value!r}: {e}') from None
-  return tuple(int(v) for v in value)
+  try:  # A pair reads as the CLI's MIN,MAX text, so both check and round alike.
+    text = value if isinstance(value, str) else ','.join(str(v) for v in value)
+    return disparity_range.parse(text)
+  except (TypeError, ValueError) as e:
+    raise ValueError(f'disparity_range={value!r}: {e}') from None
 
 
 def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] = 'auto',

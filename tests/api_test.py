@@ -81,7 +81,13 @@ def test_a_photo_that_is_no_anaglyph_names_the_keyword():
     (dict(model='anaglyph', checkpoint='run'), 'model= excludes checkpoint= and saved_model='),
     (dict(method='oracle'), "method='oracle' needs the clean stereo pair"),
     (dict(disparity_range='5,5'), "disparity_range='5,5': disparity range needs MIN < MAX"),
-    (dict(method='classical', disparity_range=(5, 5)), 'disparity_range= needs MIN < MAX'),
+    (dict(method='classical', disparity_range=(5, 5)),
+     'disparity_range=(5, 5): disparity range needs MIN < MAX'),
+    (dict(disparity_range=(1, 2, 3)), 'disparity_range=(1, 2, 3): disparity range must be'),
+    (dict(disparity_range=5), 'disparity_range=5: '),
+    (dict(disparity_range=('a', 'b')), "disparity_range=('a', 'b'): disparity range must be"),
+    (dict(max_network_pixels='big'), 'max_network_pixels= must be a whole number'),
+    (dict(restore_colour='no'), 'restore_colour= must be None, True or False'),
     (dict(method='classical', mixture='diplopia', mixing_weight=1.0),
      "mixing_weight= must be None, 'auto' or a number in (0, 1)"),
 ])
@@ -89,6 +95,16 @@ def test_bad_keywords_are_named(keywords, message):
   with pytest.raises(ValueError) as raised:
     mixstereo_tf.unmix(np.zeros((8, 8, 3), np.uint8), **keywords)
   assert message in str(raised.value) and 'Config' not in str(raised.value)
+
+
+def test_a_pair_of_fractional_bounds_widens_as_on_the_command_line(anaglyph):
+  out = mixstereo_tf.unmix(anaglyph[0], method='classical', disparity_range=(1.7, 8.2))
+  assert out.info['disparity_range'] == [1, 9]
+
+
+def test_a_folder_is_no_image_file(tmp_path):
+  with pytest.raises(ValueError, match='is a folder, not an image file'):
+    mixstereo_tf.unmix(str(tmp_path))
 
 
 def test_defaults_are_the_predictor_configs():

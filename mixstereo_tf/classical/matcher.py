@@ -116,9 +116,8 @@ def _pair(left, right, config: MatcherConfig) -> Tuple[np.ndarray, np.ndarray]:
                      f'{left.shape} and {right.shape}.')
   h, w = left.shape[:2]
   if h < config.census_height or w < config.census_width:
-    raise ValueError(f'a {h}x{w} image is smaller than the census window '
-                     f'MatcherConfig.census_height x census_width = '
-                     f'{config.census_height}x{config.census_width}.')
+    raise ValueError(f'a {h}x{w} image is smaller than the matcher\'s census window of '
+                     f'{config.census_height}x{config.census_width} pixels.')
   return np.ascontiguousarray(left), np.ascontiguousarray(right)
 
 

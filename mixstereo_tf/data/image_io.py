@@ -20,6 +20,8 @@ _SWAP_EXTENSIONS = ('.jpg', '.png')
 
 def _read_raw(path: str) -> np.ndarray:
   """cv2.imread(IMREAD_UNCHANGED) with a ValueError naming a missing or unreadable file."""
+  if os.path.isdir(path):
+    raise ValueError(f'{path} is a folder, not an image file.')
   if not os.path.isfile(path):
     raise ValueError(f'File not found: {path}')
   # IMREAD_UNCHANGED keeps 16-bit depth and ignores EXIF rotation (which would break the
@@ -82,6 +84,8 @@ def read_pfm(path: str) -> np.ndarray:
   Raises:
     ValueError: missing file, malformed header or truncated data.
   """
+  if os.path.isdir(path):
+    raise ValueError(f'{path} is a folder, not an image file.')
   if not os.path.isfile(path):
     raise ValueError(f'File not found: {path}')
   with open(path, 'rb') as f:
