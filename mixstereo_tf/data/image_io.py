@@ -134,7 +134,8 @@ def read_disparity(path: str, scale: float = 1.0) -> Tuple[np.ndarray, np.ndarra
     (disparity float32 [H, W] with unknown pixels set to 0, valid bool [H, W]).
 
   Raises:
-    ValueError: missing/unreadable file, more than one channel, or scale <= 0.
+    ValueError: missing/unreadable file, more than one channel, scale <= 0, or an 8-bit
+      file with a scale above 16 (a KITTI map saved as 8 bits).
   """
   if not scale > 0:
     raise ValueError(f'Disparity scale must be positive for {path}, got {scale}')
@@ -144,6 +145,10 @@ def read_disparity(path: str, scale: float = 1.0) -> Tuple[np.ndarray, np.ndarra
     stored = _read_raw(path)
     if stored.dtype not in (np.uint8, np.uint16):
       raise ValueError(f'Unsupported disparity sample type {stored.dtype} in {path}')
+    if stored.dtype == np.uint8 and scale > 16:  # Middlebury's 8-bit maps use 4, 8 or 16.
+      raise ValueError(f'{path} is an 8-bit image, but disparities stored as {scale:g} d '
+                       'need 16 bits (KITTI PNGs are uint16): it would read as at most '
+                       f'{255 / scale:.2f} px.')
   stored = _single_channel(stored, path).astype(np.float32)
   valid = np.isfinite(stored) & (stored > 0)
   disparity = np.where(valid, stored / np.float32(scale), 0).astype(np.float32)

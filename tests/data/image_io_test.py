@@ -135,6 +135,10 @@ def test_kitti_16_bit_disparity(tmp_path):
   assert disparity.dtype == np.float32
   np.testing.assert_allclose(disparity, [[5, 0], [7.5, 1 / 256]])
   np.testing.assert_array_equal(valid, [[True, False], [True, True]])
+  # Saved as 8 bits by mistake: every disparity would read below 1 px.
+  eight = _write(tmp_path / 'd8.png', np.array([[200, 0]], np.uint8))
+  with pytest.raises(ValueError, match=r'd8.png is an 8-bit image.*at most 1.00 px'):
+    image_io.read_disparity(eight, 256.0)
 
 
 def test_8_bit_and_pfm_disparity(tmp_path):
