@@ -9,6 +9,7 @@ import pytest
 from mixstereo_tf.data import sources
 from mixstereo_tf.data import split_lists
 from mixstereo_tf.evaluation import metrics
+from mixstereo_tf.evaluation import protocol
 from mixstereo_tf.evaluation import results
 from mixstereo_tf.evaluation import runner
 from mixstereo_tf.unmixing import predictors
@@ -152,6 +153,19 @@ def test_middlebury_bad1_known_answers(tmp_path):
   # The GT is integer pixels after its scale: 0.9 px off is good, 1.1 px off is bad.
   assert runner.evaluate(config, oracle(config, 0.9)).averages['bad1_all'] == 0.0
   assert runner.evaluate(config, oracle(config, 1.1)).averages['bad1_all'] == 1.0
+
+
+def test_middlebury_paper_mean_only_beside_the_same_four_scenes(tmp_path):
+  """Cones and Tsukuba are two of the paper's four scenes: its per-scene rows are shown,
+  its mean (over Tsukuba, Venus, Cones, Teddy) is not set beside a two-scene mean."""
+  config = EvalConfig('middlebury', 'anaglyph', make_middlebury(tmp_path / 'mb'))
+  result = runner.evaluate(config, oracle(config))
+  (title, _, rows, _, _), = protocol.get('middlebury').tables(result)
+  mean_at = [row['Scene'] for row in rows].index('mean')
+  assert len(rows) == mean_at + 1  # Our mean only.
+  paper = set(protocol.PAPER_LABELS.values())
+  assert sum(row['Method'] in paper for row in rows[:mean_at]) >= 2  # Its scene rows.
+  assert "the paper's means" in title and 'left out' in title
 
 
 def test_sample_protocol_oracle(tmp_path):
