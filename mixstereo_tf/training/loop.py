@@ -256,4 +256,8 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
   distribution.check_batch(dataset, strategy)
   session = _build(config, model_config, loss_config, strategy, chief, write_dir, jit)
   start_step = _restore_or_initialise(session, config)
+  if start_step >= config.num_steps:
+    logging.warning('%s is at step %d already, not below --num_steps=%d: nothing to train '
+                    '(raise --num_steps to continue).', config.model_dir, start_step,
+                    config.num_steps)
   return _run_steps(session, config, dataset, start_step)

@@ -38,6 +38,10 @@ def run_steps(one_step: Callable[[], Sequence[float]], step: tf.Variable, num_st
     checkpoint_every, log_every: steps between checkpoints / log lines.
     log_format: %-format of the mean of `one_step`'s numbers over the last log_every steps.
   """
+  if int(step) >= num_steps:
+    logging.warning('%s is at step %d already, not below --num_steps=%d: nothing to train '
+                    '(raise --num_steps to continue).', manager.directory, int(step),
+                    num_steps)
   stop = []
   previous = {s: signal.signal(s, lambda *_: stop.append(True))
               for s in (signal.SIGINT, signal.SIGTERM)}
