@@ -48,8 +48,10 @@ def test_middlebury_table_has_the_papers_rows_for_matching_scenes(tmp_path):
                           (4, ('30.32', '12.53%'))):
     assert all(n in lines[tsukuba + offset] for n in numbers), lines[tsukuba + offset]
   assert '26.31' in text and '4.51%' in text  # Cones (folder 'Cones').
+  # The paper's means are over its four scenes: not set beside this two-scene mean.
   mean = next(i for i, l in enumerate(lines) if l.startswith('mean'))
-  assert '5.93%' in lines[mean + 1] and '26.82%' in lines[mean + 2]
+  assert '5.93%' not in text and 'paper:' not in ''.join(lines[mean:mean + 3])
+  assert "the paper's means (over Tsukuba, Venus, Cones, Teddy) are left out" in text
   # The paper has no diplopia Middlebury numbers: only our rows.
   diplopia = _oracle_result(EvalConfig('middlebury', 'diplopia', root))
   assert 'paper:' not in report.format_report(diplopia)  # Row labels 'paper: <method>'.

@@ -168,6 +168,17 @@ def test_middlebury_paper_mean_only_beside_the_same_four_scenes(tmp_path):
   assert "the paper's means" in title and 'left out' in title
 
 
+def test_middlebury_paper_mean_beside_a_mean_over_its_four_scenes():
+  row = {'psnr_left': 30.0, 'psnr_right': 30.0, 'bad1_all': 0.1, 'bad1_nonocc': 0.1,
+         'mixture_psnr_left': 20.0, 'mixture_psnr_right': 20.0}
+  rows = [dict(row, name=name) for name in ('tsukuba', 'venus', 'cones', 'teddy')]
+  result = results.EvalResult(EvalConfig('middlebury', 'anaglyph', 'mb'), 'model', True,
+                              rows, {'bad1_all': 0.1}, {'bad1_all': 4}, 4)
+  (title, _, table, _, _), = protocol.get('middlebury').tables(result)
+  mean_at = [r['Scene'] for r in table].index('mean')
+  assert table[mean_at + 1]['bad-1'] == 5.93 and 'left out' not in title
+
+
 def test_sample_protocol_oracle(tmp_path):
   config = EvalConfig('sample', 'diplopia', max_disparity=8, heldout_scenes=1)
   result = runner.evaluate(config, oracle(config))
