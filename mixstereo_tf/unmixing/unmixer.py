@@ -143,10 +143,15 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
   if restore is None:
     restore = any(families.of(m).restores_views for m in trained)
 
+  source = ({'checkpoint': config.checkpoint} if config.checkpoint else
+            {'saved_model': config.saved_model} if config.saved_model else {})
+
   def solve(image, name, search, hint):
     del hint  # The network takes no prior.
-    return steps.model_unmix(graph, image, name, search, levels,
-                                   config.max_network_pixels, bool(restore))
+    out = steps.model_unmix(graph, image, name, search, levels, config.max_network_pixels,
+                            bool(restore))
+    out['info'] = dict(out.get('info', {}), **source)  # Which trained network ran.
+    return out
 
   return image_unmixer('model', requested, trained, config, lambda _: (0, levels - 1),
                         solve, levels, bool(restore))

@@ -64,6 +64,7 @@ def test_unmixer_odd_size_equals_padded_model_output(run):
   out = unmixer(image)
   np.testing.assert_array_equal(out['disparity_left'], explicit(image)['disparity_left'])
   assert out['info']['shift'] == 0 and out['info']['scale'] == 1.0
+  assert out['info']['checkpoint'] == path  # Which network ran.
   assert out['left'].shape == out['right'].shape == (97, 131, 3)
   assert out['left'].dtype == np.uint8
   assert out['disparity_left'].shape == out['disparity_right'].shape == (97, 131)
