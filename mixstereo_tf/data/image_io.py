@@ -23,7 +23,8 @@ def _read_raw(path: str) -> np.ndarray:
   if os.path.isdir(path):
     raise ValueError(f'{path} is a folder, not an image file.')
   if not os.path.isfile(path):
-    raise ValueError(f'File not found: {path}')
+    where = '' if os.path.isabs(path) else f' (relative to the current folder {os.getcwd()})'
+    raise ValueError(f'File not found: {path}{where}')
   # IMREAD_UNCHANGED keeps 16-bit depth and ignores EXIF rotation (which would break the
   # stereo geometry); palette PNGs are still expanded to BGR by the decoder.
   array = cv2.imread(path, cv2.IMREAD_UNCHANGED)

@@ -257,3 +257,14 @@ def test_shrink_averages_views_and_keeps_ground_truth_only_where_a_block_is_know
   np.testing.assert_array_equal(out['disparity_left'], [[0, 3], [3, 3]])
   np.testing.assert_array_equal(out['disc_left'], [[False, False], [False, True]])
   assert image_io.shrink(loaded, 1) is loaded
+
+
+def test_a_missing_or_folder_path_says_where_it_was_looked_for(tmp_path, monkeypatch):
+  monkeypatch.chdir(tmp_path)
+  with pytest.raises(ValueError, match=r'File not found: b/a1.png \(relative to the current '
+                                       f'folder {tmp_path}\\)'):
+    image_io.read_image('b/a1.png')
+  with pytest.raises(ValueError, match=r'File not found: /no/such.png$'):
+    image_io.read_image('/no/such.png')
+  with pytest.raises(ValueError, match='is a folder, not an image file'):
+    image_io.read_image(str(tmp_path))
