@@ -114,7 +114,7 @@ flags.DEFINE_boolean('census_cost', _MODEL['census_cost'], 'Give the 3D network 
                      'paper).')
 # The embedded `sample` source.
 flags.DEFINE_integer('sample_scenes', _DATA['sample_scenes'],
-                     'Procedural training scenes of `sample`.')
+                     'Procedural training scenes of `sample`.', lower_bound=1)
 flags.DEFINE_integer('sample_height', None, 'Height of `sample` scenes (default: '
                      '--crop_height).')
 flags.DEFINE_integer('sample_width', None, 'Width of `sample` scenes (default: --crop_width).')
