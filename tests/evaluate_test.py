@@ -70,6 +70,9 @@ def test_kitti_tables_partial_rule_and_paper_rows(tmp_path):
   assert 'colour restoration off' in text  # The test predictor restores nothing.
   restored = dataclasses.replace(result, restore_colour=True)
   assert 'colour restoration on' in report.format_report(restored)
+  assert 'with ground truth' not in text  # Both frames have it.
+  one_without = dataclasses.replace(result, counts=dict(result.counts, d1_all=1))
+  assert 'D1 and EPE over the 1 with ground truth' in report.format_report(one_without)
   refused = dataclasses.replace(result, config=dataclasses.replace(config, allow_partial=False))
   with pytest.raises(ValueError, match='allow_partial'):
     report.format_report(refused)

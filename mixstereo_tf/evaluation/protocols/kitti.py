@@ -49,8 +49,11 @@ def tables(result: results.EvalResult) -> List[protocol.Table]:
       rows.append(protocol.paper_row(protocol.PAPER_LABELS[method],
                                      paper_numbers.lookup('kitti2015', config.mixture, method)))
   name = 'KITTI 2015' if is_2015 else 'KITTI 2012'
-  out = [(f'{name}, {config.mixture}: mean PSNR (dB) and D1 over images, {result.coverage}',
-          columns, rows, protocol.PERCENT_COLUMNS, 2)]
+  scored = result.counts.get('d1_all', result.count)
+  without = (f'; D1 and EPE over the {scored} with ground truth' if scored < result.count
+             else '')
+  out = [(f'{name}, {config.mixture}: mean PSNR (dB) and D1 over images, {result.coverage}'
+          f'{without}', columns, rows, protocol.PERCENT_COLUMNS, 2)]
   if is_2015 and result.method != 'oracle':
     ablation = [{'Method': protocol.ours_label(result), 'PSNR': means.get('psnr')}]
     for method in paper_numbers.methods('kitti2015_ablation', None):
