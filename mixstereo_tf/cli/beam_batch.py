@@ -152,10 +152,7 @@ class _UnmixFn(beam.DoFn):
     info = completed_info(self._output_dir, item.name)
     other = info and foreign_results(info, item, self._unmixer.method)
     if other:
-      logging.error('failed %s: %s (to the dead-letter list)', item.path, other)
-      beam.metrics.Metrics.counter('mixstereo', 'failed').inc()
-      yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': item.path, 'error': other}))
-      yield index, summary_row(item, 'failed', {}, 0.0, other)
+      yield from _failed(index, item, other, 0.0)
       return
     if info is not None:
       beam.metrics.Metrics.counter('mixstereo', 'skipped').inc()
@@ -166,15 +163,20 @@ class _UnmixFn(beam.DoFn):
       unmix_files.unmix_item(self._unmixer, item, self._output_dir, self._options,
                              unmix_files.UnmixReport())
     except unmix_files.INPUT_ERRORS as e:
-      why = unmix_files.reason(e)
-      logging.error('failed %s: %s (to the dead-letter list)', item.path, why)
-      beam.metrics.Metrics.counter('mixstereo', 'failed').inc()
-      yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': item.path, 'error': why}))
-      yield index, summary_row(item, 'failed', {}, time.perf_counter() - start, why)
+      yield from _failed(index, item, unmix_files.reason(e), time.perf_counter() - start)
       return
     beam.metrics.Metrics.counter('mixstereo', 'done').inc()
     yield index, summary_row(item, 'done', completed_info(self._output_dir, item.name) or {},
                              time.perf_counter() - start)
+
+
+def _failed(index: int, item: media.MediaItem, why: str, seconds: float) -> Iterator[object]:
+  """`_UnmixFn`'s outputs for an input that failed: logged, counted, a dead letter and its
+  summary row."""
+  logging.error('failed %s: %s (to the dead-letter list)', item.path, why)
+  beam.metrics.Metrics.counter('mixstereo', 'failed').inc()
+  yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': item.path, 'error': why}))
+  yield index, summary_row(item, 'failed', {}, seconds, why)
 
 
 def _write_csv(path: str, fields: Sequence[str],

@@ -9,16 +9,17 @@ range found, or a fixed one), KITTI-style `<name>_disparity16.png` (uint16, d * 
 when every disparity lies in 0..255.996 px) and float32 signed pixels
 `<name>_disparity.npy`, the stereo formats asked for (`OutputOptions.formats`,
 `stereo_formats`), and a side-car `<name>_info.json` (mixture used and detected, range
-searched, scale, method, seconds, files, the EXIF orientation applied; `write_info`). Per video, in the input's container
-(`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate, timestamps and audio streams (copied),
-frames a player turns by quarter turns (portrait phone videos) turned upright before they
-are unmixed and written so (other rotations copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`; side by side and
+searched, scale, method, seconds, files, the EXIF orientation applied; `write_info`). Per
+video, in the input's container (`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate,
+timestamps and audio streams (copied), frames a player turns by quarter turns (portrait
+phone videos) turned upright before they are unmixed and written so (other rotations
+copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`; side by side and
 top-bottom tagged as such: `streams.STEREO_MODES`), `<name>_disparity<ext>`,
 `<name>_<format><ext>` for the formats drawn as videos (rgbd, anaglyphs; the others are
 skipped, saying why) and `<name>_info.json` (the first unmixed frame's info, frames, frame
-rate, rotation left to players, `turned_upright` degrees, audio streams, the scene cuts found in this run, files). Videos are written
-resumably (`video.jobs`). Progress (`progress.ProgressBar`) is shown for several inputs
-and for every video's frames.
+rate, rotation left to players, `turned_upright` degrees, audio streams, the scene cuts
+found in this run, files). Videos are written resumably (`video.jobs`). Progress
+(`progress.ProgressBar`) is shown for several inputs and for every video's frames.
 
 Video frames are unmixed with temporal consistency (`temporal`, unless
 `TemporalConfig.enabled` is off): the encoding and the range are decided once per shot and

@@ -18,13 +18,19 @@ from mixstereo_tf.data import records
 _SWAP_EXTENSIONS = ('.jpg', '.png')
 
 
-def _read_raw(path: str) -> np.ndarray:
-  """cv2.imread(IMREAD_UNCHANGED) with a ValueError naming a missing or unreadable file."""
+def _check_file(path: str) -> None:
+  """A ValueError naming `path` when it is a folder or no file (a relative path: with the
+  folder it was looked for in)."""
   if os.path.isdir(path):
     raise ValueError(f'{path} is a folder, not an image file.')
   if not os.path.isfile(path):
     where = '' if os.path.isabs(path) else f' (relative to the current folder {os.getcwd()})'
     raise ValueError(f'File not found: {path}{where}')
+
+
+def _read_raw(path: str) -> np.ndarray:
+  """cv2.imread(IMREAD_UNCHANGED) with a ValueError naming a missing or unreadable file."""
+  _check_file(path)
   # IMREAD_UNCHANGED keeps 16-bit depth and ignores EXIF rotation (which would break the
   # stereo geometry); palette PNGs are still expanded to BGR by the decoder.
   array = cv2.imread(path, cv2.IMREAD_UNCHANGED)
@@ -85,10 +91,7 @@ def read_pfm(path: str) -> np.ndarray:
   Raises:
     ValueError: missing file, malformed header or truncated data.
   """
-  if os.path.isdir(path):
-    raise ValueError(f'{path} is a folder, not an image file.')
-  if not os.path.isfile(path):
-    raise ValueError(f'File not found: {path}')
+  _check_file(path)
   with open(path, 'rb') as f:
     data = f.read()
   # The header is three whitespace-separated fields after the magic: width, height, scale,

@@ -24,6 +24,7 @@ from mixstereo_tf.training import config as config_lib
 from mixstereo_tf.training import distribution
 from mixstereo_tf.training import objective
 from mixstereo_tf.training import optimizers
+from mixstereo_tf.training import resumable
 from mixstereo_tf.training import step as step_lib
 from mixstereo_tf.training import summaries
 
@@ -256,8 +257,5 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
   distribution.check_batch(dataset, strategy)
   session = _build(config, model_config, loss_config, strategy, chief, write_dir, jit)
   start_step = _restore_or_initialise(session, config)
-  if start_step >= config.num_steps:
-    logging.warning('%s is at step %d already, not below --num_steps=%d: nothing to train '
-                    '(raise --num_steps to continue).', config.model_dir, start_step,
-                    config.num_steps)
+  resumable.warn_if_trained(config.model_dir, start_step, config.num_steps)
   return _run_steps(session, config, dataset, start_step)

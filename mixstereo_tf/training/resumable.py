@@ -25,6 +25,13 @@ def checkpointed(model: tf.keras.Model, optimizer, model_dir: str
   return step, manager
 
 
+def warn_if_trained(model_dir: str, step: int, num_steps: int) -> None:
+  """Says so when a resumed run is at num_steps or past it: nothing is left to train."""
+  if step >= num_steps:
+    logging.warning('%s is at step %d already, not below --num_steps=%d: nothing to train '
+                    '(raise --num_steps to continue).', model_dir, step, num_steps)
+
+
 def run_steps(one_step: Callable[[], Sequence[float]], step: tf.Variable, num_steps: int,
               manager: tf.train.CheckpointManager, checkpoint_every: int, log_every: int,
               log_format: str) -> None:
@@ -38,10 +45,7 @@ def run_steps(one_step: Callable[[], Sequence[float]], step: tf.Variable, num_st
     checkpoint_every, log_every: steps between checkpoints / log lines.
     log_format: %-format of the mean of `one_step`'s numbers over the last log_every steps.
   """
-  if int(step) >= num_steps:
-    logging.warning('%s is at step %d already, not below --num_steps=%d: nothing to train '
-                    '(raise --num_steps to continue).', manager.directory, int(step),
-                    num_steps)
+  warn_if_trained(manager.directory, int(step), num_steps)
   stop = []
   previous = {s: signal.signal(s, lambda *_: stop.append(True))
               for s in (signal.SIGINT, signal.SIGTERM)}
