@@ -140,6 +140,11 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
   requested = check_mixture(config, trained)
   levels = run_info.model_config.max_disparity
   restore = config.restore_colour
+  named = [requested] if requested != steps.AUTO else list(trained)
+  if restore and not any(families.of(m).restores_views for m in named):
+    raise ValueError(f'PredictorConfig.restore_colour=True restores anaglyph views; '
+                     f'{", ".join(repr(m) for m in named)} mixtures have no channels to '
+                     f'restore them from.')
   if restore is None:
     restore = any(families.of(m).restores_views for m in trained)
 

@@ -102,6 +102,10 @@ def test_unmixer_restores_the_anaglyph_channels(run, tmp_path):
   make_run_dir(diplopia_run, mixture='diplopia')
   assert not predictors.build_unmixer(
       predictors.PredictorConfig(checkpoint=diplopia_run)).restore_colour
+  # Asked for where nothing can be restored: refused, not a silent no-op.
+  with pytest.raises(ValueError, match="restore_colour=True .*'diplopia' mixtures have no"):
+    predictors.build_unmixer(predictors.PredictorConfig(checkpoint=diplopia_run,
+                                                        restore_colour=True))
   with pytest.raises(ValueError, match='uint8'):
     unmixer(image.astype(np.float32))
 
