@@ -43,7 +43,8 @@ FLAGS = flags.FLAGS
 cli_flags.define_predictor()
 cli_flags.define_input()
 flags.DEFINE_string('input_list', None, 'A text file of input paths, one per line (instead '
-                    'of --input; local or on any file system Apache Beam reads).')
+                    'of --input; local or on any file system Apache Beam reads; relative '
+                    'paths are read from the folder the command runs in, not the list\'s).')
 cli_flags.define_output_dir()
 cli_flags.require_unless_listing('output_dir')
 cli_flags.define_output_options()
