@@ -49,7 +49,8 @@ def make_kitti2015(root, frames=2, seed=0):
 
 
 def make_middlebury(root, seed=0):
-  """Tsukuba (2001 names, GT / 16) and Cones (2003 im2 / im6, GT / 4) scene folders."""
+  """Tsukuba (2001 names, GT / 16) and Cones (2003 im2 / im6, GT / 4, a non-occluded mask)
+  scene folders."""
   rng = np.random.RandomState(seed)
   scenes = (('tsukuba', 'scene1.row3.col3.ppm', 'scene1.row3.col4.ppm',
              'truedisp.row3.col3.pgm', 16), ('Cones', 'im2.png', 'im6.png', 'disp2.png', 4))
@@ -60,6 +61,9 @@ def make_middlebury(root, seed=0):
     gt = rng.randint(2, 15, (HEIGHT, WIDTH)) * scale
     gt[0] = 0  # Unknown row.
     assert cv2.imwrite(os.path.join(root, folder, gt_name), gt.astype(np.uint8))
+  nonocc = np.full((HEIGHT, WIDTH), 255, np.uint8)
+  nonocc[:, :8] = 0  # Occluded: left out of bad-1 nonocc.
+  assert cv2.imwrite(os.path.join(root, 'Cones', 'nonocc.png'), nonocc)
   return str(root)
 
 
@@ -113,6 +117,12 @@ def test_kitti_oracle_is_perfect_and_shifted_disparities_hit_the_d1_rule(tmp_pat
   shifted = runner.evaluate(config, oracle(config, 4.0))
   assert shifted.averages['d1_all'] == 1.0 and shifted.averages['d1_noc'] == 1.0
   assert shifted.averages['epe'] == pytest.approx(4.0, abs=1e-4)
+  # A frame without its disp_noc file has no D1-noc (not D1-all under that name).
+  os.remove(os.path.join(root, 'training', 'disp_noc_0', '000001_10.png'))
+  partial = runner.evaluate(config, oracle(config, 4.0))
+  assert np.isnan(partial.rows[1]['d1_noc']) and partial.counts['d1_noc'] == 1
+  (title, *_), = protocol.get('kitti2015').tables(partial)[:1]
+  assert 'D1-noc over the 1 with a non-occluded map' in title
 
 
 def test_mixture_is_the_quantised_anaglyph_and_the_trivial_baseline(tmp_path):
@@ -150,6 +160,10 @@ def test_middlebury_bad1_known_answers(tmp_path):
   result = runner.evaluate(config, oracle(config))
   assert result.coverage == '2 of 2 images'
   assert result.averages['bad1_all'] == 0.0 and result.averages['bad1_nonocc'] == 0.0
+  # Tsukuba has no non-occluded mask: its nonocc bad-1 is not its all-pixel one, relabelled.
+  assert np.isnan(result.rows[1]['bad1_nonocc']) and result.counts['bad1_nonocc'] == 1
+  (title, _, _, _, _), = protocol.get('middlebury').tables(result)
+  assert 'bad-1 nonocc over the 1 with a non-occluded mask' in title
   # The GT is integer pixels after its scale: 0.9 px off is good, 1.1 px off is bad.
   assert runner.evaluate(config, oracle(config, 0.9)).averages['bad1_all'] == 0.0
   assert runner.evaluate(config, oracle(config, 1.1)).averages['bad1_all'] == 1.0
@@ -177,6 +191,13 @@ def test_middlebury_paper_mean_beside_a_mean_over_its_four_scenes():
   (title, _, table, _, _), = protocol.get('middlebury').tables(result)
   mean_at = [r['Scene'] for r in table].index('mean')
   assert table[mean_at + 1]['bad-1'] == 5.93 and 'left out' not in title
+  # One of the four without ground truth: a three-scene mean, not beside the paper's.
+  rows[1] = dict(rows[1], bad1_all=float('nan'), bad1_nonocc=float('nan'))
+  three = results.EvalResult(EvalConfig('middlebury', 'anaglyph', 'mb'), 'model', True,
+                             rows, {'bad1_all': 0.1}, {'bad1_all': 3, 'bad1_nonocc': 3}, 4)
+  (title, _, table, _, _), = protocol.get('middlebury').tables(three)
+  assert [r['Scene'] for r in table][-1] == 'mean'
+  assert 'bad-1 over the 3 scenes with ground truth' in title and 'left out' in title
 
 
 def test_sample_protocol_oracle(tmp_path):

@@ -20,11 +20,13 @@ KITTI2015_IMAGES = 200
 
 def score(config: results.EvalConfig, record: records.StereoSample,
           data: Dict[str, np.ndarray], pred: np.ndarray) -> Dict[str, float]:
-  """D1 over all GT pixels and over the non-occluded ones, and EPE (pixels)."""
-  del config, record
+  """D1 over all GT pixels and over the non-occluded ones (NaN for a frame without its
+  `disp_noc` file: its mask would be all GT pixels), and EPE (pixels)."""
+  del config
   gt, valid = data['disparity_left'], data['valid_left']
-  return {'d1_all': metrics.d1_error(pred, gt, valid),
-          'd1_noc': metrics.d1_error(pred, gt, data['nonocc_left']),
+  noc = (metrics.d1_error(pred, gt, data['nonocc_left']) if record.nonocc_left else
+         float('nan'))
+  return {'d1_all': metrics.d1_error(pred, gt, valid), 'd1_noc': noc,
           'epe': metrics.end_point_error(pred, gt, valid)}
 
 
@@ -52,6 +54,9 @@ def tables(result: results.EvalResult) -> List[protocol.Table]:
   scored = result.counts.get('d1_all', result.count)
   without = (f'; D1 and EPE over the {scored} with ground truth' if scored < result.count
              else '')
+  masked = result.counts.get('d1_noc', result.count)
+  if masked < scored:
+    without += f'; D1-noc over the {masked} with a non-occluded map'
   out = [(f'{name}, {config.mixture}: mean PSNR (dB) and D1 over images, {result.coverage}'
           f'{without}', columns, rows, protocol.PERCENT_COLUMNS, 2)]
   if is_2015 and result.method != 'oracle':

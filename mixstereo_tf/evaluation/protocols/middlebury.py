@@ -18,12 +18,14 @@ from mixstereo_tf.evaluation import results
 
 def score(config: results.EvalConfig, record: records.StereoSample,
           data: Dict[str, np.ndarray], pred: np.ndarray) -> Dict[str, float]:
-  """bad-1 over all GT pixels and over the non-occluded ones."""
-  del config, record
+  """bad-1 over all GT pixels and over the non-occluded ones (NaN for a scene without a
+  non-occluded mask: its mask would be all GT pixels)."""
+  del config
   bad = metrics.middlebury_bad(pred, data['disparity_left'],
                                {'all': data['valid_left'], 'nonocc': data['nonocc_left']},
                                threshold=1.0)
-  return {'bad1_all': bad['all'], 'bad1_nonocc': bad['nonocc']}
+  return {'bad1_all': bad['all'],
+          'bad1_nonocc': bad['nonocc'] if record.nonocc_left else float('nan')}
 
 
 def tables(result: results.EvalResult) -> List[protocol.Table]:
@@ -50,17 +52,25 @@ def tables(result: results.EvalResult) -> List[protocol.Table]:
                'PSNR L': means.get('psnr_left'), 'PSNR R': means.get('psnr_right'),
                'bad-1': protocol.percent(means.get('bad1_all')),
                'bad-1 nonocc': protocol.percent(means.get('bad1_nonocc'))})
-  # The paper's mean is over its four scenes: beside a mean over all of them only.
-  every = matched == set(paper_numbers.MIDDLEBURY_SCENES) and len(result.rows) == len(matched)
+  # The paper's mean is over its four scenes: beside a mean over all of them only, every
+  # one with ground truth.
+  scored = result.counts.get('bad1_all', len(result.rows))
+  every = (matched == set(paper_numbers.MIDDLEBURY_SCENES) and
+           len(result.rows) == len(matched) == scored)
   for method in paper_numbers.methods('middlebury', mixture) if every else ():
     numbers = paper_numbers.lookup('middlebury', mixture, method, 'mean')
     rows.append({'Scene': '', **protocol.paper_row(protocol.PAPER_LABELS[method], numbers)})
   title = (f'Middlebury, {mixture}: PSNR (dB) and bad-1 (1 px) over all GT pixels and over '
            f'the non-occluded ones (the paper does not say which pixels its bad-1 counts), '
            f'{result.coverage}')
+  if scored < len(result.rows):
+    title += f'; bad-1 over the {scored} scenes with ground truth'
+  masked = result.counts.get('bad1_nonocc', scored)
+  if masked < scored:
+    title += f'; bad-1 nonocc over the {masked} with a non-occluded mask'
   if matched and not every:
     title += (f"; the paper's means (over {', '.join(paper_numbers.MIDDLEBURY_SCENES)}) "
-              'are left out: this mean is over other scenes')
+              'are left out: this mean is not over exactly those scenes')
   return [(title, columns, rows, protocol.PERCENT_COLUMNS, 2)]
 
 
