@@ -89,6 +89,9 @@ def main(argv):
     def progress(index, total, row):
       logging.info('[%d/%d] %s: %.3f s', index + 1, total, row['name'], row['seconds'])
 
+    for name in ('output_csv', 'output_markdown'):  # Before hours of evaluation.
+      if FLAGS[name].value:
+        report.prepare_path(FLAGS[name].value, f'--{name}')
     result = runner.evaluate(config, unmixer, progress)
     text = report.format_report(result)
   except ValueError as e:

@@ -173,6 +173,14 @@ def test_cli_middlebury_and_flag_errors(run_dir, tmp_path):
                    '--middlebury_scale=Cones')
   assert bad_scale.returncode != 0 and '--middlebury_scale' in bad_scale.stderr
   assert "'Cones'" in bad_scale.stderr
+  # Report files in a folder not made yet: made; a folder given as the file: refused first.
+  made = _cli('--protocol=middlebury', f'--data_dir={root}', f'--checkpoint={run_dir}',
+              '--max_images=1', f'--output_csv={tmp_path}/new/mb.csv')
+  assert made.returncode == 0 and os.path.isfile(tmp_path / 'new' / 'mb.csv'), made.stderr
+  folder = _cli('--protocol=middlebury', f'--data_dir={root}', f'--checkpoint={run_dir}',
+                f'--output_markdown={tmp_path}')
+  assert folder.returncode != 0 and '--output_markdown=' in folder.stderr
+  assert 'is a folder' in folder.stderr and '[1/' not in folder.stderr  # Nothing evaluated.
 
 
 def _sample_rows_in_process(run_dir, restore_colour):

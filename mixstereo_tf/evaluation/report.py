@@ -5,6 +5,7 @@ paper's with its published rows beside ours; `evaluation/protocols/`).
 """
 
 import csv
+import os
 import statistics
 from typing import Any, Dict, Sequence
 
@@ -34,6 +35,21 @@ def markdown_report(result: results.EvalResult) -> str:
   parts = [tables.markdown_table(*table)
            for table in protocols.get(result.config.protocol).tables(result)]
   return '\n'.join(parts) + '\n' + _footer(result) + '\n'
+
+
+def prepare_path(path: str, name: str) -> None:
+  """Makes the folder a report file `path` will be written in, before a long evaluation.
+
+  Raises:
+    ValueError: `path` is a folder, or its folder cannot be made; the message names `name`
+      (the flag or keyword of the path).
+  """
+  if os.path.isdir(path):
+    raise ValueError(f'{name}={path} is a folder; give a file name.')
+  try:
+    os.makedirs(os.path.dirname(path) or '.', exist_ok=True)
+  except OSError as e:
+    raise ValueError(f'{name}={path}: cannot make its folder ({e.strerror}).') from None
 
 
 def write_markdown(path: str, result: results.EvalResult) -> None:
