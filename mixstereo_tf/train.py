@@ -202,7 +202,7 @@ def main(argv):
                num_steps)
   try:
     result = loop.train(train_config, model_config, loss_config,
-                        lambda: pipeline.train_dataset(samples, pipeline_config),
+                        lambda start: pipeline.train_dataset(samples, pipeline_config, start),
                         flags_text=FLAGS.flags_into_string(),
                         extra_configs={'data': data_config, 'pipeline': pipeline_config})
   except runs.RunDirError as e:

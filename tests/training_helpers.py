@@ -26,10 +26,11 @@ def stereo_batch(batch_size=1, height=32, width=64, shift=3, seed=0, mixture='an
 
 
 def dataset_fn(batch_size=1, nan_from_step=None, **kwargs):
-  """Returns a function building an endless dataset of one batch (NaNs from a step on)."""
+  """Returns a function building an endless dataset of one batch (NaNs from a step on)
+  from batch `start` on (`loop.train`'s dataset_fn)."""
   batch = stereo_batch(batch_size, **kwargs)
 
-  def build():
+  def build(start=0):
     dataset = tf.data.Dataset.from_tensors(batch).repeat()
     if nan_from_step is None:
       return dataset
@@ -39,5 +40,5 @@ def dataset_fn(batch_size=1, nan_from_step=None, **kwargs):
       element['left'] = tf.where(index + 1 >= nan_from_step,
                                  tf.fill(tf.shape(element['left']), np.nan), element['left'])
       return element
-    return dataset.enumerate().map(poison)
+    return dataset.enumerate().skip(start).map(poison)
   return build

@@ -219,13 +219,16 @@ def _check_samples(samples):
                      'reader (check DataConfig.data_dir and DataConfig.split_list).')
 
 
-def train_dataset(samples: Sequence[records.StereoSample],
-                  config: PipelineConfig) -> tf.data.Dataset:
-  """An infinite, shuffled, augmented, batched dataset of training elements.
+def train_dataset(samples: Sequence[records.StereoSample], config: PipelineConfig,
+                  start_batch: int = 0) -> tf.data.Dataset:
+  """An infinite, shuffled, augmented, batched dataset of training elements, from batch
+  `start_batch` of the seeded stream on (a resumed run continues the stream: the skipped
+  elements are list indices, nothing is decoded for them).
 
   A pair that fails to decode stops iteration with an error naming it, unless
   `config.skip_bad_pairs`: then it is dropped with only tf.data's per-element warning, and
-  no count of such runtime failures is kept.
+  no count of such runtime failures is kept (a resumed stream then starts as many elements
+  late as were dropped before).
   """
   _check_samples(samples)
   samples = list(samples)
@@ -234,6 +237,7 @@ def train_dataset(samples: Sequence[records.StereoSample],
   ds = tf.data.Dataset.range(len(samples))
   ds = ds.shuffle(buffer, seed=config.seed, reshuffle_each_iteration=True).repeat()
   ds = ds.enumerate()  # Element counter: the stateless seeds differ for every draw.
+  ds = ds.skip(start_batch * config.batch_size)
 
   def prepare(count, index):
     element = load(index)

@@ -231,7 +231,7 @@ def _run_steps(session: _Session, config: config_lib.TrainConfig,
 
 def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
           loss_config: objective.LossConfig,
-          dataset_fn: Callable[[], tf.data.Dataset],
+          dataset_fn: Callable[[int], tf.data.Dataset],
           flags_text: Optional[str] = None,
           extra_configs: Optional[dict] = None) -> TrainResult:
   """Trains (or resumes training) until `config.num_steps` optimizer steps.
@@ -240,7 +240,8 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
     config: the training configuration.
     model_config: the architecture.
     loss_config: the loss weights.
-    dataset_fn: returns the training dataset of GLOBAL batches (it is split over replicas).
+    dataset_fn: `dataset_fn(start)` returns the training dataset of GLOBAL batches (it is
+      split over replicas) from batch `start` on: a resumed run continues the stream.
     flags_text: the command line flags, saved as `flags.txt` beside the checkpoints.
     extra_configs: other configs (data, pipeline) to record in `config.json`.
 
@@ -253,9 +254,9 @@ def train(config: config_lib.TrainConfig, model_config: models.ModelConfig,
   configs = dict(train=config, model=model_config, loss=loss_config, **(extra_configs or {}))
   strategy, chief, write_dir, model_config, jit = _prepare(config, model_config, flags_text,
                                                            configs)
-  dataset = dataset_fn()
-  distribution.check_batch(dataset, strategy)
   session = _build(config, model_config, loss_config, strategy, chief, write_dir, jit)
   start_step = _restore_or_initialise(session, config)
   resumable.warn_if_trained(config.model_dir, start_step, config.num_steps)
+  dataset = dataset_fn(start_step)
+  distribution.check_batch(dataset, strategy)
   return _run_steps(session, config, dataset, start_step)

@@ -50,6 +50,17 @@ def test_element_keys_shapes_and_range(samples):
   assert batch['disparity_left'].shape == (2, _H, _W - 8, 1)
 
 
+def test_a_resumed_stream_continues_where_it_stopped(samples):
+  """Batch k of the stream started at batch 2 is batch 2 + k of the whole stream (a
+  resumed training run continues the data, it does not replay its first batches)."""
+  whole = _take(pipeline.train_dataset(samples, _config()), 5)
+  resumed = _take(pipeline.train_dataset(samples, _config(), start_batch=2), 3)
+  for a, b in zip(whole[2:], resumed):
+    for key in a:
+      np.testing.assert_array_equal(a[key], b[key])
+  assert not np.array_equal(whole[0]['left'], resumed[0]['left'])
+
+
 def test_same_seed_same_batches_other_seed_differs(samples):
   first = _take(pipeline.train_dataset(samples, _config()), 3)
   second = _take(pipeline.train_dataset(samples, _config()), 3)

@@ -106,11 +106,11 @@ def test_init_checkpoint_errors_name_the_path(tmp_path):
 
 
 def test_a_crash_before_the_first_step_writes_no_checkpoint(tmp_path):
-  def broken_dataset():
+  def broken_dataset(start):
     def fail(element):
       tf.debugging.assert_equal(0, 1, message='corrupt input')
       return element
-    return training_helpers.dataset_fn(height=16, width=32, shift=2)().map(fail)
+    return training_helpers.dataset_fn(height=16, width=32, shift=2)(start).map(fail)
 
   config = config_lib.TrainConfig(model_dir=str(tmp_path), num_steps=3)
   with pytest.raises(tf.errors.InvalidArgumentError, match='corrupt input'):
@@ -135,6 +135,30 @@ def test_deterministic_runs_give_identical_weights(tmp_path):
   assert a.keys() == b.keys() and len(a) > 10
   for key in a:
     np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_a_resumed_run_trains_on_the_batches_a_straight_run_would(tmp_path):
+  """2 steps, then resumed to 4, equal 4 steps straight: the loop asks the data for the
+  batches from the restored step on (they differ per batch here)."""
+  batch = training_helpers.stereo_batch(1, height=16, width=32, shift=2)
+
+  def varying(start):  # Batch i is the pair scaled by 1 / (1 + i).
+    ds = tf.data.Dataset.range(start, 1 << 30)
+    return ds.map(lambda i: {k: v / tf.cast(1 + i, tf.float32) for k, v in batch.items()})
+
+  def train(model_dir, steps):
+    config = config_lib.TrainConfig(model_dir=str(model_dir), num_steps=steps,
+                                    learning_rate=1e-3, checkpoint_every=1)
+    return loop.train(config, training_helpers.MINI, objective.LossConfig(), varying)
+
+  straight = train(tmp_path / 'a', 4)
+  train(tmp_path / 'b', 2)
+  resumed = train(tmp_path / 'b', 4)
+  assert (resumed.start_step, resumed.final_step) == (2, 4)
+  a = _checkpoint_values(straight.last_checkpoint)
+  b = _checkpoint_values(resumed.last_checkpoint)
+  for key in a:
+    np.testing.assert_allclose(a[key], b[key], rtol=1e-4, atol=1e-6, err_msg=key)
 
 
 def test_mixed_precision_on_a_gpu_scales_the_loss_and_logs_unscaled_scalars(
