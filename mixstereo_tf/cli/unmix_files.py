@@ -42,6 +42,7 @@ from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
+from mixstereo_tf.cli import run_request
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
 from mixstereo_tf.unmixing import predictors
@@ -148,7 +149,7 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
                  layout: str, max_disparity: float, settings: Dict[str, object],
                  video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
                  report: UnmixReport, temporal_config: temporal.TemporalConfig,
-                 formats: Tuple[str, ...] = ()) -> int:
+                 formats: Tuple[str, ...] = (), request: Optional[Dict] = None) -> int:
   """Unmixes every frame of a video into layout, disparity and `formats` videos
   (resumable, see `video.jobs`; side-by-side and top-bottom ones tagged as such), writes
   `<name>_info.json`; returns the frames unmixed in this run.
@@ -198,7 +199,8 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
       scene_cuts=[state['done'] + index for index in shots.cuts],
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
       files=[os.path.basename(path) for path in outputs.values()],
-      **({'skipped_formats': skipped} if skipped else {}), **_odd_size_note(info)))
+      **({'skipped_formats': skipped} if skipped else {}), **_odd_size_note(info)),
+      request)
   return state['rendered']
 
 
@@ -211,19 +213,23 @@ def _odd_size_note(info) -> Dict[str, str]:
                      'video needs even sizes); crop it to recover the input size'}
 
 
-def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object]) -> str:
+def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
+               request: Optional[Dict] = None) -> str:
   """Writes `<name>_info.json` beside an input's results: what was done (the mixture used
   and detected, with its confidence, the disparity range searched, the network's shift and
-  scale, the method, the seconds spent) and the files written."""
+  scale, the method, the seconds spent), the files written and what was asked
+  (`run_request.describe`)."""
   path = os.path.join(output_dir, f'{item.name}_info.json')
   with open(path, 'w', encoding='utf-8') as f:
-    json.dump(dict(info, input=item.path), f, indent=2, sort_keys=True)
+    json.dump(dict(info, input=item.path, **({'request': request} if request else {})), f,
+              indent=2, sort_keys=True)
   return path
 
 
 def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
                  layout: str, max_display_disparity: Optional[float],
-                 report: UnmixReport, formats: Tuple[str, ...] = ()) -> int:
+                 report: UnmixReport, formats: Tuple[str, ...] = (),
+                 request: Optional[Dict] = None) -> int:
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
   image, orientation = media.read_upright(item.path)
@@ -237,7 +243,7 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   if media.truncated_jpeg(item.path):
     written['warning'] = 'the JPEG file ends before its end marker: rows may be missing'
     logging.warning('%s: %s.', item.path, written['warning'])
-  write_info(output_dir, item, dict(outputs.get('info', {}), **written))
+  write_info(output_dir, item, dict(outputs.get('info', {}), **written), request)
   return 1
 
 
@@ -250,13 +256,15 @@ def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: s
   pipeline). Errors propagate (`INPUT_ERRORS` are the per-input ones); `report` gains the
   seconds spent unmixing.
   """
+  request = run_request.describe(options)
   if item.is_video:
     return _unmix_video(unmixer, item, output_dir, options.layout,
                         options.max_display_disparity or unmixer.max_disparity,
                         options.settings or _video_settings(unmixer), options.video_config,
-                        progress_stream, report, options.temporal_config, options.formats)
+                        progress_stream, report, options.temporal_config, options.formats,
+                        request)
   return _unmix_image(unmixer, item, output_dir, options.layout,
-                      options.max_display_disparity, report, options.formats)
+                      options.max_display_disparity, report, options.formats, request)
 
 
 def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,

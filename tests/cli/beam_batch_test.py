@@ -1,6 +1,7 @@
 """Tests for the Apache Beam batch pipeline (mixstereo_tf.cli.beam_batch) and its binary."""
 
 import csv
+import dataclasses
 import gzip
 import json
 import os
@@ -12,6 +13,7 @@ import pytest
 
 from mixstereo_tf.cli import beam_batch
 from mixstereo_tf.cli import media
+from mixstereo_tf.cli import run_request
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
 
@@ -87,6 +89,12 @@ def test_outputs_equal_the_cli_failures_dead_letter_and_a_rerun_skips(tmp_path, 
   assert [row['status'] for row in _csv(out / beam_batch.SUMMARY)] == [
       'skipped', 'skipped', 'done', 'failed']
   assert len(_csv(out / beam_batch.DEAD_LETTERS)) == 1
+  # Other flags on the same folder: refused per input, nothing overwritten or kept silently.
+  other = dataclasses.replace(OPTIONS, layout='tb')
+  counts = beam_batch.run(items, CONFIG, str(out), other)
+  assert counts == {'done': 0, 'skipped': 0, 'failed': 4}
+  assert stamps == {name: os.stat(out / name).st_mtime_ns for name in stamps}
+  assert "layout: 'sbs' -> 'tb'" in _csv(out / beam_batch.DEAD_LETTERS)[0]['error']
 
 
 def test_input_list_names_like_the_cli(tmp_path):
@@ -128,6 +136,16 @@ def test_results_of_another_input_or_method_are_not_skipped_as_done(tmp_path):
       mine, item, 'model')
   other = dict(mine, input=str(tmp_path / 'elsewhere' / 'p.png'))
   assert 'another input' in beam_batch.foreign_results(other, item, 'classical')
+  # Asked for with other flags (the mixture detected before, now named; a new format).
+  asked = run_request.describe(media.OutputOptions(settings={'mixture': 'auto'}))
+  recorded = dict(mine, request=asked)
+  assert beam_batch.foreign_results(recorded, item, 'classical', asked) is None
+  now = run_request.describe(media.OutputOptions(settings={'mixture': 'anaglyph'},
+                                                 formats=('mpo',)))
+  why = beam_batch.foreign_results(recorded, item, 'classical', now)
+  assert "mixture: 'auto' -> 'anaglyph'" in why and "output_formats: [] -> ['mpo']" in why
+  assert 'remove p_info.json to redo it' in why
+  assert beam_batch.foreign_results(mine, item, 'classical', now) is None  # Older infos.
 
 
 def test_complete_means_the_info_and_every_file_it_lists(tmp_path):
