@@ -2,15 +2,15 @@ r"""Exports a trained model: a SavedModel that unmixes uint8 images of any size,
 folder in the package's pretrained format.
 
   python -m mixstereo_tf.export --checkpoint=runs/demo --export_dir=exports/demo
-  python -m mixstereo_tf.export --export_dir=exports/diplopia --pretrained=diplopia
+  python -m mixstereo_tf.export --pretrained=models/demo --export_dir=exports/demo
   python -m mixstereo_tf.export --checkpoint=runs/pretrained_anaglyph --as_pretrained \
       --export_dir=mixstereo_tf/artifacts/pretrained/anaglyph --recipe='...' --results='...'
 
 Signatures: `serving_default` (image -> left, right, disparity, disparity_right) and
-`metadata` (mixture, training crop, architecture); see mixstereo_tf/artifacts/serving.py. Without
---checkpoint the shipped model (`--pretrained`, default: the one for --mixture) is
-exported. A hybrid refiner has no SavedModel: its first stage is the classical method,
-which is not a TensorFlow graph.
+`metadata` (mixture, training crop, architecture); see mixstereo_tf/artifacts/serving.py.
+Without --checkpoint, `--pretrained=FOLDER` exports a joint network in the pretrained
+format (written by --as_pretrained). The shipped models have no SavedModel: each runs a
+classical stage (census or ZNCC costs, SGM, restoration) that is not a TensorFlow graph.
 """
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
@@ -41,17 +41,28 @@ flags.DEFINE_string('recipe', '', 'With --as_pretrained: the command that retrai
 flags.DEFINE_string('results', '', 'With --as_pretrained: its held-out numbers.')
 
 
+# Why a kind of the pretrained format is no TensorFlow graph alone.
+_NOT_A_GRAPH = {
+    'refiner': "a network refining the classical method's result",
+    'features': 'learned descriptors whose costs a classical SGM aggregates',
+    'echo_features': 'learned echo descriptors whose costs a classical SGM aggregates'}
+
+
 def _model_and_info():
   """(model, RunInfo) of --checkpoint, else of the shipped model."""
   if FLAGS.checkpoint:
     if FLAGS.pretrained:
       raise ValueError('Give --checkpoint or --pretrained, not both.')
     return runs.load_run(FLAGS.checkpoint)
+  if not FLAGS.pretrained:
+    raise ValueError('Give --checkpoint (a training run) or --pretrained (a joint network '
+                     'in the pretrained format): the shipped models have no SavedModel.')
   entry = pretrained.choose(FLAGS.pretrained, FLAGS.mixture)
   if entry.kind != 'joint':
-    raise ValueError(f'The shipped model {entry.name!r} is a {entry.kind}: its first stage '
-                     'is the classical method, which a SavedModel cannot hold; use it through '
-                     'mixstereo-unmix / mixstereo-eval (or mixstereo_tf.unmixing.predictors).')
+    raise ValueError(f'--pretrained={FLAGS.pretrained}: {entry.name!r} is a {entry.kind!r} '
+                     f'model, {_NOT_A_GRAPH.get(entry.kind, "not a joint network")}, which a '
+                     'SavedModel cannot hold; use it through mixstereo-unmix / mixstereo-eval '
+                     '(or mixstereo_tf.unmix).')
   model = pretrained.load_model(entry)
   return model, runs.RunInfo(entry.mixture, entry.crop[0], entry.crop[1], model.model_config)
 

@@ -122,6 +122,23 @@ def test_export_errors(exported, tmp_path):
                                export_dir)
   with pytest.raises(ValueError, match='No SavedModel'):
     serving.load_saved_model(str(tmp_path))
+  (tmp_path / 'notes.txt').write_text('mine')
+  for target, why in ((tmp_path, 'is not empty'), (tmp_path / 'notes.txt', 'is a file'),
+                      (os.path.join(export_dir, 'variables'), 'is not empty')):
+    with pytest.raises(ValueError, match=why):
+      serving.export_saved_model(graphs.serving_function(model), model.variables, info,
+                                 str(target))
+  assert (tmp_path / 'notes.txt').read_text() == 'mine'
+
+
+def test_export_of_a_shipped_model_says_why_it_cannot(tmp_path):
+  for flags, message in (([], 'Give --checkpoint'),
+                         (['--pretrained=anaglyph_matching'],
+                          "'features' model, learned descriptors whose costs a classical")):
+    result = _run([sys.executable, '-m', 'mixstereo_tf.export',
+                   f'--export_dir={tmp_path / "x"}', *flags], cwd=REPO)
+    assert result.returncode != 0 and message in result.stderr, result.stderr[-2000:]
+    assert 'Traceback' not in result.stderr and not os.path.exists(tmp_path / 'x')
 
 
 def test_the_checkpoint_weights_were_exported(exported):

@@ -67,16 +67,22 @@ def export_saved_model(unmix: UnmixGraph, variables: Sequence[tf.Variable],
     unmix: the uint8 graph function (`graphs.serving_function(model)`).
     variables: the model's variables `unmix` reads (saved with the graph).
     run_info: the run's mixture, training crop and architecture.
-    export_dir: output directory (created; must not already hold a SavedModel).
+    export_dir: output directory (created; if it exists, an empty folder).
 
   Returns:
     export_dir.
 
   Raises:
-    ValueError: `export_dir` already holds a SavedModel.
+    ValueError: `export_dir` already holds a SavedModel, or other files, or is a file.
   """
   if tf.io.gfile.exists(os.path.join(export_dir, 'saved_model.pb')):
     raise ValueError(f'{export_dir} already holds a SavedModel; choose a new export_dir.')
+  if tf.io.gfile.exists(export_dir):
+    if not tf.io.gfile.isdir(export_dir):
+      raise ValueError(f'{export_dir} is a file; choose a new export_dir.')
+    if tf.io.gfile.listdir(export_dir):
+      raise ValueError(f'{export_dir} is not empty (its files would be mixed with the '
+                       'SavedModel\'s); choose a new export_dir.')
   root = _Exported(unmix, variables, run_info)
   tf.saved_model.save(root, export_dir, signatures={
       'serving_default': root.unmix.get_concrete_function(),
