@@ -80,7 +80,8 @@ flags.DEFINE_boolean('mixed_precision', _TRAIN['mixed_precision'],
 flags.DEFINE_boolean('deterministic', _TRAIN['deterministic'],
                      'Op determinism: two runs of one flagfile on one machine give '
                      'identical weights (slower on a GPU).')
-flags.DEFINE_integer('seed', _TRAIN['seed'], 'Seed of initialisation and the input pipeline.')
+flags.DEFINE_integer('seed', _TRAIN['seed'], 'Seed of initialisation and the input pipeline.',
+                     lower_bound=0, upper_bound=2**32 - 1)
 flags.DEFINE_integer('checkpoint_every', _TRAIN['checkpoint_every'], 'Steps between checkpoints.')
 flags.DEFINE_integer('summary_every', _TRAIN['summary_every'], 'Steps between scalar summaries.')
 flags.DEFINE_integer('image_summary_every', _TRAIN['image_summary_every'],

@@ -60,6 +60,8 @@ class TrainConfig:
   def __post_init__(self):
     if not self.model_dir:
       raise ValueError('TrainConfig.model_dir is required.')
+    if not 0 <= self.seed < 2**32:
+      raise ValueError(f'TrainConfig.seed must be in [0, 2**32), got {self.seed}.')
     if self.mode not in objective.MODES:
       raise ValueError(f'TrainConfig.mode must be one of {objective.MODES}, got {self.mode!r}.')
     if self.jit_compile not in JIT_CHOICES:

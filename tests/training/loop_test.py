@@ -123,6 +123,8 @@ def test_config_validation_names_the_field():
     config_lib.TrainConfig(model_dir='x', num_steps=0)
   with pytest.raises(ValueError, match='TrainConfig.mode'):
     config_lib.TrainConfig(model_dir='x', mode='stereo')
+  with pytest.raises(ValueError, match=r'TrainConfig.seed must be in \[0, 2\*\*32\), got -5'):
+    config_lib.TrainConfig(model_dir='x', seed=-5)
 
 
 def test_deterministic_runs_give_identical_weights(tmp_path):
