@@ -16,6 +16,7 @@ import sys
 from absl import app
 from absl import flags
 from absl import logging
+import tensorflow as tf
 
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import runs
@@ -179,6 +180,14 @@ def _train_config(num_steps: int) -> config_lib.TrainConfig:
       seed=FLAGS.seed)
 
 
+def _op_error_line(error: tf.errors.OpError) -> str:
+  """The line of a TensorFlow error that says what failed: a Python error raised inside
+  the input pipeline (it names the list, line and file) or else the first line."""
+  lines = [line.split('[[')[0].strip() for line in error.message.splitlines()]
+  inner = [line[line.index('ValueError: '):] for line in lines if 'ValueError: ' in line]
+  return next(iter(inner[-1:] or [line for line in lines if line]), type(error).__name__)
+
+
 def main(argv):
   del argv
   device.log_line()
@@ -211,6 +220,10 @@ def main(argv):
   except loop.NonFiniteLossError as e:
     logging.error('%s', e)
     sys.exit(f'error: {e}')
+  except tf.errors.OpError as e:  # E.g. a pair of the list that does not decode.
+    sys.exit(f'error: {_op_error_line(e)} (the newest checkpoint holds the last completed '
+             'step: fix the cause and run the same command to resume; --skip_bad_pairs '
+             'drops pairs that fail to decode)')
   if result.interrupted_by:
     sys.exit(128 + {'SIGINT': 2, 'SIGTERM': 15}[result.interrupted_by])
 

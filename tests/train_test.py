@@ -20,6 +20,7 @@ from mixstereo_tf.training import config as config_lib
 from mixstereo_tf.training import loop
 from mixstereo_tf.training import objective
 from mixstereo_tf.training import step as step_lib
+from tests.data import kitti_test
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TINY_FLAGS = ['--dataset=sample', '--sample_scenes=50', '--sample_height=32',
@@ -122,6 +123,23 @@ def test_bad_flags_are_usage_errors_naming_the_flag(tmp_path):
   output = process.communicate(timeout=120)[0]
   assert process.returncode != 0 and '--seed=-5' in output and 'Traceback' not in output
   assert not os.path.exists(tmp_path / 'seeded' / 'config.json')  # Refused before writing.
+
+
+def test_a_pair_that_does_not_decode_stops_with_its_list_line_not_a_traceback(tmp_path):
+  data_dir = str(tmp_path / 'raw')
+  kitti_test._raw_frame(data_dir, '0000000001')
+  kitti_test._raw_frame(data_dir, '0000000002')
+  broken = os.path.join(data_dir, kitti_test._DRIVE, 'image_02', 'data', '0000000002.png')
+  with open(broken, 'wb') as f:
+    f.write(b'not a png')
+  listed = kitti_test._list(tmp_path, '\n'.join(kitti_test._entry(f'000000000{i}', '.png')
+                                                for i in (1, 2)))
+  process = _train_cli(tmp_path / 'run', '--num_steps=4', '--dataset=kitti_raw',
+                       f'--data_dir={data_dir}', f'--train_list={listed}')
+  output = process.communicate(timeout=240)[0]
+  assert process.returncode == 1 and 'Traceback' not in output, output[-3000:]
+  assert 'error: ValueError: ' in output and 'files.txt:2: ' in output
+  assert 'run the same command to resume' in output
 
 
 def test_a_few_dozen_steps_on_the_sample_source_lower_the_loss(tmp_path):
