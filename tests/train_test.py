@@ -119,6 +119,9 @@ def test_bad_flags_are_usage_errors_naming_the_flag(tmp_path):
   process = _train_cli(tmp_path / 'run', '--num_steps=0')
   output = process.communicate(timeout=120)[0]
   assert process.returncode != 0 and '--num_steps=0: 0 is not a positive integer' in output
+  process = _train_cli(tmp_path / 'run', '--num_epochs=0')
+  output = process.communicate(timeout=120)[0]
+  assert process.returncode != 0 and '--num_epochs must be positive' in output
   process = _train_cli(tmp_path / 'seeded', '--num_steps=1', '--seed=-5')
   output = process.communicate(timeout=120)[0]
   assert process.returncode != 0 and '--seed=-5' in output and 'Traceback' not in output
