@@ -69,7 +69,14 @@ def main(argv):
     raise flag_errors.usage_error(e) from None
   logging.info('%d input(s) to %s.', len(items), FLAGS.output_dir)
   std_logging.getLogger('apache_beam').setLevel(std_logging.WARNING)  # Runner chatter.
-  counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
+  try:
+    counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
+  except (KeyboardInterrupt, RuntimeError) as e:  # Beam re-raises Ctrl-C as RuntimeError.
+    if not isinstance(e, KeyboardInterrupt) and 'KeyboardInterrupt' not in str(e):
+      raise
+    logging.error('Interrupted: the inputs finished so far are kept; run the same command '
+                  'to continue (finished inputs are skipped).')
+    sys.exit(130)
   logging.info('%(done)d input(s) done, %(skipped)d skipped (complete before this run), '
                '%(failed)d failed. Summary: %(summary)s', dict(
                    counts, summary=os.path.join(FLAGS.output_dir, beam_batch.SUMMARY)))

@@ -188,3 +188,25 @@ def test_binary_on_an_input_list(tmp_path):
       ['b_tb.png', 'b_disparity.png', 'b_disparity16.png', 'b_disparity.npy', 'b_info.json',
        *OWN_FILES])
   assert media.read_image(str(tmp_path / 'out' / 'b_tb.png')).shape == (72, 52, 3)
+
+
+def test_an_interrupted_binary_exits_130_saying_how_to_continue(tmp_path):
+  """Beam re-raises Ctrl-C inside a bundle as RuntimeError('KeyboardInterrupt ...')."""
+  folder = _folder(tmp_path / 'in')
+  script = ('import sys\n'
+            'from mixstereo_tf import batch\n'
+            'from mixstereo_tf.cli import beam_batch\n'
+            'def interrupted(*args):\n'
+            '  raise RuntimeError("KeyboardInterrupt [while running \'Unmix\']")\n'
+            'beam_batch.run = interrupted\n'
+            'sys.argv[1:] = sys.argv[2:]\n'
+            'batch.run()\n')
+  result = subprocess.run(
+      [sys.executable, '-c', script, 'mixstereo-batch', '--method=classical',
+       '--mixture=anaglyph', f'--input={folder}', f'--output_dir={tmp_path / "out"}'],
+      capture_output=True, text=True, cwd=REPO, timeout=300, check=False,
+      env=dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2'))
+  assert result.returncode == 130, result.stderr[-3000:]
+  assert 'Interrupted: the inputs finished so far are kept' in result.stderr
+  assert 'Traceback' not in result.stderr
+
