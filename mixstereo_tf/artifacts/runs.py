@@ -28,11 +28,14 @@ FLAGS_FILE = 'flags.txt'
 
 @dataclasses.dataclass(frozen=True)
 class RunInfo:
-  """What a trained model expects: its mixture operator, training crop and architecture."""
+  """What a trained model expects: its mixture operator, training crop and architecture;
+  `mode` what its run trained (`objective.MODES`; separation_only leaves the stereo network
+  at its initial weights)."""
   mixture: str
   crop_height: int
   crop_width: int
   model_config: models.ModelConfig
+  mode: str = 'joint'
 
   @property
   def mixtures(self) -> Tuple[str, ...]:
@@ -42,7 +45,8 @@ class RunInfo:
 
   def to_dict(self) -> Dict[str, object]:
     return {'mixture': self.mixture, 'crop_height': self.crop_height,
-            'crop_width': self.crop_width, 'model': self.model_config.to_dict()}
+            'crop_width': self.crop_width, 'model': self.model_config.to_dict(),
+            'mode': self.mode}
 
 
 def to_json(**configs: Any) -> str:
@@ -130,7 +134,8 @@ def read_run_info(model_dir: str) -> RunInfo:
     pipeline = config['pipeline']
     return RunInfo(mixture=str(pipeline['mixture']), crop_height=int(pipeline['crop_height']),
                    crop_width=int(pipeline['crop_width']),
-                   model_config=models.ModelConfig.from_dict(config['model']))
+                   model_config=models.ModelConfig.from_dict(config['model']),
+                   mode=str(config.get('train', {}).get('mode', 'joint')))
   except (KeyError, TypeError) as e:
     raise ValueError(f'{path} lacks the entry {e} (expected sections "model" and '
                      '"pipeline" with mixture, crop_height, crop_width).') from None

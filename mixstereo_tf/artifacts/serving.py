@@ -114,5 +114,17 @@ def load_saved_model(export_dir: str) -> Tuple[tf.Module, runs.RunInfo]:
       mixture=meta['mixture'].numpy().decode('utf-8'),
       crop_height=int(meta['crop_height']), crop_width=int(meta['crop_width']),
       model_config=models.ModelConfig.from_dict(
-          json.loads(meta['model_config'].numpy().decode('utf-8'))))
+          json.loads(meta['model_config'].numpy().decode('utf-8'))),
+      mode=_exported_mode(export_dir))
   return loaded, run_info
+
+
+def _exported_mode(export_dir: str) -> str:
+  """What the exported run trained (`RunInfo.mode`), from `assets.extra/run_info.json`;
+  'joint' where it is not recorded (exports before it was)."""
+  path = os.path.join(export_dir, 'assets.extra', RUN_INFO_FILE)
+  try:
+    with tf.io.gfile.GFile(path) as f:
+      return str(json.load(f).get('mode', 'joint'))
+  except (tf.errors.OpError, ValueError, AttributeError):
+    return 'joint'

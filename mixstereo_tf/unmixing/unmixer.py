@@ -7,6 +7,7 @@ Unmixers are made in `shipped`.
 import dataclasses
 from typing import Callable, Dict, Optional, Sequence, Tuple, Union
 
+from absl import logging
 import numpy as np
 import tensorflow as tf
 
@@ -138,6 +139,10 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
   """The 'model' Unmixer around a uint8 serving graph (`graphs.serving_function`) of a run."""
   trained = run_info.mixtures
   requested = check_mixture(config, trained)
+  if run_info.mode == 'separation_only':
+    logging.warning('%s was trained with mode separation_only: its disparities come from '
+                    'a stereo network at its initial weights.',
+                    config.checkpoint or config.saved_model)
   levels = run_info.model_config.max_disparity
   restore = config.restore_colour
   named = [requested] if requested != steps.AUTO else list(trained)

@@ -1,5 +1,6 @@
 """Tests for mixstereo_tf.unmixing.predictors: padding, the Unmixer and its registry of methods."""
 
+import logging
 import os
 
 import numpy as np
@@ -19,15 +20,17 @@ TINY = models.ModelConfig(separation_widths=(4, 4, 4, 4, 4, 4), stereo_features=
                           stereo_residual_blocks=0, stereo_3d_widths=(2,), max_disparity=4)
 
 
-def make_run_dir(path, mixture='anaglyph', seed=1):
-  """A run directory as training writes it: config.json and a model+optimizer checkpoint."""
+def make_run_dir(path, mixture='anaglyph', seed=1, mode=None):
+  """A run directory as training writes it: config.json (with a train section naming
+  `mode` when given) and a model+optimizer checkpoint."""
   tf.keras.utils.set_random_seed(seed)
   model = models.build_model(TINY)
   os.makedirs(path, exist_ok=True)
+  train = {'train': {'mode': mode}} if mode else {}
   with open(os.path.join(path, 'config.json'), 'w') as f:
     f.write(runs.to_json(
         model=TINY, pipeline=pipeline.PipelineConfig(mixture=mixture, crop_height=64,
-                                                     crop_width=128)))
+                                                     crop_width=128), **train))
   checkpoint = tf.train.Checkpoint(model=model, optimizer=tf.keras.optimizers.RMSprop(1e-4))
   prefix = tf.train.CheckpointManager(checkpoint, path, max_to_keep=2).save(checkpoint_number=7)
   return model, prefix
@@ -189,3 +192,17 @@ def test_sgbm_method_is_registered_and_unmixes_an_anaglyph():
   estimated = build(mixture='auto')(image)  # Detected encoding, range estimated.
   assert estimated['info']['disparity_range'][0] <= -4 <= estimated['info'][
       'disparity_range'][1]
+
+
+def test_a_separation_only_run_warns_and_is_no_oracle(tmp_path, caplog):
+  path = str(tmp_path / 'separation')
+  make_run_dir(path, mode='separation_only')
+  assert runs.read_run_info(path).mode == 'separation_only'
+  caplog.set_level(logging.WARNING)
+  predictors.build_unmixer(predictors.PredictorConfig(checkpoint=path))
+  assert 'separation_only' in caplog.text and 'initial weights' in caplog.text
+  with pytest.raises(ValueError, match='separation_only run .* never trained'):
+    predictors.build_unmixer(predictors.PredictorConfig(method='oracle', checkpoint=path))
+  assert runs.read_run_info(str(tmp_path / 'separation')).to_dict()['mode'] == (
+      'separation_only')
+
