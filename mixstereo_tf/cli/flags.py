@@ -159,7 +159,8 @@ def define_predictor() -> None:
                     'model: a trained network (--checkpoint or --saved_model); classical: the '
                     'training-free baseline; sgbm: OpenCV StereoSGBM on the eye channels, a '
                     'peer baseline (anaglyph encodings); oracle: the stereo module of '
-                    '--checkpoint (a stereo_only or joint run) on the clean pairs (evaluation only).')
+                    '--checkpoint (a stereo_only or joint run) on the clean pairs '
+                    '(evaluation only).')
   flags.DEFINE_string('saved_model', defaults.saved_model,
                       'A SavedModel written by mixstereo_tf.export.')
   flags.DEFINE_boolean('restore_colour', defaults.restore_colour,
