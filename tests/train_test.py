@@ -168,7 +168,7 @@ def test_a_few_dozen_steps_on_the_sample_source_lower_the_loss(tmp_path):
                              checkpoint_every=1000, summary_every=1000,
                              image_summary_every=1000, log_every=10),
       model_config, objective.LossConfig(),
-      lambda: pipeline.train_dataset(samples, config))
+      lambda start: pipeline.train_dataset(samples, config, start))
   trained = probe_loss(result.last_checkpoint)
   # The untrained U-Net outputs ~0 (L1 of about 0.25 per view on the [0, 1] loss scale);
   # 150 steps of TF1 RMSProp (its accumulator starts at one: a warm-up of a few tens of
