@@ -143,9 +143,16 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
 
   Returns:
     uint8 [H, W, D] left-referenced costs, d_i = min_disparity + i (as `sgm.cost_volume`).
+
+  Raises:
+    ValueError: the image is smaller than the ZNCC window.
   """
   matching = config.matching
   height, width = gray.shape
+  side = 2 * config.window_radius + 1
+  if height < side or width < side:
+    raise ValueError(f'a {height}x{width} image is smaller than the double-image matcher\'s '
+                     f'ZNCC window of {side}x{side} pixels.')
   max_disparity = min(matching.max_disparity, width - 1)
   high = (gray - cv2.GaussianBlur(gray, (0, 0), config.highpass_sigma)).astype(np.float32)
   window = (2 * config.window_radius + 1,) * 2

@@ -106,6 +106,18 @@ def test_diplopia_constant_shift_and_layers():
     assert gain >= 1.0, (view, gain)
 
 
+@pytest.mark.parametrize('shape', [(64, 1), (12, 12), (8, 16), (16, 8)])
+def test_a_double_image_smaller_than_the_zncc_window_is_a_clear_error(shape):
+  """A 1-px strip gave an IndexError, a 12 x 12 image a broadcasting error."""
+  image = np.random.RandomState(0).uniform(0, 1, shape + (3,)).astype(np.float32)
+  with pytest.raises(ValueError, match=rf'a {shape[0]}x{shape[1]} image is smaller than the '
+                                       r"double-image matcher's ZNCC window of 15x15"):
+    diplopia_range.estimate_range(image)
+  with pytest.raises(ValueError, match='ZNCC window'):
+    diplopia.unmix_diplopia(image, (1, 4))
+  assert diplopia_range.estimate_range(np.resize(image, (15, 15, 3)))  # Large enough.
+
+
 def test_diplopia_reports_its_disparities_before_solving_the_layers(monkeypatch):
   left, right, _, _ = _scene(d_bg=5, d_fg=5)
   told, solve = [], diplopia_layers.separate_layers
