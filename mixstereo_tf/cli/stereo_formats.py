@@ -5,7 +5,8 @@ written (`write(result, stem) -> paths`, files named `<stem><suffix>`) and, wher
 makes sense for a video, how one frame of its video is drawn (`frame(result) -> uint8 RGB`);
 the others carry the reason they are skipped for videos (`video_note`).
 
-- `mpo`: CIPA DC-007 multi-picture JPEG, left then right (Pillow writes the MP index).
+- `mpo`: CIPA DC-007 multi-picture JPEG, left then right, typed multi-view disparity
+  (`mpo.py`; Pillow's writer leaves the second picture's type undefined).
 - `jps`: one JPEG [H, 2W], cross-eyed order (the RIGHT view in the left half).
 - `wiggle`: an animated GIF left -> right -> left with views synthesised between them
   from the disparity (`wiggle_frames`).
@@ -26,6 +27,7 @@ import cv2
 import numpy as np
 from PIL import Image
 
+from mixstereo_tf.cli import mpo
 from mixstereo_tf.cli import viewer_page
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
@@ -181,8 +183,8 @@ def _image_writer(suffix: str, draw: Callable[[StereoResult], np.ndarray]
 
 def _write_mpo(result: StereoResult, stem: str) -> List[str]:
   path = stem + '.mpo'
-  _pil(result.left).save(path, 'MPO', save_all=True, append_images=[_pil(result.right)],
-                         quality=JPEG_QUALITY)
+  with open(path, 'wb') as f:
+    f.write(mpo.encode([result.left, result.right], JPEG_QUALITY))
   return [path]
 
 

@@ -3,6 +3,7 @@ RGBD, anaglyphs."""
 
 import dataclasses
 import shutil
+import struct
 import subprocess
 
 import numpy as np
@@ -40,11 +41,44 @@ def test_mpo_holds_left_then_right_with_an_mp_index(tmp_path):
     frames = [np.asarray(frame.convert('RGB')) for frame in ImageSequence.Iterator(image)]
   assert _close(frames[0], result.left) and _close(frames[1], result.right)
   assert not _close(frames[0], result.right)
+  # A stereo pair for 3D cameras and TVs: both pictures typed multi-frame disparity, the
+  # first representative, each with its MP attributes (number, base viewpoint 1).
+  entries = image.mpinfo[0xB002]
+  assert [e['Attribute']['MPType'] for e in entries] == ['Multi-Frame Image: (Disparity)'] * 2
+  assert [e['Attribute']['RepresentativeImageFlag'] for e in entries] == [True, False]
+  with open(paths[0], 'rb') as f:
+    data = f.read()
+  assert entries[0]['Size'] + entries[1]['Size'] == len(data)
+  assert _mp_attributes(data) == [{0xB101: 1, 0xB204: 1}, {0xB101: 2, 0xB204: 1}]
   if shutil.which('exiftool') is None:
     print('exiftool not installed (apt-get install libimage-exiftool-perl): skipping its check')
     return
-  text = subprocess.run(['exiftool', paths[0]], capture_output=True, text=True).stdout
+  text = subprocess.run(['exiftool', '-a', paths[0]], capture_output=True, text=True).stdout
   assert 'MPO' in text and 'Number Of Images                : 2' in text
+  assert text.count('Multi-frame Disparity') == 2 and 'Base Viewpoint Num' in text
+
+
+def _mp_attributes(data):
+  """{MPIndividualNum, BaseViewpointNum} of each picture's MP attribute IFD (the IFD after
+  the first picture's index; the only IFD of the others), read from the APP2 segments."""
+  found, at = [], 0
+  while (at := data.find(b'MPF\x00II*\x00', at)) >= 0:
+    tiff = data[at + 4:]
+    ifd = struct.unpack('<I', tiff[4:8])[0]
+    count = struct.unpack('<H', tiff[ifd:ifd + 2])[0]
+    tags = {struct.unpack('<H', tiff[ifd + 2 + 12 * i:ifd + 4 + 12 * i])[0]
+            for i in range(count)}
+    if 0xB001 in tags:  # The index IFD: its next IFD holds the attributes.
+      ifd = struct.unpack('<I', tiff[ifd + 2 + 12 * count:ifd + 6 + 12 * count])[0]
+      count = struct.unpack('<H', tiff[ifd:ifd + 2])[0]
+    values = {}
+    for i in range(count):
+      tag, _, _, value = struct.unpack('<HHII', tiff[ifd + 2 + 12 * i:ifd + 14 + 12 * i])
+      if tag in (0xB101, 0xB204):
+        values[tag] = value
+    found.append(values)
+    at += 8
+  return found
 
 
 def test_jps_is_a_double_width_jpeg_with_the_right_view_first(tmp_path):
