@@ -78,7 +78,8 @@ def define_output_options() -> None:
                     'half width (sbs_half) or top-bottom (tb).')
   flags.DEFINE_float('max_display_disparity', options['max_display_disparity'],
                      'Disparity (pixels) shown brightest in the colour maps, fixed for the '
-                     "run (default: the range found; videos: the predictor's range).")
+                     'run (default: the range found; videos: the range searched on their '
+                     'first frame, recorded as display_range in the info JSON).')
   flags.DEFINE_integer('segment_frames', jobs.VideoConfig.segment_frames,
                        'Videos are written in resumable segments of this many frames: '
                        'running the same command again after an interruption continues '

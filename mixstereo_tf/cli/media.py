@@ -156,7 +156,8 @@ class OutputOptions:
   """How each input's results are written (`unmix_files.unmix_item`; flags of `mixstereo-unmix`).
 
   layout: one of `LAYOUTS`. max_display_disparity: the colour maps span 0..this many
-  pixels (None: each image's disparities found; videos: the unmixer's range).
+  pixels (None: each image's disparities found; videos: the range searched on the first
+  frame).
   video_config: resumable segments (`video.jobs`). settings: a JSON-serialisable
   description of the unmixer for a video job's manifest (None: its method, mixture and
   range). temporal_config: a video's per-shot decisions and disparity prior (`temporal`).

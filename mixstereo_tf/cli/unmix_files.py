@@ -115,20 +115,21 @@ def _video_outputs(item: media.MediaItem, output_dir: str, layout: str,
   return outputs, drawn, skipped
 
 
-def _frame_images(result: Dict[str, object], layout: str, max_disparity: float,
+def _frame_images(result: Dict[str, object], layout: str, display: Tuple[float, float],
                   drawn: Tuple[str, ...]) -> Dict[str, object]:
-  """One unmixed frame's images: {output key: uint8 RGB}."""
+  """One unmixed frame's images: {output key: uint8 RGB}; colour maps over `display`."""
   images = dict(media.layout_images(result['left'], result['right'], layout))
-  images['disparity'] = colormap.colorize(result['disparity_left'], max_disparity)
+  images['disparity'] = colormap.colorize(result['disparity_left'], display[1], display[0])
   if drawn:
     pair = stereo_formats.StereoResult(result['left'], result['right'],
                                        result['disparity_left'], images['disparity'],
-                                       (0.0, max_disparity))
+                                       display)
     images.update((name, stereo_formats.FORMATS[name].frame(pair)) for name in drawn)
   return images
 
 
-def _drawn_when_done(pending, state: Dict[str, object], layout: str, max_disparity: float,
+def _drawn_when_done(pending, state: Dict[str, object], layout: str,
+                     display: Tuple[float, float],
                      drawn: Tuple[str, ...]) -> Callable[[], Dict[str, object]]:
   """The call that draws a frame's images once its unmixing (`pending`, a Future) is done,
   made in frame order on the video writer's thread (`jobs.Rendered`); it records the first
@@ -137,7 +138,7 @@ def _drawn_when_done(pending, state: Dict[str, object], layout: str, max_dispari
     result = pending.result()
     if state['info'] is None:
       state['info'] = dict(result.get('info', {}))
-    drawn_images = _frame_images(result, layout, max_disparity, drawn)
+    drawn_images = _frame_images(result, layout, display, drawn)
     state['rendered'] += 1
     state['bar'].update(state['done'] + state['rendered'], state['rendered'])
     return drawn_images
@@ -146,7 +147,7 @@ def _drawn_when_done(pending, state: Dict[str, object], layout: str, max_dispari
 
 
 def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
-                 layout: str, max_disparity: float, settings: Dict[str, object],
+                 layout: str, display: Tuple[float, float], settings: Dict[str, object],
                  video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
                  report: UnmixReport, temporal_config: temporal.TemporalConfig,
                  formats: Tuple[str, ...] = (), request: Optional[Dict] = None) -> int:
@@ -176,10 +177,10 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
     pending = pipeline.submit(frame, cut=index % video_config.segment_frames == 0,
                               unread='disparity_right')
     report.unmix_seconds += time.perf_counter() - unmix_start
-    return _drawn_when_done(pending, state, layout, max_disparity, drawn)
+    return _drawn_when_done(pending, state, layout, display, drawn)
 
   job = jobs.VideoJob(item.path, outputs,
-                      dict(settings, layout=layout, max_disparity=max_disparity,
+                      dict(settings, layout=layout, display_range=list(display),
                            temporal=dataclasses.asdict(temporal_config), formats=drawn),
                       video_config, {layout: media.STEREO_MODES[layout]}
                       if layout in media.STEREO_MODES else {})
@@ -195,6 +196,7 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   write_info(output_dir, item, dict(
       state['info'] or {}, frames=done['frames'], resumed_frames=done['resumed_frames'],
       frame_rate=str(info.frame_rate), rotation=info.rotation, turned_upright=info.turned,
+      display_range=[round(v, 3) for v in display],
       temporal=temporal_config.enabled,
       scene_cuts=[state['done'] + index for index in shots.cuts],
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
@@ -202,6 +204,20 @@ def _unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
       **({'skipped_formats': skipped} if skipped else {}), **_odd_size_note(info)),
       request)
   return state['rendered']
+
+
+def _video_display_range(unmixer: predictors.Unmixer, path: str) -> Tuple[float, float]:
+  """A video's colour-map (low, high): the disparity range its first frame is searched
+  over (one extra unmixing of that frame; the same on every run, so a resumed job colours
+  its frames as the first run did). Later shots beyond it are clipped."""
+  _, frames = streams.open_video(path)
+  try:
+    first = next(frames).image
+  finally:
+    frames.close()
+  searched = unmixer(first).get('info', {}).get('disparity_range')
+  low, high = searched if searched else (0.0, unmixer.max_disparity)
+  return float(low), float(max(high, low + 1))
 
 
 def _odd_size_note(info) -> Dict[str, str]:
@@ -258,8 +274,9 @@ def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: s
   """
   request = run_request.describe(options)
   if item.is_video:
-    return _unmix_video(unmixer, item, output_dir, options.layout,
-                        options.max_display_disparity or unmixer.max_disparity,
+    display = ((0.0, float(options.max_display_disparity)) if options.max_display_disparity
+               else _video_display_range(unmixer, item.path))
+    return _unmix_video(unmixer, item, output_dir, options.layout, display,
                         options.settings or _video_settings(unmixer), options.video_config,
                         progress_stream, report, options.temporal_config, options.formats,
                         request)

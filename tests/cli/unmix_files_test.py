@@ -248,12 +248,18 @@ def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_pa
   seen = []
 
   def unmix(image, hint=None):
-    seen.append(hint.unread)
+    seen.append(hint and hint.unread)
     return unmixer(image, hint=hint)
 
   report = unmix_files.unmix_inputs(dataclasses.replace(unmixer, fn=unmix), source,
                                     str(tmp_path / 'out'), media.OutputOptions('sbs'))
-  assert report.frames == 3 and seen == ['disparity_right'] * 3
+  # First the colour maps' range from the first frame alone, then the frames.
+  assert report.frames == 3 and seen == [None] + ['disparity_right'] * 3
+  # The colour maps span that range (0..8 px here), not the method's largest disparity.
+  info = json.loads((tmp_path / 'out' / 'clip_info.json').read_text())
+  assert info['display_range'] == [0.0, 8.0] and unmixer.max_disparity != 8.0
+  _, frames = streams_test.read_all(tmp_path / 'out' / 'clip_disparity.mp4')
+  assert max(frame.image.max() for frame in frames) > 200  # Near shows bright (255: 8 px).
 
 
 def test_unreadable_video_is_named(setup, tmp_path):
