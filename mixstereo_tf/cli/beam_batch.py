@@ -30,7 +30,7 @@ from apache_beam.options.pipeline_options import PipelineOptions
 from apache_beam.options.pipeline_options import StandardOptions
 
 from mixstereo_tf.cli import media
-from mixstereo_tf.cli import run_request
+from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
 
@@ -110,7 +110,7 @@ def completed_info(output_dir: str, name: str) -> Optional[Dict[str, object]]:
 def foreign_results(info: Dict[str, object], item: media.MediaItem, method: str,
                     request: Optional[Dict[str, object]] = None) -> Optional[str]:
   """Why complete results under `item.name` are not `item`'s by `method` asked for as
-  `request` (`run_request.describe`; another input, another method or other options: a
+  `request` (`info_file.describe`; another input, another method or other options: a
   re-run with other flags), or None: they are, and are skipped."""
   written_for = info.get('input')
   if isinstance(written_for, str) and os.path.abspath(written_for) != os.path.abspath(
@@ -120,7 +120,7 @@ def foreign_results(info: Dict[str, object], item: media.MediaItem, method: str,
   if info.get('method') not in (None, method):
     return (f'the output folder holds results of {item.path} by method '
             f'{info["method"]!r}, not {method!r}; use another --output_dir')
-  changed = run_request.differences(info.get('request'), request) if request else []
+  changed = info_file.differences(info.get('request'), request) if request else []
   if changed:
     return (f'the output folder holds results of {item.path} asked for with other flags '
             f'({"; ".join(changed)}); use another --output_dir, or remove '
@@ -158,7 +158,7 @@ class _UnmixFn(beam.DoFn):
     index, item = element[0], media.MediaItem(*element[1:])
     info = completed_info(self._output_dir, item.name)
     other = info and foreign_results(info, item, self._unmixer.method,
-                                     run_request.describe(self._options))
+                                     info_file.describe(self._options))
     if other:
       yield from _failed(index, item, other, 0.0)
       return

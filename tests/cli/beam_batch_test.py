@@ -13,7 +13,7 @@ import pytest
 
 from mixstereo_tf.cli import beam_batch
 from mixstereo_tf.cli import media
-from mixstereo_tf.cli import run_request
+from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
 
@@ -137,10 +137,10 @@ def test_results_of_another_input_or_method_are_not_skipped_as_done(tmp_path):
   other = dict(mine, input=str(tmp_path / 'elsewhere' / 'p.png'))
   assert 'another input' in beam_batch.foreign_results(other, item, 'classical')
   # Asked for with other flags (the mixture detected before, now named; a new format).
-  asked = run_request.describe(media.OutputOptions(settings={'mixture': 'auto'}))
+  asked = info_file.describe(media.OutputOptions(settings={'mixture': 'auto'}))
   recorded = dict(mine, request=asked)
   assert beam_batch.foreign_results(recorded, item, 'classical', asked) is None
-  now = run_request.describe(media.OutputOptions(settings={'mixture': 'anaglyph'},
+  now = info_file.describe(media.OutputOptions(settings={'mixture': 'anaglyph'},
                                                  formats=('mpo',)))
   why = beam_batch.foreign_results(recorded, item, 'classical', now)
   assert "mixture: 'auto' -> 'anaglyph'" in why and "output_formats: [] -> ['mpo']" in why

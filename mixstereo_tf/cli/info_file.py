@@ -1,4 +1,4 @@
-"""What an input's results were asked for with, recorded in its `<name>_info.json`.
+"""An input's side-car `<name>_info.json`: what was done (`write_info`) and what was asked.
 
 `mixstereo-unmix` and the batch pipeline record under `request` the predictor's settings
 (`media.OutputOptions.settings`: the PredictorConfig as the flags gave it, `mixture='auto'`
@@ -9,6 +9,7 @@ otherwise keep silently beside this run's.
 """
 
 import json
+import os
 from typing import Dict, List, Optional
 
 from mixstereo_tf.cli import media
@@ -38,3 +39,16 @@ def differences(recorded: Optional[object], current: Dict[str, object]) -> List[
   old, new = _flat(recorded), _flat(current)
   return [f'{key}: {old.get(key)!r} -> {new.get(key)!r}'
           for key in sorted(set(old) | set(new)) if old.get(key) != new.get(key)]
+
+
+def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
+               request: Optional[Dict] = None) -> str:
+  """Writes `<name>_info.json` beside an input's results: what was done (the mixture used
+  and detected, with its confidence, the disparity range searched, the network's shift and
+  scale, the method, the seconds spent), the files written and what was asked
+  (`describe`)."""
+  path = os.path.join(output_dir, f'{item.name}_info.json')
+  with open(path, 'w', encoding='utf-8') as f:
+    json.dump(dict(info, input=item.path, **({'request': request} if request else {})), f,
+              indent=2, sort_keys=True)
+  return path

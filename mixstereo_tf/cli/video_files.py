@@ -1,0 +1,161 @@
+"""Unmixing one video file: its frames, resumably, into layout, disparity and format videos.
+
+`unmix_video` is `unmix_files.unmix_item`'s video path (outputs listed in `unmix_files`):
+frames go through a shot's temporal state and the frame pipeline, are drawn on the
+writer's thread and written in resumable segments (`video.jobs`); the colour maps span the
+range searched on the first frame (`display_range`).
+"""
+
+import dataclasses
+import os
+import time
+from typing import Callable, Dict, Optional, TextIO, Tuple
+
+from absl import logging
+
+from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import media
+from mixstereo_tf.cli import progress
+from mixstereo_tf.cli import stereo_formats
+from mixstereo_tf.core import colormap
+from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import frame_pipeline
+from mixstereo_tf.video import jobs
+from mixstereo_tf.video import streams
+from mixstereo_tf.video import temporal
+
+
+def default_settings(unmixer: predictors.Unmixer) -> Dict[str, object]:
+  """What identifies an unmixer in a video job's manifest when the caller gives nothing."""
+  return {'method': unmixer.method, 'mixture': unmixer.mixture,
+          'max_disparity': unmixer.max_disparity, 'restore_colour': unmixer.restore_colour}
+
+
+def _video_outputs(item: media.MediaItem, output_dir: str, layout: str,
+                   formats: Tuple[str, ...]) -> Tuple[Dict[str, str], Tuple[str, ...],
+                                                      Dict[str, str]]:
+  """A video's ({key: output path}, the stereo formats drawn as videos, {format skipped:
+  why}); the skipped ones are logged."""
+  extension = os.path.splitext(item.path)[1].lower()
+  drawn, skipped = stereo_formats.video_formats(formats)
+  for name, why in skipped.items():
+    logging.warning('%s: --output_format=%s %s.', item.path, name, why)
+  keys = (['left', 'right'] if layout == 'separate' else [layout]) + ['disparity']
+  outputs = {key: os.path.join(output_dir, f'{item.name}_{key}{extension}')
+             for key in keys + list(drawn)}
+  return outputs, drawn, skipped
+
+
+def _frame_images(result: Dict[str, object], layout: str, display: Tuple[float, float],
+                  drawn: Tuple[str, ...]) -> Dict[str, object]:
+  """One unmixed frame's images: {output key: uint8 RGB}; colour maps over `display`."""
+  images = dict(media.layout_images(result['left'], result['right'], layout))
+  images['disparity'] = colormap.colorize(result['disparity_left'], display[1], display[0])
+  if drawn:
+    pair = stereo_formats.StereoResult(result['left'], result['right'],
+                                       result['disparity_left'], images['disparity'],
+                                       display)
+    images.update((name, stereo_formats.FORMATS[name].frame(pair)) for name in drawn)
+  return images
+
+
+def _drawn_when_done(pending, state: Dict[str, object], layout: str,
+                     display: Tuple[float, float],
+                     drawn: Tuple[str, ...]) -> Callable[[], Dict[str, object]]:
+  """The call that draws a frame's images once its unmixing (`pending`, a Future) is done,
+  made in frame order on the video writer's thread (`jobs.Rendered`); it records the first
+  frame's info and the progress in `state`."""
+  def images():
+    result = pending.result()
+    if state['info'] is None:
+      state['info'] = dict(result.get('info', {}))
+    drawn_images = _frame_images(result, layout, display, drawn)
+    state['rendered'] += 1
+    state['bar'].update(state['done'] + state['rendered'], state['rendered'])
+    return drawn_images
+
+  return images
+
+
+def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
+                layout: str, display: Tuple[float, float], settings: Dict[str, object],
+                video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
+                report, temporal_config: temporal.TemporalConfig,
+                formats: Tuple[str, ...] = (), request: Optional[Dict] = None) -> int:
+  """Unmixes every frame of a video into layout, disparity and `formats` videos
+  (resumable, see `video.jobs`; side-by-side and top-bottom ones tagged as such), writes
+  `<name>_info.json` (with `request`); returns the frames unmixed in this run. `report`
+  (`unmix_files.UnmixReport`) gains the seconds spent unmixing.
+
+  Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
+  encoding, range and prior; each segment's first frame starts a shot), a shot's frames
+  side by side (`frame_pipeline`); their images are drawn and written in order on the
+  writer's thread."""
+  start = time.perf_counter()
+  shots = temporal.VideoState(temporal_config)
+  outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
+  state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
+  pipeline = frame_pipeline.FramePipeline(unmixer, shots)
+
+  def on_start(info, done):
+    state['bar'] = progress.ProgressBar(info.frame_count, os.path.basename(item.path),
+                                        progress_stream)
+    state['done'] = done
+
+  def render(frame):
+    unmix_start = time.perf_counter()
+    index = state['done'] + shots.frames  # This run's frames begun before this one.
+    # A video writes the views and the left disparity: the right one is not read.
+    pending = pipeline.submit(frame, cut=index % video_config.segment_frames == 0,
+                              unread='disparity_right')
+    report.unmix_seconds += time.perf_counter() - unmix_start
+    return _drawn_when_done(pending, state, layout, display, drawn)
+
+  job = jobs.VideoJob(item.path, outputs,
+                      dict(settings, layout=layout, display_range=list(display),
+                           temporal=dataclasses.asdict(temporal_config), formats=drawn),
+                      video_config, {layout: media.STEREO_MODES[layout]}
+                      if layout in media.STEREO_MODES else {})
+  try:
+    with pipeline:
+      done = jobs.run(job, render, on_start)
+    # The container's frame count may be wrong or missing.
+    state['bar'].update(done['frames'], state['rendered'], force=True)
+  finally:
+    if state['bar']:
+      state['bar'].close()
+  info = done['info']
+  info_file.write_info(output_dir, item, dict(
+      state['info'] or {}, frames=done['frames'], resumed_frames=done['resumed_frames'],
+      frame_rate=str(info.frame_rate), rotation=info.rotation, turned_upright=info.turned,
+      display_range=[round(v, 3) for v in display],
+      temporal=temporal_config.enabled,
+      scene_cuts=[state['done'] + index for index in shots.cuts],
+      audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
+      files=[os.path.basename(path) for path in outputs.values()],
+      **({'skipped_formats': skipped} if skipped else {}), **_odd_size_note(info)),
+      request)
+  return state['rendered']
+
+
+def display_range(unmixer: predictors.Unmixer, path: str) -> Tuple[float, float]:
+  """A video's colour-map (low, high): the disparity range its first frame is searched
+  over (one extra unmixing of that frame; the same on every run, so a resumed job colours
+  its frames as the first run did). Later shots beyond it are clipped."""
+  _, frames = streams.open_video(path)
+  try:
+    first = next(frames).image
+  finally:
+    frames.close()
+  searched = unmixer(first).get('info', {}).get('disparity_range')
+  low, high = searched if searched else (0.0, unmixer.max_disparity)
+  return float(low), float(max(high, low + 1))
+
+
+def _odd_size_note(info) -> Dict[str, str]:
+  """{'padding': why an output video is a row or column larger than the input}, if it is."""
+  if info.width % 2 == 0 and info.height % 2 == 0:
+    return {}
+  return {'padding': f'{info.width}x{info.height} frames: an output video whose width or '
+                     'height is odd gets one more column or row, copied from its edge (4:2:0 '
+                     'video needs even sizes); crop it to recover the input size'}
