@@ -116,7 +116,8 @@ def train_features() -> None:
         photo_warps=FLAGS.photo_warps)
     low, count = feature_loop.candidates(FLAGS.max_disparity, names)
     config = feature_loop.FeatureTrainConfig(
-        model_dir=FLAGS.model_dir, texture_dir=FLAGS.texture_dir, mixtures=names, batch_size=FLAGS.batch_size,
+        model_dir=FLAGS.model_dir, texture_dir=FLAGS.texture_dir, mixtures=names,
+        batch_size=FLAGS.batch_size,
         learning_rate=FLAGS.learning_rate, num_steps=FLAGS.num_steps, min_disparity=low,
         num_disparities=count, degrade_probability=0.7 if FLAGS.degrade else 0.0,
         real_pairs=tuple(FLAGS.real_pairs), real_probability=FLAGS.real_pair_probability,
