@@ -67,8 +67,12 @@ def _settle(image: np.ndarray, name: str, info: Dict[str, object],
 
 
 def _detection_info(found: detection.Detection) -> Dict[str, object]:
-  """The info a frame records of its detection: {'detected', 'confidence'}."""
-  return {'detected': found.name, 'confidence': round(found.confidence, 3)}
+  """The info a frame records of its detection: {'detected', 'confidence'}, and where it
+  finds no anaglyph {'detection': why} (the confidence is then that there is none)."""
+  info = {'detected': found.name, 'confidence': round(found.confidence, 3)}
+  if found.name is None:
+    info['detection'] = f'no anaglyph ({found.reason})'
+  return info
 
 
 def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],

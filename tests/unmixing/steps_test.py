@@ -65,6 +65,15 @@ def test_a_wrong_explicit_mixture_warns_with_the_detected_one(monkeypatch):
   assert not warnings
 
 
+def test_a_named_double_image_says_its_confidence_is_that_it_is_no_anaglyph():
+  rng = np.random.default_rng(1)
+  gray = rng.integers(0, 256, (64, 96, 1), dtype=np.uint8)
+  double = np.repeat((gray.astype(np.uint16) + np.roll(gray, 5, 1)) // 2, 3, 2)
+  name, info = steps.resolve_mixture(double.astype(np.uint8), 'diplopia', ('diplopia',))
+  assert name == 'diplopia' and info['detected'] is None and info['confidence'] > 0.5
+  assert info['detection'].startswith('no anaglyph (')
+
+
 def test_a_named_mixture_needs_no_detection_of_a_thin_image():
   """Detection needs 16 px rows at 320 px wide; a named encoding only warns from it."""
   thin = np.random.default_rng(0).integers(0, 256, (60, 4440, 3), dtype=np.uint8)
