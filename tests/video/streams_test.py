@@ -25,9 +25,11 @@ def pattern(index, height=64, width=96):
                    ((x + y) * 4) % 256], -1).astype(np.uint8)
 
 
-def make_video(path, frames, rate=Fraction(12), audio_rate=48000, rotation=0):
+def make_video(path, frames, rate=Fraction(12), audio_rate=48000, rotation=0, tags=None,
+               aspect=None):
   """Writes frames (uint8 RGB) with a 440 Hz sine as mono audio (codec from AUDIO) using
-  PyAV directly, independently of the writer under test. Returns the path."""
+  PyAV directly, independently of the writer under test; `tags`: container tags, and the
+  audio's language 'fra'; `aspect`: the sample aspect ratio. Returns the path."""
   extension = str(path)[str(path).rfind('.'):]
   with av.open(str(path), 'w') as out:
     codec = 'mjpeg' if extension == '.avi' else 'libx264'
@@ -38,6 +40,11 @@ def make_video(path, frames, rate=Fraction(12), audio_rate=48000, rotation=0):
     if rotation:
       video.set_display_rotation(rotation)
     audio = out.add_stream(AUDIO[extension], rate=audio_rate, layout='mono')
+    if tags:
+      out.metadata.update(tags)
+      audio.metadata['language'] = 'fra'
+    if aspect:
+      video.codec_context.sample_aspect_ratio = aspect
     for index, image in enumerate(frames):
       frame = av.VideoFrame.from_ndarray(image, format='rgb24')
       frame.pts = index
@@ -99,6 +106,30 @@ def test_parts_assembled_keep_rate_timestamps_and_audio(tmp_path, extension):
   assert max(errors) < 5, errors
   np.testing.assert_array_equal(audio_samples(output), audio_samples(source))
   assert audio_samples(source).shape[1] >= 20 * 4000  # 48 kHz for 20 frames at 12 fps.
+
+
+@pytest.mark.parametrize('extension', ['.mp4', '.mkv'])
+def test_assembly_keeps_the_sources_tags_audio_language_and_aspect(tmp_path, extension):
+  tags = {'title': 'Holiday', 'creation_time': '2020-05-01T10:00:00.000000Z'}
+  source = make_video(tmp_path / f'in{extension}', [pattern(i) for i in range(4)],
+                      tags=tags, aspect=Fraction(4, 3))
+  info, frames = read_all(source)
+  part = str(tmp_path / 'part.mov')
+  with streams.VideoWriter(part, info.frame_rate, info.time_base,
+                            streams.encoder_for(source)) as writer:
+    for frame in frames:
+      writer.write(frame.image, frame.time)
+  output = str(tmp_path / f'out{extension}')
+  assembly.assemble([assembly.Part(part, frames[0].time)], output, info.frame_rate,
+                    info.time_base, audio_source=source)
+  with av.open(output) as out:
+    assert out.metadata.get('title') == 'Holiday'
+    assert out.metadata.get('creation_time', '').startswith('2020-05-01')
+    assert out.streams.audio[0].metadata.get('language') == 'fra'
+    # MP4 / MOV keep the source's sample aspect ratio; PyAV cannot set it on Matroska's
+    # copied stream (docs/OUTPUTS.md).
+    aspect = out.streams.video[0].sample_aspect_ratio
+    assert aspect == (Fraction(4, 3) if extension == '.mp4' else None)
 
 
 def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
