@@ -67,6 +67,23 @@ def _keywords(message: str) -> str:
   return re.sub(r'\bPredictorConfig\.(\w+)=?', keyword, message)
 
 
+def _image(image) -> np.ndarray:
+  """`unmix`'s image argument as an array: a path (str, bytes, PathLike) read like the CLI
+  reads it; ValueError naming `image=` for videos and arrays that are not uint8."""
+  from mixstereo_tf.cli import media  # pylint: disable=g-import-not-at-top
+  if isinstance(image, (str, bytes, os.PathLike)):
+    path = os.fsdecode(image)
+    if os.path.splitext(path)[1].lower() in media.VIDEO_EXTENSIONS:
+      raise ValueError(f'image={path} is a video; unmix() takes one image (videos: '
+                       f'mixstereo-unmix --input={path}).')
+    return media.read_image(path)
+  array = np.asarray(image)
+  if array.dtype != np.uint8:
+    raise ValueError(f'image= must be a uint8 array (0-255), got {array.dtype}; e.g. '
+                     'np.round(x * 255).astype(np.uint8) for floats in [0, 1].')
+  return array
+
+
 @functools.lru_cache(maxsize=4)
 def _unmixer(config):
   """The Unmixer of a PredictorConfig, built once (building loads the model)."""
@@ -105,8 +122,9 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
   `unmix` on many images costs the model loading once.
 
   Args:
-    image: a uint8 RGB [H, W, 3] or gray [H, W] array, or the path of an image file (read
-      like the CLI reads it: gray and 16-bit files become uint8 RGB).
+    image: a uint8 RGB [H, W, 3] or gray [H, W] array, or the path (str, bytes, PathLike)
+      of an image file (read like the CLI reads it: gray and 16-bit files become uint8 RGB,
+      EXIF orientation applied); videos: the `mixstereo-unmix` tool.
     mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g. 'gray',
       'diplopia'); 'auto' detects an anaglyph's encoding; None: the model's own.
     method: 'model' (a network), 'classical' (training-free) or 'sgbm' (OpenCV's, a peer).
@@ -129,7 +147,6 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
       take (e.g. mixture='auto' on a photo that is no anaglyph); the message names the
       keyword to change.
   """
-  from mixstereo_tf.cli import media  # pylint: disable=g-import-not-at-top
   from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
   given = dict(method=method, checkpoint=checkpoint, saved_model=saved_model,
                mixture=mixture, restore_colour=restore_colour, swap_eyes=swap_eyes,
@@ -139,9 +156,7 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
     config = predictors.PredictorConfig(
         disparity_range=_search(disparity_range),
         **{name: value for name, value in given.items() if value is not ...})
-    if isinstance(image, (str, os.PathLike)):
-      image = media.read_image(os.fspath(image))
-    outputs = _unmixer(config)(image)
+    outputs = _unmixer(config)(_image(image))
   except ValueError as e:
     message = _keywords(str(e))
     if message == str(e):

@@ -56,7 +56,8 @@ def test_path_and_gray_inputs(anaglyph, tmp_path):
   image = anaglyph[0][:64, 150:230]
   media.write_image(str(tmp_path / 'photo.png'), image)
   direct = mixstereo_tf.unmix(image, method='classical')
-  for path in (str(tmp_path / 'photo.png'), tmp_path / 'photo.png'):
+  for path in (str(tmp_path / 'photo.png'), tmp_path / 'photo.png',
+               str(tmp_path / 'photo.png').encode()):
     read = mixstereo_tf.unmix(path, method='classical')
     np.testing.assert_array_equal(read.disparity, direct.disparity)
     np.testing.assert_array_equal(read.left, direct.left)
@@ -105,6 +106,14 @@ def test_a_pair_of_fractional_bounds_widens_as_on_the_command_line(anaglyph):
 def test_a_folder_is_no_image_file(tmp_path):
   with pytest.raises(ValueError, match='is a folder, not an image file'):
     mixstereo_tf.unmix(str(tmp_path))
+
+
+def test_a_video_or_an_array_that_is_not_uint8_is_named(tmp_path):
+  with pytest.raises(ValueError, match=r'image=.*clip.MP4 is a video; .*mixstereo-unmix'):
+    mixstereo_tf.unmix(str(tmp_path / 'clip.MP4'), method='classical', mixture='gray')
+  for dtype in (np.float32, np.uint16, bool):
+    with pytest.raises(ValueError, match=f'image= must be a uint8 array .*got {np.dtype(dtype)}'):
+      mixstereo_tf.unmix(np.zeros((20, 20, 3), dtype), method='classical', mixture='gray')
 
 
 def test_defaults_are_the_predictor_configs():
