@@ -123,6 +123,15 @@ def global_shift(gray: np.ndarray, min_lag: int = 2, max_lag: int = 128) -> int:
   return int(min_lag + np.argmax(cepstrum[min_lag:max_lag + 1]))
 
 
+def check_size(shape: Tuple[int, ...], config: DiplopiaConfig) -> None:
+  """ValueError naming the size of an image [H, W, ...] smaller than the ZNCC window (too
+  small to tell echoes from texture; a 1-px strip has no lag at all)."""
+  side = 2 * config.window_radius + 1
+  if shape[0] < side or shape[1] < side:
+    raise ValueError(f'a {shape[0]}x{shape[1]} image is smaller than the double-image '
+                     f"matcher's ZNCC window of {side}x{side} pixels.")
+
+
 def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray:
   """ZNCC costs of the high-passed mixture against itself, corrected for self-similarity.
 
@@ -145,19 +154,18 @@ def self_matching_volume(gray: np.ndarray, config: DiplopiaConfig) -> np.ndarray
     uint8 [H, W, D] left-referenced costs, d_i = min_disparity + i (as `sgm.cost_volume`).
 
   Raises:
-    ValueError: the image is smaller than the ZNCC window.
+    ValueError: no lag of the range fits in the image (a 1-px strip).
   """
   matching = config.matching
   height, width = gray.shape
-  side = 2 * config.window_radius + 1
-  if height < side or width < side:
-    raise ValueError(f'a {height}x{width} image is smaller than the double-image matcher\'s '
-                     f'ZNCC window of {side}x{side} pixels.')
   max_disparity = min(matching.max_disparity, width - 1)
   high = (gray - cv2.GaussianBlur(gray, (0, 0), config.highpass_sigma)).astype(np.float32)
   window = (2 * config.window_radius + 1,) * 2
   energy = cv2.boxFilter(high * high, -1, window)
   lags = np.arange(matching.min_disparity, max_disparity + 1, dtype=np.int64)
+  if not lags.size:
+    raise ValueError(f'a {height}x{width} image has no lag of [{matching.min_disparity}, '
+                     f'{matching.max_disparity}] to match (the width allows {width - 1}).')
   threads = workers.usable_cpus(0)
   blocks = workers.row_blocks(height, 4 * threads)
   stored = 4 * height * width * lags.size <= config.max_float_mib << 20
@@ -287,7 +295,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     'global_shift': int, the power-cepstrum peak, pixels; 'mixing_weight': the a used.
 
   Raises:
-    ValueError: a range with min < 1 or min >= max.
+    ValueError: a range with min < 1 or min >= max, or no lag of it within the image.
   """
   config = config or DiplopiaConfig()
   if disparity_range is not None:

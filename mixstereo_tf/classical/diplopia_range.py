@@ -39,8 +39,12 @@ def estimate_range(mixture, config: Optional[diplopia.DiplopiaConfig] = None, wi
 
   Returns:
     (min, max) ints with 1 <= min < max: the whole search when nothing is consistent.
+
+  Raises:
+    ValueError: an image smaller than the ZNCC window (`diplopia.check_size`).
   """
   config = config or diplopia.DiplopiaConfig()
+  diplopia.check_size(np.shape(mixture), config)
   gray = diplopia.gray_255(image_range.as_unit_float(mixture, 'mixture'))
   full_width = gray.shape[1]
   scale = max(1.0, full_width / width)
