@@ -50,6 +50,10 @@ def main(argv):
         progress_stream=sys.stderr)
   except ValueError as e:
     raise flag_errors.usage_error(e) from None
+  except KeyboardInterrupt:
+    logging.error('Interrupted: finished inputs are kept, and a video continues from its '
+                  'last finished segment when the same command is run again.')
+    sys.exit(130)
   logging.info('%d input(s) done, %d failed; %d frame(s) in %.2f s: %.2f frames/s '
                '(unmixing alone %.2f frames/s).', report.processed, len(report.failures),
                report.frames, report.seconds, report.frames_per_second,
