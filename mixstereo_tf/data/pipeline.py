@@ -16,6 +16,7 @@ to swap on a flip (evaluation reads it through `sources.load_sample`).
 import dataclasses
 from typing import Dict, Sequence
 
+from absl import logging
 import numpy as np
 import tensorflow as tf
 
@@ -80,13 +81,20 @@ class PipelineConfig:
       raise ValueError(f'PipelineConfig.shuffle_buffer must be >= 0, got {self.shuffle_buffer}.')
 
 
-def _load_fn(samples: Sequence[records.StereoSample]):
-  """Returns a graph function index -> dict of decoded arrays (via tf.numpy_function)."""
+def _load_fn(samples: Sequence[records.StereoSample], skipping: bool = False):
+  """Returns a graph function index -> dict of decoded arrays (via tf.numpy_function);
+  `skipping`: a pair that fails to decode is logged as skipped before its error drops it
+  (tf.data's own warning is hidden with TensorFlow's start-up noise)."""
   keys = tuple(records.LOADED_KEYS)
   dtypes = [tf.as_dtype(records.LOADED_KEYS[k]) for k in keys]
 
   def load(index):
-    loaded = sources.load_sample(samples[int(index)])
+    try:
+      loaded = sources.load_sample(samples[int(index)])
+    except ValueError as e:
+      if skipping:
+        logging.warning('Skipped a pair that does not decode (skip_bad_pairs): %s', e)
+      raise
     return [np.asarray(loaded[k], dtype=records.LOADED_KEYS[k]) for k in keys]
 
   def graph_load(index):
@@ -226,13 +234,13 @@ def train_dataset(samples: Sequence[records.StereoSample], config: PipelineConfi
   elements are list indices, nothing is decoded for them).
 
   A pair that fails to decode stops iteration with an error naming it, unless
-  `config.skip_bad_pairs`: then it is dropped with only tf.data's per-element warning, and
-  no count of such runtime failures is kept (a resumed stream then starts as many elements
+  `config.skip_bad_pairs`: then it is dropped with a logged warning naming it, each time
+  the stream reaches it (a resumed stream then starts as many elements
   late as were dropped before).
   """
   _check_samples(samples)
   samples = list(samples)
-  load = _load_fn(samples)
+  load = _load_fn(samples, config.skip_bad_pairs)
   buffer = config.shuffle_buffer or len(samples)
   ds = tf.data.Dataset.range(len(samples))
   ds = ds.shuffle(buffer, seed=config.seed, reshuffle_each_iteration=True).repeat()

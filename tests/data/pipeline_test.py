@@ -1,5 +1,7 @@
 """Tests of the tf.data pipeline on a stubbed loader with an analytic stereo scene."""
 
+import logging
+
 import numpy as np
 import pytest
 import tensorflow as tf
@@ -230,7 +232,7 @@ def test_decode_error_names_the_sample(monkeypatch):
     _take(pipeline.train_dataset(samples, _config(batch_size=1)), 1)
 
 
-def test_skip_bad_pairs_drops_failing_pairs(monkeypatch):
+def test_skip_bad_pairs_drops_failing_pairs(monkeypatch, caplog):
   def sometimes(sample):
     if sample.name == 'bad':
       raise ValueError('corrupt')
@@ -238,5 +240,7 @@ def test_skip_bad_pairs_drops_failing_pairs(monkeypatch):
   monkeypatch.setattr(sources, 'load_sample', sometimes)
   samples = [records.StereoSample(n, n, n) for n in ('good', 'bad')]
   config = _config(batch_size=1, skip_bad_pairs=True)
+  caplog.set_level(logging.WARNING)
   names = {e['name'][0].decode() for e in _take(pipeline.train_dataset(samples, config), 6)}
   assert names == {'good'}
+  assert 'Skipped a pair that does not decode (skip_bad_pairs): corrupt' in caplog.text
