@@ -65,8 +65,7 @@ _AUDIO_TAGS = ('language', 'title')
 def _copy_metadata(source, out, video, audio: Dict[int, object]) -> None:
   """The source's content tags (title, creation time, ...), its audio streams' language
   and title, and its video's sample aspect ratio (anamorphic video plays stretched
-  without it; MP4 / MOV write it, Matroska does not take it from a copied stream) onto
-  `out`'s streams."""
+  without it; the parts also encode it, `streams.VideoWriter`) onto `out`'s streams."""
   out.metadata.update({k: v for k, v in source.metadata.items() if k not in _MUXING_TAGS})
   for index, stream in audio.items():
     tags = source.streams[index].metadata

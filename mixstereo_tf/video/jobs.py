@@ -141,7 +141,8 @@ class _Segment:
     self.writers = {key: streams.VideoWriter(partial_path(_segment_path(job, key, index)),
                                               info.frame_rate, info.time_base,
                                               streams.encoder_for(
-                                                  path, job.stereo_modes.get(key)))
+                                                  path, job.stereo_modes.get(key)),
+                                              info.aspect)
                     for key, path in job.outputs.items()}
 
   def write(self, frame: streams.Frame, images: Rendered) -> None:

@@ -94,6 +94,8 @@ class VideoInfo:
     audio_streams: how many audio streams the file holds.
     turned: degrees counter-clockwise the reader turned the stored frames, so that they
       arrive as a player shows them: 90, 180 or -90 (0: as stored).
+    aspect: the sample (pixel) aspect ratio of the delivered frames, None when square or
+      unknown (anamorphic footage: e.g. 4/3 for 1440x1080 shown at 16:9).
   """
   width: int
   height: int
@@ -103,6 +105,7 @@ class VideoInfo:
   rotation: int
   audio_streams: int
   turned: int = 0
+  aspect: Optional[Fraction] = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -175,9 +178,12 @@ def open_video(path: str, skip: int = 0,
   rotation = round(getattr(first, 'rotation', 0)) or int(float(stream.metadata.get('rotate', 0)))
   turns = rotation // 90 % 4 if upright and rotation % 90 == 0 else 0
   size = (first.height, first.width) if turns % 2 else (first.width, first.height)
+  aspect = stream.sample_aspect_ratio or stream.codec_context.sample_aspect_ratio
+  aspect = (1 / Fraction(aspect) if turns % 2 else Fraction(aspect)) if aspect else None
   info = VideoInfo(*size, rate, Fraction(stream.time_base or 1 / rate), stream.frames or None,
                    0 if turns else rotation, len(container.streams.audio),
-                   turned=(rotation % 360 + 179) % 360 - 179 if turns else 0)  # (-180, 180].
+                   turned=(rotation % 360 + 179) % 360 - 179 if turns else 0,  # (-180, 180].
+                   aspect=aspect if aspect and aspect != 1 else None)
   return info, _frames(container, itertools.chain([first], decoded), rate, skip, turns)
 
 
@@ -186,13 +192,14 @@ class VideoWriter:
   path's, `encoder_for`).
 
   The size comes from the first frame; odd sizes are padded by one row / column of edge
-  replication (4:2:0 chroma needs even sizes). Timestamps are `time / time_base` rounded
-  and kept strictly increasing; AVI always counts frames (time base 1 / frame_rate).
+  replication (4:2:0 chroma needs even sizes); `aspect` is the sample aspect ratio encoded.
+  Timestamps are `time / time_base` rounded and kept strictly increasing; AVI always counts
+  frames (time base 1 / frame_rate).
   """
 
   def __init__(self, path: str, frame_rate: Fraction, time_base: Optional[Fraction] = None,
-               encoder: Optional[EncoderSettings] = None):
-    self.path = path
+               encoder: Optional[EncoderSettings] = None, aspect: Optional[Fraction] = None):
+    self.path, self.aspect = path, aspect
     self.settings = encoder or encoder_for(path)
     self.frame_rate = Fraction(frame_rate)
     frame_index = self.settings.codec == 'mjpeg' or not time_base
@@ -210,6 +217,8 @@ class VideoWriter:
     stream.width, stream.height = (size[1] + 1) // 2 * 2, (size[0] + 1) // 2 * 2
     stream.pix_fmt = self.settings.pix_fmt
     stream.time_base = stream.codec_context.time_base = self.time_base
+    if self.aspect:
+      stream.codec_context.sample_aspect_ratio = self.aspect
     self._stream, self._size = stream, size
 
   def write(self, image: np.ndarray, time: Fraction) -> None:

@@ -114,9 +114,10 @@ def test_assembly_keeps_the_sources_tags_audio_language_and_aspect(tmp_path, ext
   source = make_video(tmp_path / f'in{extension}', [pattern(i) for i in range(4)],
                       tags=tags, aspect=Fraction(4, 3))
   info, frames = read_all(source)
+  assert info.aspect == Fraction(4, 3)
   part = str(tmp_path / 'part.mov')
   with streams.VideoWriter(part, info.frame_rate, info.time_base,
-                            streams.encoder_for(source)) as writer:
+                            streams.encoder_for(source), info.aspect) as writer:
     for frame in frames:
       writer.write(frame.image, frame.time)
   output = str(tmp_path / f'out{extension}')
@@ -126,10 +127,7 @@ def test_assembly_keeps_the_sources_tags_audio_language_and_aspect(tmp_path, ext
     assert out.metadata.get('title') == 'Holiday'
     assert out.metadata.get('creation_time', '').startswith('2020-05-01')
     assert out.streams.audio[0].metadata.get('language') == 'fra'
-    # MP4 / MOV keep the source's sample aspect ratio; PyAV cannot set it on Matroska's
-    # copied stream (docs/OUTPUTS.md).
-    aspect = out.streams.video[0].sample_aspect_ratio
-    assert aspect == (Fraction(4, 3) if extension == '.mp4' else None)
+    assert out.streams.video[0].sample_aspect_ratio == Fraction(4, 3)
 
 
 def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
