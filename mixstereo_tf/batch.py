@@ -20,7 +20,6 @@ import logging as std_logging
 import os
 import sys
 
-from absl import app
 from absl import flags
 from absl import logging
 
@@ -96,7 +95,7 @@ def _parse_known_flags(argv):
 
 def run():
   """Console-script entry point (`mixstereo-batch`)."""
-  app.run(main, flags_parser=_parse_known_flags)
+  cli_flags.run_binary(main, __doc__, flags_parser=_parse_known_flags)
 
 
 if __name__ == '__main__':

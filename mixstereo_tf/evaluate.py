@@ -105,7 +105,7 @@ def main(argv):
 
 def run():
   """Console-script entry point (`mixstereo-eval`)."""
-  app.run(main)
+  cli_flags.run_binary(main, __doc__)
 
 
 if __name__ == '__main__':

@@ -15,7 +15,6 @@ classical stage (census or ZNCC costs, SGM, restoration) that is not a TensorFlo
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
 
-from absl import app  # pylint: disable=g-bad-import-order
 from absl import flags
 from absl import logging
 
@@ -89,7 +88,7 @@ def main(argv):
 
 def run():
   """Console-script entry point (`mixstereo-export`)."""
-  app.run(main)
+  cli_flags.run_binary(main, __doc__)
 
 
 if __name__ == '__main__':

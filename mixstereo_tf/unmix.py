@@ -18,7 +18,6 @@ from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: qu
 import dataclasses  # pylint: disable=g-bad-import-order
 import sys
 
-from absl import app
 from absl import flags
 from absl import logging
 
@@ -67,7 +66,7 @@ def main(argv):
 
 def run():
   """Console-script entry point (`mixstereo-unmix`)."""
-  app.run(main)
+  cli_flags.run_binary(main, __doc__)
 
 
 if __name__ == '__main__':

@@ -209,6 +209,16 @@ def require_unless_listing(*names: str) -> None:
         message=f'Flag --{name} must have a value other than None.')
 
 
+def run_binary(main, doc: str, **kwargs) -> None:
+  """`app.run(main, **kwargs)` with `doc` (the binary's module docstring) as the `--help`
+  text, also under a console-script wrapper (`mixstereo-unmix`), whose `__main__` has
+  none: absl printed a bare usage line there."""
+  module = sys.modules['__main__']
+  if not getattr(module, '__doc__', None):
+    module.__doc__ = doc
+  app.run(main, **kwargs)
+
+
 def exit_if_listing() -> None:
   """--pretrained=list: prints the shipped models (name, mixtures, recipe, held-out
   numbers) and exits."""

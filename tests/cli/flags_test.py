@@ -2,7 +2,11 @@
 
 import contextlib
 import copy
+import importlib
+import os
 import re
+import subprocess
+import sys
 
 from absl import app
 from absl import flags
@@ -88,3 +92,18 @@ def test_unmix_predictor_config_refuses_the_oracle():
     method.parse('oracle')
     with pytest.raises(ValueError, match='--method=oracle needs the clean stereo pair'):
       cli_flags.unmix_predictor_config()
+
+
+@pytest.mark.parametrize('binary', ['unmix', 'train', 'evaluate', 'export', 'batch'])
+def test_help_under_a_console_script_wrapper_shows_the_binarys_docstring(binary):
+  """A console script's `__main__` (the pip wrapper) has no docstring: absl printed a bare
+  usage line for `mixstereo-unmix --help`."""
+  module = importlib.import_module(f'mixstereo_tf.{binary}')
+  script = ('import importlib, sys\n'
+            f"sys.argv = ['mixstereo-{binary}', '--help']\n"
+            f"importlib.import_module('mixstereo_tf.{binary}').run()\n")
+  result = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          timeout=120, check=False,
+                          env=dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2'))
+  first_line = module.__doc__.strip().splitlines()[0]
+  assert first_line in result.stdout + result.stderr
