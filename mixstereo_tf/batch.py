@@ -1,7 +1,7 @@
 r"""Unmixes an archive of mixture images and videos on Apache Beam (`pip install '.[beam]'`).
 
   python -m mixstereo_tf.batch --input='scans/*.jpg' --output_dir=out --method=classical \
-      --runner=DirectRunner --direct_num_workers=2 --direct_running_mode=multi_processing
+      --mixture=auto --direct_num_workers=2 --direct_running_mode=multi_processing
 
 Inputs: `--input` (an image, folder, glob pattern or video, as for `mixstereo-unmix`) or
 `--input_list` (a text file, one path per line, on any file system Beam reads). Every

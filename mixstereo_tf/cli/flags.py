@@ -46,7 +46,9 @@ def define_mixture() -> None:
                       "(default anaglyph), or a comma-separated list ('anaglyphs' = every "
                       "anaglyph encoding) to draw one per pair from; evaluate / unmix: the "
                       "inputs', or 'auto' to detect each image's anaglyph encoding "
-                      "(default: the model's; required for --method=classical).")
+                      "(default: detected for the shipped models, a --checkpoint / "
+                      "--saved_model network's own mixture; required for "
+                      "--method=classical).")
 
 
 @functools.lru_cache(maxsize=None)
@@ -194,8 +196,9 @@ def define_predictor() -> None:
 def define_pretrained() -> None:
   """--pretrained: a shipped model by name, or 'list'."""
   flags.DEFINE_string('pretrained', None, "A model shipped with the package (--method=model "
-                      "without --checkpoint / --saved_model; default: the first that unmixes "
-                      "the mixture), a folder in its format, or 'list' to list them.")
+                      "without --checkpoint / --saved_model; default: the one marked default for "
+                      "the mixture in --pretrained=list), a folder in its format, or 'list' "
+                      "to list them.")
 
 
 def require_unless_listing(*names: str) -> None:

@@ -86,8 +86,10 @@ def reason(error: Exception) -> str:
 
 # What one input may raise without stopping the others: unreadable or malformed files
 # (ValueError, cv2.error, FFmpeg's errors), failures inside TensorFlow (e.g. an image too
-# large for memory) and file-system errors while reading or writing.
-INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError)
+# large for memory), NumPy / numba allocations too large (MemoryError) and file-system
+# errors while reading or writing.
+INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError,
+                MemoryError)
 
 
 def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,

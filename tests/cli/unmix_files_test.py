@@ -239,6 +239,25 @@ def test_an_odd_sized_video_says_its_outputs_are_padded(tmp_path):
   assert (out_info.width, out_info.height) == (48, 34)
 
 
+def test_an_input_too_large_for_memory_fails_alone(tmp_path):
+  """NumPy / numba raise MemoryError (not TensorFlow's error) for an allocation too large:
+  that input fails, the others are unmixed."""
+  def unmix(image, **hint):
+    del hint
+    if image.shape[0] == 41:
+      raise MemoryError('Unable to allocate 90.1 GiB for an array')
+    return {'left': image, 'right': image, 'info': {},
+            'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  os.makedirs(tmp_path / 'in')
+  _image(tmp_path / 'in' / 'a.png')
+  _image(tmp_path / 'in' / 'b.png', shape=(41, 50, 3))
+  report = unmix_files.unmix_inputs(predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0),
+                                    str(tmp_path / 'in'), str(tmp_path / 'out'))
+  assert report.processed == 1 and len(report.failures) == 1
+  assert report.failures[0][1] == 'MemoryError: Unable to allocate 90.1 GiB for an array'
+
+
 def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_path):
   """Videos write the views and the left disparity: each frame's hint says so, which lets a
   refiner leave out its right disparity correction (tests/unmixing/shipped_test.py)."""
