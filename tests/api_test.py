@@ -91,6 +91,10 @@ def test_a_photo_that_is_no_anaglyph_names_the_keyword():
     (dict(restore_colour='no'), 'restore_colour= must be None, True or False'),
     (dict(method='classical', mixture='diplopia', mixing_weight=1.0),
      "mixing_weight= must be None, 'auto' or a number in (0, 1)"),
+    (dict(mixture='bogus'), "mixture='bogus': Unknown mixture"),
+    (dict(model='nonexistent'), "model='nonexistent': No pretrained model"),
+    (dict(checkpoint='/nonexistent'), "checkpoint='/nonexistent': /nonexistent is neither"),
+    (dict(saved_model='/nonexistent'), "saved_model='/nonexistent': No SavedModel"),
 ])
 def test_bad_keywords_are_named(keywords, message):
   with pytest.raises(ValueError) as raised:

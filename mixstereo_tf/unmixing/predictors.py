@@ -10,6 +10,7 @@ tool uses (unmix, evaluate, benchmarks) from a `PredictorConfig`, by method:
     reference); it takes (left, right) instead of a mixture.
 """
 
+import contextlib
 from typing import Callable, Dict
 
 import tensorflow as tf
@@ -39,18 +40,32 @@ def _register(method: str):
   return add
 
 
+@contextlib.contextmanager
+def _naming(config: PredictorConfig, field: str):
+  """Re-raises a ValueError of loading `config.<field>` naming the field (the tools' flag,
+  `unmix`'s keyword), unless it already names one."""
+  try:
+    yield
+  except ValueError as e:
+    if 'PredictorConfig.' in str(e):
+      raise
+    raise ValueError(f'PredictorConfig.{field}={getattr(config, field)!r}: {e}') from None
+
+
 def _load_graph(config: PredictorConfig):
   """(uint8 graph, RunInfo) of a checkpoint or a SavedModel."""
   if bool(config.saved_model) == bool(config.checkpoint):
     raise ValueError('Give exactly one of PredictorConfig.saved_model and '
                      'PredictorConfig.checkpoint.')
   if config.saved_model:
-    loaded, run_info = serving.load_saved_model(config.saved_model)
+    with _naming(config, 'saved_model'):
+      loaded, run_info = serving.load_saved_model(config.saved_model)
     signature = loaded.signatures['serving_default']
     graph = lambda image: signature(image=image)
     graph.loaded = loaded  # Keeps the variables alive while the signature is used.
     return graph, run_info
-  model, run_info = runs.load_run(config.checkpoint)
+  with _naming(config, 'checkpoint'):
+    model, run_info = runs.load_run(config.checkpoint)
   return tf.function(graphs.serving_function(model),
                      input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)]), run_info
 
@@ -65,11 +80,13 @@ def _model(config: PredictorConfig) -> Unmixer:
       raise ValueError('PredictorConfig.restore_colour applies to a trained network '
                        '(PredictorConfig.checkpoint or PredictorConfig.saved_model), not to '
                        'the shipped models, which always restore the views.')
-    return shipped.pretrained_unmixer(pretrained.choose(config.pretrained, config.mixture),
-                                      config)
+    with _naming(config, 'pretrained' if config.pretrained else 'mixture'):
+      entry = pretrained.choose(config.pretrained, config.mixture)
+    return shipped.pretrained_unmixer(entry, config)
   if config.checkpoint and not config.saved_model:  # Checked before the model is built.
-    unmixer.check_mixture(config, runs.read_run_info(
-        runs.resolve_checkpoint(config.checkpoint)[0]).mixtures)
+    with _naming(config, 'checkpoint'):
+      trained = runs.read_run_info(runs.resolve_checkpoint(config.checkpoint)[0]).mixtures
+    unmixer.check_mixture(config, trained)
   graph, run_info = _load_graph(config)
   return unmixer.model_unmixer(graph, run_info, config)
 
@@ -137,7 +154,8 @@ def build_unmixer(config: PredictorConfig) -> Unmixer:
     raise ValueError(f'Unknown PredictorConfig.method={config.method!r}; valid: '
                      f'{", ".join(METHODS)}.')
   if config.mixture not in (None, steps.AUTO):
-    mixtures.get_mixture(config.mixture)  # ValueError listing the valid names.
+    with _naming(config, 'mixture'):
+      mixtures.get_mixture(config.mixture)  # ValueError listing the valid names.
   if config.method != 'model' and config.pretrained:
     raise ValueError("PredictorConfig.pretrained applies to method 'model' only.")
   if config.method != 'model' and config.restore_colour is not None:
