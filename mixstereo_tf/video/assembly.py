@@ -62,18 +62,14 @@ _MUXING_TAGS = ('major_brand', 'minor_version', 'compatible_brands', 'encoder')
 _AUDIO_TAGS = ('language', 'title')
 
 
-def _copy_metadata(source, out, video, audio: Dict[int, object]) -> None:
-  """The source's content tags (title, creation time, ...), its audio streams' language
-  and title, and its video's sample aspect ratio (anamorphic video plays stretched
-  without it; the parts also encode it, `streams.VideoWriter`) onto `out`'s streams."""
+def _copy_metadata(source, out, audio: Dict[int, object]) -> None:
+  """The source's content tags (title, creation time, ...) and its audio streams'
+  language and title onto `out` and its audio streams. (The video's sample aspect ratio
+  comes with the parts, which encode it: `streams.VideoWriter`.)"""
   out.metadata.update({k: v for k, v in source.metadata.items() if k not in _MUXING_TAGS})
   for index, stream in audio.items():
     tags = source.streams[index].metadata
     stream.metadata.update({k: tags[k] for k in _AUDIO_TAGS if k in tags})
-  if source.streams.video:
-    ratio = source.streams.video[0].sample_aspect_ratio
-    if ratio and ratio != 1:
-      video.sample_aspect_ratio = ratio
 
 
 def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
@@ -84,7 +80,7 @@ def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
   Packets are copied, not re-encoded: the parts must come from one encoder configuration
   (same codec parameters, checked). The video stream gets `frame_rate` and `time_base`
   (AVI: 1 / frame_rate); every audio stream of `audio_source` is copied unchanged, with
-  the source's content tags and sample aspect ratio (`_copy_metadata`); a
+  the source's content tags (`_copy_metadata`); a
   non-zero `rotation` (degrees counter-clockwise) becomes the display matrix (PyAV >= 18;
   older versions log that it is lost); `stereo_mode` (a STEREO_MODES key) tags the video
   stream (Matroska writes it as StereoMode; other containers ignore the tag).
@@ -118,7 +114,7 @@ def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
         audio = {s.index: out.add_stream_from_template(s)
                  for s in (source.streams.audio if source else ())}
         if source is not None:
-          _copy_metadata(source, out, video, audio)
+          _copy_metadata(source, out, audio)
         merged = heapq.merge(_video_packets(parts, video), _audio_packets(source, audio),
                              key=lambda item: item[0])
         for _, packet in merged:
