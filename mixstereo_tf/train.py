@@ -67,7 +67,7 @@ flags.DEFINE_enum('optimizer', _TRAIN['optimizer'], tuple(optimizers.OPTIMIZERS)
                   "1e-10); rmsprop_keras: Keras 3's RMSprop.")
 flags.DEFINE_integer('num_steps', None, 'Total optimizer steps.', lower_bound=1)
 flags.DEFINE_float('num_epochs', None, 'Epochs over the training list (instead of '
-                   '--num_steps), > 0.', lower_bound=0.0)
+                   '--num_steps), > 0.')
 flags.register_validator('num_epochs', lambda value: value is None or value > 0,
                          '--num_epochs must be positive.')
 flags.DEFINE_enum('mode', _TRAIN['mode'], objective.MODES, 'What to train.')

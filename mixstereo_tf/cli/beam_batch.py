@@ -29,8 +29,8 @@ from apache_beam.metrics.metric import MetricsFilter
 from apache_beam.options.pipeline_options import PipelineOptions
 from apache_beam.options.pipeline_options import StandardOptions
 
-from mixstereo_tf.cli import media
 from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
 
@@ -148,6 +148,7 @@ class _UnmixFn(beam.DoFn):
                options: media.OutputOptions):
     super().__init__()
     self._config, self._output_dir, self._options = config, output_dir, options
+    self._request = info_file.describe(options)  # What every input is asked for.
     self._unmixer = None
 
   def setup(self):
@@ -157,8 +158,7 @@ class _UnmixFn(beam.DoFn):
   def process(self, element: Tuple[int, str, bool, str]) -> Iterator[object]:
     index, item = element[0], media.MediaItem(*element[1:])
     info = completed_info(self._output_dir, item.name)
-    other = info and foreign_results(info, item, self._unmixer.method,
-                                     info_file.describe(self._options))
+    other = info and foreign_results(info, item, self._unmixer.method, self._request)
     if other:
       yield from _failed(index, item, other, 0.0)
       return

@@ -128,11 +128,13 @@ def _sgbm(config: PredictorConfig) -> Unmixer:
 def _oracle(config: PredictorConfig) -> Unmixer:
   if not config.checkpoint or config.saved_model:
     raise ValueError("PredictorConfig.method='oracle' needs PredictorConfig.checkpoint (a "
-                     'stereo_only or joint training run) and takes no PredictorConfig.saved_model.')
+                     'stereo_only or joint training run) and takes no '
+                     'PredictorConfig.saved_model.')
   if config.swap_eyes is not False:
     raise ValueError("PredictorConfig.swap_eyes does not apply to method 'oracle' (its "
                      'inputs are the clean pair).')
-  model, run_info = runs.load_run(config.checkpoint)
+  with _naming(config, 'checkpoint'):
+    model, run_info = runs.load_run(config.checkpoint)
   if run_info.mode == 'separation_only':
     raise ValueError(f"PredictorConfig.method='oracle' runs a checkpoint's stereo network, "
                      f'which the separation_only run {config.checkpoint} never trained.')
