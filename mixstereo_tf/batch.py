@@ -15,7 +15,6 @@ status is non-zero if any input failed. Details: mixstereo_tf/cli/beam_batch.py.
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
 
-import dataclasses  # pylint: disable=g-bad-import-order
 import logging as std_logging
 import os
 import sys
@@ -61,7 +60,7 @@ def main(argv):
     config = cli_flags.unmix_predictor_config()
     predictors.build_unmixer(config)  # A bad predictor flag fails here, not on workers.
     items = beam_batch.list_inputs(FLAGS.input, FLAGS.input_list)
-    options = cli_flags.output_options(settings=dataclasses.asdict(config))
+    options = cli_flags.output_options(config)
     pipeline_options = beam_batch.pipeline_options(argv[1:])
     media.prepare_output_dir(items, FLAGS.output_dir)
   except ValueError as e:

@@ -16,7 +16,6 @@ from the last finished segment. Outputs are described in mixstereo_tf/cli/unmix_
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
 
-import dataclasses  # pylint: disable=g-bad-import-order
 import sys
 
 from absl import flags
@@ -46,7 +45,7 @@ def main(argv):
     unmixer = predictors.build_unmixer(config)
     report = unmix_files.unmix_inputs(
         unmixer, FLAGS.input, FLAGS.output_dir,
-        cli_flags.output_options(settings=dataclasses.asdict(config)),
+        cli_flags.output_options(config),
         progress_stream=sys.stderr)
   except ValueError as e:
     raise flag_errors.usage_error(e) from None

@@ -99,9 +99,12 @@ def define_output_options() -> None:
                           '. Videos: rgbd and the anaglyphs (the others are skipped).')
 
 
-def output_options(settings: Optional[Dict[str, object]] = None) -> media.OutputOptions:
-  """`media.OutputOptions` from the flags of `define_output_options`; `settings` describes
-  the unmixer in a video job's manifest."""
+def output_options(config: Optional[predictors.PredictorConfig] = None
+                   ) -> media.OutputOptions:
+  """`media.OutputOptions` from the flags of `define_output_options`; the settings recorded
+  by video manifests and info files: `config`'s fields and `predictors.weights_identity`."""
+  settings = None if config is None else dict(
+      dataclasses.asdict(config), weights=predictors.weights_identity(config))
   return media.OutputOptions(
       layout=FLAGS.layout, max_display_disparity=FLAGS.max_display_disparity,
       video_config=jobs.VideoConfig(FLAGS.segment_frames), settings=settings,

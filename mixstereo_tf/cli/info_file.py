@@ -2,7 +2,8 @@
 
 `mixstereo-unmix` and the batch pipeline record under `request` the predictor's settings
 (`media.OutputOptions.settings`: the PredictorConfig as the flags gave it, `mixture='auto'`
-included) and how the results are written (layout, stereo formats, colour-map span). A
+included, and the identity of the weights it loads, so that a checkpoint retrained at the
+same path counts as another request) and how the results are written (layout, stereo formats, colour-map span). A
 batch run skips an input whose complete results were asked for in the same way, and
 refuses (a dead letter naming the differences) results asked for otherwise, which it would
 otherwise keep silently beside this run's.
@@ -33,12 +34,13 @@ def _flat(request: Dict[str, object]) -> Dict[str, object]:
 def differences(recorded: Optional[object], current: Dict[str, object]) -> List[str]:
   """'name: recorded -> current' for every field `current` (`describe`'s) asks otherwise
   than the `recorded` request of an info file; [] when they agree or nothing is recorded
-  (results written before requests were recorded)."""
+  (results written before requests were recorded). A field the recorded request lacks
+  (written before the field was recorded, e.g. `weights`) is not compared."""
   if not isinstance(recorded, dict):
     return []
   old, new = _flat(recorded), _flat(current)
   return [f'{key}: {old.get(key)!r} -> {new.get(key)!r}'
-          for key in sorted(set(old) | set(new)) if old.get(key) != new.get(key)]
+          for key in sorted(old) if old[key] != new.get(key)]
 
 
 def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],

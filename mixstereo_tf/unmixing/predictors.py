@@ -11,7 +11,9 @@ tool uses (unmix, evaluate, benchmarks) from a `PredictorConfig`, by method:
 """
 
 import contextlib
-from typing import Callable, Dict
+import hashlib
+import os
+from typing import Callable, Dict, Optional
 
 import tensorflow as tf
 
@@ -68,6 +70,36 @@ def _load_graph(config: PredictorConfig):
     model, run_info = runs.load_run(config.checkpoint)
   return tf.function(graphs.serving_function(model),
                      input_signature=[tf.TensorSpec([None, None, 3], tf.uint8)]), run_info
+
+
+def weights_identity(config: PredictorConfig) -> Optional[str]:
+  """'<file> sha256:<16 hex digits>' of the file that holds the weights `config` loads (a
+  checkpoint's `.index`, whose per-tensor checksums change with every retraining; a
+  SavedModel's `variables/variables.index`; a shipped or folder model's weights), or None
+  where no weights are named (the classical methods, the shipped default per mixture).
+  Recorded in a run's settings so that results of other weights at the same path are
+  told apart (`info_file`, the video jobs' manifests).
+
+  Raises:
+    ValueError: a path that holds no such file, naming the field (as loading would).
+  """
+  field = next((name for name in ('checkpoint', 'saved_model', 'pretrained')
+                if getattr(config, name)), None)
+  if field is None or (field == 'pretrained' and config.method != 'model'):
+    return None
+  with _naming(config, field):
+    if field == 'checkpoint':
+      path = runs.resolve_checkpoint(config.checkpoint)[1] + '.index'
+    elif field == 'saved_model':
+      path = os.path.join(config.saved_model, 'variables', 'variables.index')
+    else:
+      path = os.path.join(pretrained.get(config.pretrained).folder, pretrained.WEIGHTS_FILE)
+    try:
+      with open(path, 'rb') as f:
+        digest = hashlib.sha256(f.read()).hexdigest()[:16]
+    except OSError as e:
+      raise ValueError(f'cannot read {path}: {e.strerror or e}') from None
+  return f'{os.path.basename(path)} sha256:{digest}'
 
 
 @_register('model')

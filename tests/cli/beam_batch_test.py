@@ -146,6 +146,15 @@ def test_results_of_another_input_or_method_are_not_skipped_as_done(tmp_path):
   assert "mixture: 'auto' -> 'anaglyph'" in why and "output_formats: [] -> ['mpo']" in why
   assert 'remove p_info.json to redo it' in why
   assert beam_batch.foreign_results(mine, item, 'classical', now) is None  # Older infos.
+  # Other weights at the same checkpoint path; a field the old request lacks is not asked.
+  trained = info_file.describe(media.OutputOptions(settings={
+      'mixture': 'auto', 'checkpoint': 'runs/a', 'weights': 'ckpt-1.index sha256:1'}))
+  retrained = info_file.describe(media.OutputOptions(settings={
+      'mixture': 'auto', 'checkpoint': 'runs/a', 'weights': 'ckpt-1.index sha256:2'}))
+  why = beam_batch.foreign_results(dict(mine, request=trained), item, 'classical', retrained)
+  assert "weights: 'ckpt-1.index sha256:1' -> 'ckpt-1.index sha256:2'" in why
+  assert beam_batch.foreign_results(recorded, item, 'classical', dict(
+      asked, settings=dict(asked['settings'], weights=None))) is None
 
 
 def test_complete_means_the_info_and_every_file_it_lists(tmp_path):

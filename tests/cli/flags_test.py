@@ -1,8 +1,10 @@
 """Tests for mixstereo_tf.cli.flags: flags declared once, parsing and error translation."""
 
+import ast
 import contextlib
 import copy
 import importlib
+import importlib.util
 import os
 import re
 import subprocess
@@ -61,6 +63,10 @@ def test_output_format_is_repeatable_and_reaches_output_options():
     output_format.parse('mpo')
     output_format.parse('anaglyph_dubois')
     assert cli_flags.output_options().formats == ('mpo', 'anaglyph_dubois')
+    assert cli_flags.output_options().settings is None
+    settings = cli_flags.output_options(predictors.PredictorConfig(pretrained='anaglyph')).settings
+    assert settings['pretrained'] == 'anaglyph'  # The config's fields and its weights'.
+    assert settings['weights'].startswith('weights.npz sha256:')
     with pytest.raises(flags.IllegalFlagValueError, match='wiggle'):
       output_format.parse('gif')
     error = flag_errors.usage_error(ValueError("OutputOptions.formats: 'jps' twice"))
@@ -97,13 +103,15 @@ def test_unmix_predictor_config_refuses_the_oracle():
 @pytest.mark.parametrize('binary', ['unmix', 'train', 'evaluate', 'export', 'batch'])
 def test_help_under_a_console_script_wrapper_shows_the_binarys_docstring(binary):
   """A console script's `__main__` (the pip wrapper) has no docstring: absl printed a bare
-  usage line for `mixstereo-unmix --help`."""
-  module = importlib.import_module(f'mixstereo_tf.{binary}')
+  usage line for `mixstereo-unmix --help`. The docstring is read from the source: importing
+  `mixstereo_tf.unmix` here would shadow the package's `unmix` function for later tests."""
+  with open(importlib.util.find_spec(f'mixstereo_tf.{binary}').origin, encoding='utf-8') as f:
+    docstring = ast.get_docstring(ast.parse(f.read()))
   script = ('import importlib, sys\n'
             f"sys.argv = ['mixstereo-{binary}', '--help']\n"
             f"importlib.import_module('mixstereo_tf.{binary}').run()\n")
   result = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
                           timeout=120, check=False,
                           env=dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2'))
-  first_line = module.__doc__.strip().splitlines()[0]
+  first_line = docstring.strip().splitlines()[0]
   assert first_line in result.stdout + result.stderr

@@ -206,3 +206,25 @@ def test_a_separation_only_run_warns_and_is_no_oracle(tmp_path, caplog):
   assert runs.read_run_info(str(tmp_path / 'separation')).to_dict()['mode'] == (
       'separation_only')
 
+
+
+def test_weights_identity_changes_with_the_weights_at_a_path(tmp_path):
+  path = str(tmp_path / 'run')
+  make_run_dir(path, seed=1)
+  first = predictors.weights_identity(predictors.PredictorConfig(checkpoint=path))
+  assert first.startswith('ckpt-7.index sha256:') and len(first.split(':')[1]) == 16
+  assert predictors.weights_identity(predictors.PredictorConfig(
+      checkpoint=os.path.join(path, 'ckpt-7'))) == first  # The prefix names the same.
+  make_run_dir(path, seed=2)  # Retrained: other weights under the same checkpoint name.
+  assert predictors.weights_identity(predictors.PredictorConfig(checkpoint=path)) != first
+  shipped = predictors.weights_identity(predictors.PredictorConfig(pretrained='anaglyph'))
+  assert shipped.startswith('weights.npz sha256:') and shipped != predictors.weights_identity(
+      predictors.PredictorConfig(pretrained='diplopia'))
+  for config in (predictors.PredictorConfig(), predictors.PredictorConfig(
+      method='classical', mixture='anaglyph')):
+    assert predictors.weights_identity(config) is None  # No weights named.
+  with pytest.raises(ValueError, match=r"PredictorConfig.checkpoint='.*nothing': .*neither"):
+    predictors.weights_identity(predictors.PredictorConfig(checkpoint=str(tmp_path / 'nothing')))
+  with pytest.raises(ValueError, match=r"PredictorConfig.saved_model='.*': cannot read "
+                                       r'.*variables.index'):
+    predictors.weights_identity(predictors.PredictorConfig(saved_model=str(tmp_path)))
