@@ -7,8 +7,8 @@ Inputs: an image, a video (.mp4 .avi .mov .mkv), a folder of them or a glob patt
 An input that cannot be read, unmixed or written is reported with the reason and skipped;
 the others still run, and the exit status is non-zero if any failed. A progress bar with
 the measured frames per second is drawn on stderr when it is a terminal (logged otherwise).
-Videos keep their container, frame rate, timestamps and audio (copied; portrait videos
-are turned upright, other rotations kept), are
+Videos keep their container, frame rate, timestamps, audio and subtitles (copied;
+portrait videos are turned upright, other rotations kept), are
 unmixed shot by shot with the previous frame's disparity as a prior (--notemporal: frame by
 frame), and are written resumably: after Ctrl-C or a crash, the same command continues
 from the last finished segment. Outputs are described in mixstereo_tf/cli/unmix_files.py.

@@ -2,7 +2,7 @@
 
 `assemble` concatenates the parts (files of one encoder configuration, `streams.VideoWriter`)
 packet by packet, shifted by each part's start time, and interleaves the audio packets of
-a source file unchanged (no re-encode); rotation and the stereo layout become stream
+a source file and its subtitles unchanged (no re-encode); rotation and the stereo layout become stream
 metadata (`streams.STEREO_MODES`).
 """
 
@@ -42,9 +42,10 @@ def _video_packets(parts: Sequence[Part], stream) -> Iterator[Tuple[Fraction, av
         yield stamp * Fraction(packet.time_base), packet
 
 
-def _audio_packets(container, streams: Dict[int, object]
-                   ) -> Iterator[Tuple[Fraction, av.Packet]]:
-  """(decode time in seconds, packet) of the audio streams, unchanged but re-targeted."""
+def _source_packets(container, streams: Dict[int, object]
+                    ) -> Iterator[Tuple[Fraction, av.Packet]]:
+  """(decode time in seconds, packet) of the copied streams (`_COPIED`), unchanged but
+  re-targeted."""
   if not streams:
     return
   for packet in container.demux([container.streams[i] for i in streams]):
@@ -58,29 +59,41 @@ def _audio_packets(container, streams: Dict[int, object]
 
 # Container tags that describe the file's own muxing, not its content: not copied.
 _MUXING_TAGS = ('major_brand', 'minor_version', 'compatible_brands', 'encoder')
-# Stream tags copied to the output's audio streams.
-_AUDIO_TAGS = ('language', 'title')
+# Stream types copied from the source, packet by packet, with these tags.
+_COPIED = ('audio', 'subtitle')
+_STREAM_TAGS = ('language', 'title')
 
 
-def _copy_metadata(source, out, audio: Dict[int, object]) -> None:
-  """The source's content tags (title, creation time, ...) and its audio streams'
-  language and title onto `out` and its audio streams. (The video's sample aspect ratio
-  comes with the parts, which encode it: `streams.VideoWriter`.)"""
+def _copy_streams(source, out, output: str) -> Dict[int, object]:
+  """{source stream index: output stream} of the source's audio and subtitle streams, added
+  to `out` with their language and title, and the source's content tags (title, creation
+  time, ...) onto `out`; other streams (data, attachments) are logged as not copied. (The
+  video's sample aspect ratio comes with the parts, which encode it:
+  `streams.VideoWriter`.)"""
+  copied = {s.index: out.add_stream_from_template(s) for s in source.streams
+            if s.type in _COPIED}
   out.metadata.update({k: v for k, v in source.metadata.items() if k not in _MUXING_TAGS})
-  for index, stream in audio.items():
+  for index, stream in copied.items():
     tags = source.streams[index].metadata
-    stream.metadata.update({k: tags[k] for k in _AUDIO_TAGS if k in tags})
+    stream.metadata.update({k: tags[k] for k in _STREAM_TAGS if k in tags})
+  dropped = [f'#{s.index} ({s.type})' for s in source.streams
+             if s.type not in _COPIED + ('video',)]
+  if dropped:
+    logging.warning('%s: streams of %s not copied: %s.', output, source.name,
+                    ', '.join(dropped))
+  return copied
 
 
 def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
              time_base: Optional[Fraction] = None, audio_source: Optional[str] = None,
              rotation: int = 0, stereo_mode: Optional[str] = None) -> None:
-  """Writes the parts' video one after the other and the source's audio into `output`.
+  """Writes the parts' video one after the other and the source's audio and subtitles into
+  `output`.
 
   Packets are copied, not re-encoded: the parts must come from one encoder configuration
   (same codec parameters, checked). The video stream gets `frame_rate` and `time_base`
-  (AVI: 1 / frame_rate); every audio stream of `audio_source` is copied unchanged, with
-  the source's content tags (`_copy_metadata`); a
+  (AVI: 1 / frame_rate); every audio and subtitle stream of `audio_source` is copied
+  unchanged, with the source's content tags (`_copy_streams`); a
   non-zero `rotation` (degrees counter-clockwise) becomes the display matrix (PyAV >= 18;
   older versions log that it is lost); `stereo_mode` (a STEREO_MODES key) tags the video
   stream (Matroska writes it as StereoMode; other containers ignore the tag).
@@ -111,11 +124,8 @@ def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
                         'PyAV >= 18, so the output is shown unrotated.', output, rotation)
       source = av.open(audio_source) if audio_source else None
       try:
-        audio = {s.index: out.add_stream_from_template(s)
-                 for s in (source.streams.audio if source else ())}
-        if source is not None:
-          _copy_metadata(source, out, audio)
-        merged = heapq.merge(_video_packets(parts, video), _audio_packets(source, audio),
+        copied = _copy_streams(source, out, output) if source is not None else {}
+        merged = heapq.merge(_video_packets(parts, video), _source_packets(source, copied),
                              key=lambda item: item[0])
         for _, packet in merged:
           out.mux(packet)

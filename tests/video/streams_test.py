@@ -108,11 +108,40 @@ def test_parts_assembled_keep_rate_timestamps_and_audio(tmp_path, extension):
   assert audio_samples(source).shape[1] >= 20 * 4000  # 48 kHz for 20 frames at 12 fps.
 
 
+def _with_subtitles(path, output, tags):
+  """`path` remuxed into `output` with a subtitle stream (language 'deu', cues 'Hallo' at
+  0-0.2 s and 'Welt' at 0.2-0.3 s; MP4: mov_text, Matroska: SubRip) by FFmpeg, and the
+  container `tags` set again (FFmpeg's remux drops an MP4's creation_time)."""
+  srt = str(output) + '.srt'
+  with open(srt, 'w', encoding='utf-8') as f:
+    f.write('1\n00:00:00,000 --> 00:00:00,200\nHallo\n\n'
+            '2\n00:00:00,200 --> 00:00:00,300\nWelt\n')
+  codec = 'mov_text' if str(output).endswith('.mp4') else 'srt'
+  subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), '-loglevel', 'error', '-i', str(path),
+                  '-i', srt, '-map', '0', '-map', '1', '-c', 'copy', '-c:s', codec,
+                  '-metadata:s:s:0', 'language=deu'] +
+                 [arg for k, v in tags.items() for arg in ('-metadata', f'{k}={v}')] +
+                 [str(output)], check=True)
+  return str(output)
+
+
+def _subtitle_texts(path):
+  """{'language', 'texts'} of a file's first subtitle stream, texts in order."""
+  with av.open(str(path)) as container:
+    stream = container.streams.subtitles[0]
+    texts = [bytes(packet).decode('utf-8', 'replace')
+             for packet in container.demux(stream) if packet.size]
+  return stream.metadata.get('language'), texts
+
+
 @pytest.mark.parametrize('extension', ['.mp4', '.mkv'])
-def test_assembly_keeps_the_sources_tags_audio_language_and_aspect(tmp_path, extension):
+def test_assembly_keeps_the_sources_tags_audio_language_aspect_and_subtitles(tmp_path,
+                                                                              extension):
   tags = {'title': 'Holiday', 'creation_time': '2020-05-01T10:00:00.000000Z'}
-  source = make_video(tmp_path / f'in{extension}', [pattern(i) for i in range(4)],
-                      tags=tags, aspect=Fraction(4, 3))
+  source = _with_subtitles(make_video(tmp_path / f'plain{extension}',
+                                      [pattern(i) for i in range(4)], tags=tags,
+                                      aspect=Fraction(4, 3)), tmp_path / f'in{extension}',
+                           tags)
   info, frames = read_all(source)
   assert info.aspect == Fraction(4, 3)
   part = str(tmp_path / 'part.mov')
@@ -128,6 +157,10 @@ def test_assembly_keeps_the_sources_tags_audio_language_and_aspect(tmp_path, ext
     assert out.metadata.get('creation_time', '').startswith('2020-05-01')
     assert out.streams.audio[0].metadata.get('language') == 'fra'
     assert out.streams.video[0].sample_aspect_ratio == Fraction(4, 3)
+  language, texts = _subtitle_texts(output)
+  assert language == 'deu' and len(texts) == 2  # (MP4's cues carry a length prefix.)
+  assert texts[0].endswith('Hallo') and texts[1].endswith('Welt')
+  assert (language, texts) == _subtitle_texts(source)  # Packets copied unchanged.
 
 
 def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
