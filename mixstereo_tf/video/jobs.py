@@ -142,7 +142,7 @@ class _Segment:
                                               info.frame_rate, info.time_base,
                                               streams.encoder_for(
                                                   path, job.stereo_modes.get(key)),
-                                              info.aspect)
+                                              info.aspect, info.colour)
                     for key, path in job.outputs.items()}
 
   def write(self, frame: streams.Frame, images: Rendered) -> None:

@@ -33,10 +33,14 @@ DEFAULT_FRAME_RATE = Fraction(25)
 
 @dataclasses.dataclass(frozen=True)
 class EncoderSettings:
-  """How a container is encoded: codec, pixel format and codec options."""
+  """How a container is encoded: codec, pixel format, codec options, and the RGB -> YUV
+  matrix and range, both used and tagged (FFmpeg's AVColorSpace / AVColorRange numbers:
+  1 BT.709 / limited, 5 BT.601 / full)."""
   codec: str
   pix_fmt: str
   options: Tuple[Tuple[str, str], ...] = ()
+  matrix: int = 1
+  color_range: int = 1
 
 
 # H.264 at constant quality 18 (visually lossless for x264) in 4:2:0, which every player
@@ -48,11 +52,14 @@ class EncoderSettings:
 # code encodes identical frames differently from run to run (seen with libx264 core 165
 # whenever the width in macroblocks is not a multiple of 16, e.g. 96 or 1920 px), and a
 # resumed video job must re-encode its segments exactly as an uninterrupted run does.
+# Colour: BT.709 limited range, tagged (untagged 4:2:0 is read as BT.709 by most players
+# at HD sizes, where FFmpeg's default conversion wrote BT.601: green 255 showed as 215);
+# AVI's Motion JPEG is JFIF's full-range BT.601.
 _H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'veryfast'),
                                                ('x264-params', 'mbtree=0')))
 ENCODERS: Dict[str, EncoderSettings] = {
     '.mp4': _H264, '.mov': _H264, '.mkv': _H264,
-    '.avi': EncoderSettings('mjpeg', 'yuvj420p', (('qmin', '1'), ('qmax', '2'))),
+    '.avi': EncoderSettings('mjpeg', 'yuvj420p', (('qmin', '1'), ('qmax', '2')), 5, 2),
 }
 
 
@@ -96,6 +103,8 @@ class VideoInfo:
       arrive as a player shows them: 90, 180 or -90 (0: as stored).
     aspect: the sample (pixel) aspect ratio of the delivered frames, None when square or
       unknown (anamorphic footage: e.g. 4/3 for 1440x1080 shown at 16:9).
+    colour: the first frame's (primaries, transfer) tags, FFmpeg's AVColorPrimaries /
+      AVColorTransferCharacteristic numbers (2: unspecified): what its RGB values mean.
   """
   width: int
   height: int
@@ -106,6 +115,7 @@ class VideoInfo:
   audio_streams: int
   turned: int = 0
   aspect: Optional[Fraction] = None
+  colour: Tuple[int, int] = (2, 2)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -183,7 +193,8 @@ def open_video(path: str, skip: int = 0,
   info = VideoInfo(*size, rate, Fraction(stream.time_base or 1 / rate), stream.frames or None,
                    0 if turns else rotation, len(container.streams.audio),
                    turned=(rotation % 360 + 179) % 360 - 179 if turns else 0,  # (-180, 180].
-                   aspect=aspect if aspect and aspect != 1 else None)
+                   aspect=aspect if aspect and aspect != 1 else None,
+                   colour=(int(first.color_primaries), int(first.color_trc)))
   return info, _frames(container, itertools.chain([first], decoded), rate, skip, turns)
 
 
@@ -192,14 +203,16 @@ class VideoWriter:
   path's, `encoder_for`).
 
   The size comes from the first frame; odd sizes are padded by one row / column of edge
-  replication (4:2:0 chroma needs even sizes); `aspect` is the sample aspect ratio encoded.
+  replication (4:2:0 chroma needs even sizes); `aspect` is the sample aspect ratio encoded,
+  `colour` the (primaries, transfer) tagged (`VideoInfo.colour`: the frames' RGB as read).
   Timestamps are `time / time_base` rounded and kept strictly increasing; AVI always counts
   frames (time base 1 / frame_rate).
   """
 
   def __init__(self, path: str, frame_rate: Fraction, time_base: Optional[Fraction] = None,
-               encoder: Optional[EncoderSettings] = None, aspect: Optional[Fraction] = None):
-    self.path, self.aspect = path, aspect
+               encoder: Optional[EncoderSettings] = None, aspect: Optional[Fraction] = None,
+               colour: Tuple[int, int] = (2, 2)):
+    self.path, self.aspect, self.colour = path, aspect, colour
     self.settings = encoder or encoder_for(path)
     self.frame_rate = Fraction(frame_rate)
     frame_index = self.settings.codec == 'mjpeg' or not time_base
@@ -216,6 +229,9 @@ class VideoWriter:
                                         options=dict(self.settings.options))
     stream.width, stream.height = (size[1] + 1) // 2 * 2, (size[0] + 1) // 2 * 2
     stream.pix_fmt = self.settings.pix_fmt
+    stream.codec_context.colorspace = self.settings.matrix
+    stream.codec_context.color_range = self.settings.color_range
+    stream.codec_context.color_primaries, stream.codec_context.color_trc = self.colour
     stream.time_base = stream.codec_context.time_base = self.time_base
     if self.aspect:
       stream.codec_context.sample_aspect_ratio = self.aspect
@@ -233,7 +249,9 @@ class VideoWriter:
     # `padded` must outlive the encode call: PyAV may wrap the array without copying it.
     padded = np.ascontiguousarray(np.pad(image, pad, 'edge'))
     frame = av.VideoFrame.from_ndarray(padded, format='rgb24')
-    frame = frame.reformat(format=self.settings.pix_fmt)  # The encoder's pixel format.
+    frame = frame.reformat(format=self.settings.pix_fmt,  # The encoder's, as tagged.
+                           dst_colorspace=self.settings.matrix,
+                           dst_color_range=self.settings.color_range)
     pts = round(Fraction(time) / self.time_base)
     if self._last_pts is not None:
       pts = max(pts, self._last_pts + 1)

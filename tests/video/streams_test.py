@@ -163,6 +163,33 @@ def test_assembly_keeps_the_sources_tags_audio_language_aspect_and_subtitles(tmp
   assert (language, texts) == _subtitle_texts(source)  # Packets copied unchanged.
 
 
+@pytest.mark.parametrize('extension', ['.mp4', '.avi'])
+def test_writer_tags_the_matrix_it_uses_and_passes_primaries_on(tmp_path, extension):
+  """Untagged 4:2:0 is read as BT.709 by players at HD sizes, where FFmpeg's default RGB
+  conversion wrote BT.601 (green 255 showed as 215): the pixels must match their tags."""
+  bars = np.zeros((32, 128, 3), np.uint8)
+  for i, colour in enumerate([(255, 0, 0), (0, 255, 0), (0, 0, 255), (255, 255, 0),
+                              (0, 255, 255), (255, 0, 255), (128, 64, 32), (200, 200, 200)]):
+    bars[:, 16 * i:16 * (i + 1)] = colour
+  path = str(tmp_path / f'bars{extension}')
+  settings = streams.encoder_for(path)
+  with streams.VideoWriter(path, Fraction(10), colour=(1, 1)) as writer:
+    for index in range(2):
+      writer.write(bars, Fraction(index, 10))
+  with av.open(path) as container:
+    context = container.streams.video[0].codec_context
+    assert (context.colorspace, context.color_range) == (settings.matrix,
+                                                         settings.color_range)
+    frame = next(container.decode(video=0))
+    as_tagged = frame.to_ndarray(format='rgb24')
+    assumed = frame.reformat(format='rgb24', src_colorspace='ITU709' if extension == '.mp4'
+                             else 'ITU601').to_ndarray()  # What players assume untagged.
+  for decoded in (as_tagged, assumed):
+    assert np.abs(decoded[:, 2:-2].astype(int) - bars[:, 2:-2]).max() <= 4
+  info, _ = read_all(path)
+  assert info.colour == ((1, 1) if extension == '.mp4' else (2, 2))  # AVI holds no tags.
+
+
 def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
   rate = Fraction(30000, 1001)
   source = make_video(tmp_path / 'in.mp4', [pattern(i, 34, 48) for i in range(6)], rate,
