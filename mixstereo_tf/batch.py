@@ -67,6 +67,10 @@ def main(argv):
     raise flag_errors.usage_error(e) from None
   logging.info('%d input(s) to %s.', len(items), FLAGS.output_dir)
   std_logging.getLogger('apache_beam').setLevel(std_logging.WARNING)  # Runner chatter.
+  # The local runner's workers in other processes write their log to this stderr, and its
+  # job service relays each line again: relayed lines are dropped.
+  std_logging.getLogger('apache_beam.runners.portability.local_job_service').setLevel(
+      std_logging.CRITICAL)
   try:
     counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
   except (KeyboardInterrupt, RuntimeError) as e:  # Beam re-raises Ctrl-C as RuntimeError.

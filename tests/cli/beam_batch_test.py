@@ -187,9 +187,12 @@ def test_binary_on_an_input_list(tmp_path):
   result = subprocess.run(
       [sys.executable, '-m', 'mixstereo_tf.batch', '--method=classical', '--mixture=anaglyph',
        '--disparity_range=0,8', f'--input_list={tmp_path / "list.txt"}',
-       f'--output_dir={tmp_path / "out"}', '--layout=tb', '--direct_num_workers=1'],
+       f'--output_dir={tmp_path / "out"}', '--layout=tb', '--direct_num_workers=2',
+       '--direct_running_mode=multi_processing'],
       capture_output=True, text=True, env=env, cwd=REPO, timeout=300, check=False)
   assert result.returncode == 1, result.stderr[-3000:]
+  # Logged once: by the worker process, not relayed again by the runner's job service.
+  assert result.stderr.count(f'failed {folder / "broken.png"}') == 1, result.stderr[-3000:]
   assert (f'error: 1 of 2 input(s) failed: see {tmp_path / "out" / beam_batch.DEAD_LETTERS}'
           in result.stderr)
   assert '1 input(s) done, 0 skipped' in result.stderr
