@@ -45,6 +45,7 @@ from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.unmixing import steps
 from mixstereo_tf.video import streams
 
 
@@ -77,11 +78,15 @@ def failure_message(report: UnmixReport) -> Optional[str]:
 
 def reason(error: Exception) -> str:
   """A one-line reason for a failed input (TensorFlow messages can span many lines),
-  naming the predictor flags (`--mixture`) instead of PredictorConfig fields."""
+  naming the predictor flags (`--mixture`) instead of PredictorConfig fields, and the
+  package's own error classes by their built-in base (`ValueError`)."""
   message = error.message if isinstance(error, tf.errors.OpError) else str(error)
   lines = message.strip().splitlines()
   line = flag_errors.flag_names(lines[0], known=cli_flags.PREDICTOR_FLAGS) if lines else ''
-  return f'{type(error).__name__}: {line}'
+  kind = type(error)
+  while kind.__module__.startswith('mixstereo_tf.'):  # The package's own: by their base.
+    kind = kind.__base__
+  return f'{kind.__name__}: {line}'
 
 
 # What one input may raise without stopping the others: unreadable or malformed files
@@ -124,12 +129,15 @@ def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: s
   """
   request = info_file.describe(options)
   if item.is_video:
+    opened = ({} if options.max_display_disparity and unmixer.mixture != steps.AUTO
+              else video_files.opening(unmixer, item.path))
     display = ((0.0, float(options.max_display_disparity)) if options.max_display_disparity
-               else video_files.display_range(unmixer, item.path))
+               else video_files.display_range(unmixer, opened))
     return video_files.unmix_video(
         unmixer, item, output_dir, options.layout, display,
         options.settings or video_files.default_settings(unmixer), options.video_config,
-        progress_stream, report, options.temporal_config, options.formats, request)
+        progress_stream, report, options.temporal_config, options.formats, request,
+        opened.get('mixture'))
   return _unmix_image(unmixer, item, output_dir, options.layout,
                       options.max_display_disparity, report, options.formats, request)
 

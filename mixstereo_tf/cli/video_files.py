@@ -19,6 +19,7 @@ from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.unmixing import steps
 from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import streams
@@ -81,18 +82,20 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
                 layout: str, display: Tuple[float, float], settings: Dict[str, object],
                 video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
                 report, temporal_config: temporal.TemporalConfig,
-                formats: Tuple[str, ...] = (), request: Optional[Dict] = None) -> int:
+                formats: Tuple[str, ...] = (), request: Optional[Dict] = None,
+                fallback: Optional[str] = None) -> int:
   """Unmixes every frame of a video into layout, disparity and `formats` videos
   (resumable, see `video.jobs`; side-by-side and top-bottom ones tagged as such), writes
   `<name>_info.json` (with `request`); returns the frames unmixed in this run. `report`
-  (`unmix_files.UnmixReport`) gains the seconds spent unmixing.
+  (`unmix_files.UnmixReport`) gains the seconds spent unmixing; `fallback`: the encoding
+  frames with no anaglyph found are read as until a shot finds one (`opening`).
 
   Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
   encoding, range and prior; each segment's first frame starts a shot), a shot's frames
   side by side (`frame_pipeline`); their images are drawn and written in order on the
   writer's thread."""
   start = time.perf_counter()
-  shots = temporal.VideoState(temporal_config)
+  shots = temporal.VideoState(temporal_config, fallback)
   outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
   state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
   pipeline = frame_pipeline.FramePipeline(unmixer, shots)
@@ -138,16 +141,45 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
   return state['rendered']
 
 
-def display_range(unmixer: predictors.Unmixer, path: str) -> Tuple[float, float]:
-  """A video's colour-map (low, high): the disparity range its first frame is searched
-  over (one extra unmixing of that frame; the same on every run, so a resumed job colours
-  its frames as the first run did). Later shots beyond it are clipped."""
+# A video's frames searched for its first anaglyph ('auto'): every SCAN_STRIDE-th of the
+# first SCAN_FRAMES (a minute at 25 frames/s, five a second).
+SCAN_FRAMES, SCAN_STRIDE = 1500, 5
+
+
+def opening(unmixer: predictors.Unmixer, path: str) -> Dict[str, object]:
+  """The info of unmixing a video's first frame, or with `unmixer.mixture` 'auto' its
+  first frame in which detection finds an anaglyph (`SCAN_STRIDE`, `SCAN_FRAMES`): the
+  black frames, fades or titles before it are read as its encoding
+  (`temporal.VideoState.fallback_mixture`).
+
+  Raises:
+    ValueError: no frame of those scanned shows an anaglyph, naming the video.
+  """
   _, frames = streams.open_video(path)
+  last = None
   try:
-    first = next(frames).image
+    for index, frame in enumerate(frames):
+      if index % SCAN_STRIDE and unmixer.mixture == steps.AUTO:
+        continue
+      try:
+        return unmixer(frame.image).get('info', {})
+      except steps.NoAnaglyphError as e:
+        if index + SCAN_STRIDE >= SCAN_FRAMES:
+          raise ValueError(f'No frame of the first {SCAN_FRAMES} of {path} looks like an '
+                           f'anaglyph ({e}); name its mixture (--mixture).') from None
+        last = e
   finally:
     frames.close()
-  searched = unmixer(first).get('info', {}).get('disparity_range')
+  raise ValueError(f'No frame of {path} looks like an anaglyph ({last}); name its mixture '
+                   '(--mixture).')
+
+
+def display_range(unmixer: predictors.Unmixer, opened: Dict[str, object]
+                  ) -> Tuple[float, float]:
+  """A video's colour-map (low, high): the disparity range searched in its `opening` frame
+  (the same on every run, so a resumed job colours its frames as the first run did). Later
+  shots beyond it are clipped."""
+  searched = opened.get('disparity_range')
   low, high = searched if searched else (0.0, unmixer.max_disparity)
   return float(low), float(max(high, low + 1))
 

@@ -33,6 +33,9 @@ class FrameHint:
     matcher_strips: the anaglyph matcher's SGM strips (`MatcherConfig.strips`), for its
       range estimation and its matching; None: its own (they follow the core count, and
       the aggregation differs near strip borders); 1: the same result on every machine.
+    fallback_mixture: 'auto' only: the encoding a frame in which detection finds no anaglyph
+      is read as (`steps.resolve_mixture`): the video's last shot's, or the first frame's
+      with one (black frames, fades, titles); None: such a frame fails.
     mixing_weight: double images: the left view's weight a of I = a L + (1 - a) R; None:
       1/2 (`--mixture=diplopia` exactly); 'auto': estimated from the frame; a number in
       (0, 1): that weight (`classical.diplopia_layers.resolve_weight`).
@@ -56,6 +59,7 @@ class FrameHint:
   prior_window: Optional[Tuple[int, int]] = None
   full_search_cells: Optional[int] = None
   matcher_strips: Optional[int] = None
+  fallback_mixture: Optional[str] = None
   mixing_weight: Union[None, float, str] = None
   unread: Optional[str] = None
   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None

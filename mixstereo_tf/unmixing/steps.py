@@ -75,8 +75,13 @@ def _detection_info(found: detection.Detection) -> Dict[str, object]:
   return info
 
 
+class NoAnaglyphError(ValueError):
+  """'auto' found no anaglyph in an image (or it is too small to tell) and has no fallback."""
+
+
 def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
-                    weighted: bool = False) -> Tuple[str, Dict[str, object]]:
+                    weighted: bool = False, fallback: Optional[str] = None
+                    ) -> Tuple[str, Dict[str, object]]:
   """(encoding to unmix with, detection info) for an image.
 
   Args:
@@ -86,26 +91,32 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
       (`families.undetectable`: a double image model's 'diplopia').
     allowed: the encodings the predictor can unmix.
     weighted: a mixing weight was given (only weighted encodings take one).
+    fallback: for 'auto', the encoding an image with no anaglyph found (or too small to
+      tell) is read as: a video's (`hints.FrameHint.fallback_mixture`: black frames, fades).
 
   Raises:
-    ValueError: 'auto' on an image that is not an anaglyph or too small to tell, or an
-      encoding outside `allowed`.
+    NoAnaglyphError: 'auto' on an image that is not an anaglyph or too small to tell.
+    ValueError: an encoding outside `allowed`.
   """
   try:
     found = detection.detect(image)
   except ValueError as e:  # Too small or thin to detect: a named mixture needs no check.
+    if requested == AUTO and not fallback:
+      raise NoAnaglyphError(str(e)) from None
     if requested == AUTO:
-      raise
+      return fallback, {'detected': None, 'detection': str(e), 'read_as': fallback}
     return families.allowed_name(requested, allowed), {'detected': None, 'detection': str(e)}
   info = _detection_info(found)
   if requested == AUTO:
-    fallback = families.undetectable(allowed, weighted)
-    if found.name is None and fallback:
-      why = 'a mixing weight given' if weighted else 'the only encoding this predictor takes'
-      return fallback, dict(info, read_as=f'{fallback}: no anaglyph found, {why}')
+    only = families.undetectable(allowed, weighted)
+    if found.name is None and (only or fallback):
+      why = ('a mixing weight given' if weighted else 'the only encoding this predictor '
+             'takes') if only else "the video's encoding"
+      return only or fallback, dict(info, read_as=f'{only or fallback}: no anaglyph found, '
+                                    f'{why}')
     if found.name is None:
-      raise ValueError(f'This image does not look like an anaglyph ({found.reason}); name '
-                       'its mixture (e.g. PredictorConfig.mixture=diplopia).')
+      raise NoAnaglyphError(f'This image does not look like an anaglyph ({found.reason}); '
+                            'name its mixture (e.g. PredictorConfig.mixture=diplopia).')
     name = found.name
     if found.also_fits:
       info['also_fits'] = found.also_fits
@@ -278,7 +289,7 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
       name, info = _settle(image, name, info, hint.may_be)
   else:
     name, info = resolve_mixture(image, requested_mixture, allowed,
-                                 hint.mixing_weight is not None)
+                                 hint.mixing_weight is not None, hint.fallback_mixture)
     if hint.mixing_weight is not None and not families.of(name).weighted:
       info['mixing_weight_unused'] = hint.mixing_weight
       logging.warning('The mixing weight %s is not used: a %s mixture has none (double '

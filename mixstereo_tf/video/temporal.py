@@ -137,10 +137,14 @@ class VideoState:
     frames: frames begun so far.
     shot_starts: the indices of the frames that started a shot (0 first).
     cuts: the indices of the frames where the histograms found a scene cut.
+    fallback_mixture: the encoding a frame with no anaglyph detected is read as
+      (`hints.FrameHint.fallback_mixture`): the one given (a video's first frame found
+      with an anaglyph), then each shot's as it is found; None: such frames fail.
   """
 
-  def __init__(self, config: TemporalConfig = TemporalConfig()):
-    self.config = config
+  def __init__(self, config: TemporalConfig = TemporalConfig(),
+               fallback_mixture: Optional[str] = None):
+    self.config, self.fallback_mixture = config, fallback_mixture
     self.frames = 0
     self.shot_starts: List[int] = []
     self.cuts: List[int] = []
@@ -155,7 +159,7 @@ class VideoState:
     if not self.config.enabled:
       self.shot_starts.append(self.frames)
       self.frames += 1
-      return hints.FrameHint()
+      return hints.FrameHint(fallback_mixture=self.fallback_mixture)
     histograms = colour_histograms(image, self.config)
     found = self._histograms is not None and (
         histogram_distance(self._histograms, histograms) > self.config.cut_threshold)
@@ -178,7 +182,8 @@ class VideoState:
                      swap_eyes=self._shot.get('swap_eyes'), prior=prior,
                      prior_window=(self.config.prior_radius, self.config.prior_spread),
                      full_search_cells=self.config.first_frame_cells if starts else None,
-                     mixing_weight=self._shot.get('mixing_weight'))
+                     mixing_weight=self._shot.get('mixing_weight'),
+                     fallback_mixture=self.fallback_mixture)
 
   def end(self, outputs: Dict[str, object]) -> None:
     """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range,
@@ -187,9 +192,11 @@ class VideoState:
     'disparity_left' as the next frame's prior, NaN where its 'consistent_left' (when
     given) says the match failed the left-right check: there the next frame searches the
     valid prior's range nearby (or everything), so a wrong disparity is not inherited."""
+    info = outputs.get('info', {})
+    if info.get('detected') and info.get('mixture'):
+      self.fallback_mixture = info['mixture']  # The latest encoding found in the video.
     if not self.config.enabled:
       return
-    info = outputs.get('info', {})
     if not self._shot and 'mixture' in info:
       search = info.get('disparity_range')
       self._shot = {'mixture': info['mixture'], 'may_be': info.get('also_fits'),

@@ -25,6 +25,7 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import unmixer
 from mixstereo_tf.video import jobs
+from mixstereo_tf.video import temporal
 from tests.unmixing import predictors_test
 from tests.video import streams_test
 
@@ -115,11 +116,12 @@ def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
   assert '1 of 1 input(s) failed' in unmix_files.failure_message(report)
 
 
-def _anaglyph_clip(path, mixture, frames=24, rotation=0):
+def _anaglyph_clip(path, mixture, frames=24, rotation=0, black=()):
   """A stereo clip (a textured plane 3 px behind a box 6 px, both moving) encoded as
   `mixture` anaglyph frames, with a sine audio track; returns the path. With `rotation`
   (degrees counter-clockwise, a multiple of 90) the frames are stored turned back by it
-  and the display matrix turns them upright, as a phone filming in portrait stores them."""
+  and the display matrix turns them upright, as a phone filming in portrait stores them.
+  The frames of `black` (indices) are black."""
   texture = cv2.resize(np.random.RandomState(4).rand(20, 60, 3).astype(np.float32), (240, 64),
                        interpolation=cv2.INTER_CUBIC)
   images = []
@@ -133,6 +135,8 @@ def _anaglyph_clip(path, mixture, frames=24, rotation=0):
                          image_range.u8_to_signed(right_u8))
     images.append(np.ascontiguousarray(np.rot90(image_range.signed_to_u8(mixed.numpy()),
                                                 -(rotation // 90))))
+    if index in black:
+      images[-1][:] = 0
   return streams_test.make_video(path, images, rotation=rotation)
 
 
@@ -309,6 +313,34 @@ def test_an_input_that_is_no_anaglyph_names_the_flag(tmp_path):
   reason = report.failures[0][1]
   assert reason.startswith('ValueError: This image does not look like an anaglyph')
   assert '(e.g. --mixture=diplopia)' in reason and 'PredictorConfig' not in reason
+
+
+@pytest.mark.parametrize('temporal_on', [True, False])
+def test_black_frames_of_a_video_take_its_detected_encoding(tmp_path, temporal_on):
+  """A fade from black, a black pause: detection finds no anaglyph there, and the whole
+  video failed. They are read as the video's encoding, found further on."""
+  source = _anaglyph_clip(tmp_path / 'clip.mp4', 'gray', frames=30,
+                          black=set(range(8)) | {15, 16, 17})
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='auto', disparity_range=(0, 8)))
+  report = unmix_files.unmix_inputs(
+      unmixer, source, str(tmp_path / 'out'),
+      media.OutputOptions(temporal_config=temporal.TemporalConfig(enabled=temporal_on)))
+  assert (report.processed, report.frames, report.failures) == (1, 30, [])
+  info = json.loads((tmp_path / 'out' / 'clip_info.json').read_text())
+  assert info['mixture'] == 'gray' and info['detected'] is None  # The first frame: black.
+  assert info['read_as'] == "gray: no anaglyph found, the video's encoding"
+  _, frames = streams_test.read_all(tmp_path / 'out' / 'clip_left.mp4')
+  assert len(frames) == 30 and frames[3].image.max() < 24  # Black stays black.
+  assert frames[10].image.mean() > 60
+
+
+def test_a_video_without_any_anaglyph_names_itself(tmp_path):
+  source = _anaglyph_clip(tmp_path / 'dark.mp4', 'gray', frames=6, black=set(range(6)))
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='auto'))
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'out'))
+  assert report.processed == 0
+  assert f'No frame of {source} looks like an anaglyph' in report.failures[0][1]
 
 
 def test_inputs_sharing_a_stem_keep_their_own_outputs(setup, tmp_path):

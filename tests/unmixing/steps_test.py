@@ -36,8 +36,22 @@ def test_auto_on_a_half_colour_anaglyph_records_and_warns_that_colour_fits_too(m
 
 def test_auto_refuses_a_plain_photo_with_a_clear_message():
   left, _, _ = detection_test._pair()  # pylint: disable=protected-access
-  with pytest.raises(ValueError, match='does not look like an anaglyph.*name its mixture'):
+  with pytest.raises(steps.NoAnaglyphError,
+                     match='does not look like an anaglyph.*name its mixture'):
     steps.resolve_mixture(left, 'auto', mixtures.ANAGLYPH_NAMES)
+
+
+def test_auto_reads_a_frame_without_an_anaglyph_as_the_videos_encoding():
+  left, _, _ = detection_test._pair()  # pylint: disable=protected-access
+  for frame in (left, np.zeros_like(left), np.zeros((4, 4, 3), np.uint8)):  # Too small.
+    name, info = steps.resolve_mixture(frame, 'auto', mixtures.ANAGLYPH_NAMES,
+                                       fallback='dubois')
+    assert name == 'dubois' and info['detected'] is None and 'dubois' in info['read_as']
+  image, _ = _anaglyph('gray')  # A frame that shows its own encoding keeps it.
+  assert steps.resolve_mixture(image, 'auto', mixtures.ANAGLYPH_NAMES,
+                               fallback='dubois')[0] == 'gray'
+  with pytest.raises(steps.NoAnaglyphError, match='too small|at least'):
+    steps.resolve_mixture(np.zeros((4, 4, 3), np.uint8), 'auto', mixtures.ANAGLYPH_NAMES)
 
 
 def test_auto_reads_a_plain_image_as_the_double_image_a_predictor_expects():
