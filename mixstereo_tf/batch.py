@@ -54,6 +54,7 @@ flags.register_multi_flags_validator(
 
 
 def main(argv):
+  flag_errors.refuse_arguments(argv, 'input', passed_on=True)  # Others: Beam's options.
   cli_flags.exit_if_listing()
   device.log_line()
   try:

@@ -15,7 +15,6 @@ import dataclasses
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
 
-from absl import app  # pylint: disable=g-bad-import-order
 from absl import flags
 from absl import logging
 
@@ -63,8 +62,7 @@ def _depth_caps():
 
 
 def main(argv):
-  if len(argv) > 1:
-    raise app.UsageError(f'Unexpected arguments: {argv[1:]}')
+  flag_errors.refuse_arguments(argv)
   cli_flags.exit_if_listing()
   device.log_line()
   try:

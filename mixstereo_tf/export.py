@@ -67,7 +67,7 @@ def _model_and_info():
 
 
 def main(argv):
-  del argv
+  flag_errors.refuse_arguments(argv)
   cli_flags.exit_if_listing()
   device.log_line()
   try:

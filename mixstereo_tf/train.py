@@ -191,7 +191,7 @@ def _op_error_line(error: tf.errors.OpError) -> str:
 
 
 def main(argv):
-  del argv
+  flag_errors.refuse_arguments(argv)
   device.log_line()
   if FLAGS.architecture in stage_training.TRAINERS:
     stage_training.TRAINERS[FLAGS.architecture]()

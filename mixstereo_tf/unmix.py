@@ -37,7 +37,7 @@ cli_flags.define_output_options()
 
 
 def main(argv):
-  del argv
+  flag_errors.refuse_arguments(argv, 'input')
   cli_flags.exit_if_listing()
   device.log_line()
   try:

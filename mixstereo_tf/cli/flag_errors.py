@@ -43,3 +43,18 @@ def flag_names(message: str, renamed: Optional[Dict[str, str]] = None,
 def usage_error(error: Exception, renamed: Optional[Dict[str, str]] = None) -> app.UsageError:
   """A UsageError whose message names flags instead of config fields (`flag_names`)."""
   return app.UsageError(flag_names(str(error), renamed))
+
+
+def refuse_arguments(argv, glob_flag: Optional[str] = None, passed_on: bool = False) -> None:
+  """Raises app.UsageError naming the arguments after the program name in `argv` that no
+  flag took (`--input glob/*.png` unquoted: the shell expands the glob, the flag takes the
+  first file and the others were ignored); `glob_flag` names the flag to quote.
+  `passed_on`: `argv` keeps options for another parser (Beam's), so a value after an
+  option without '=' (`--runner X`) is that option's."""
+  extra = [arg for index, arg in enumerate(argv[1:]) if not arg.startswith('-') and not (
+      passed_on and index and argv[index].startswith('-') and '=' not in argv[index])]
+  if extra:
+    hint = (f"; quote a pattern so that the shell does not expand it (--{glob_flag}='dir/*"
+            f".png') or give a folder" if glob_flag else '')
+    raise app.UsageError(f'Unexpected argument(s), taken by no flag: '
+                         f'{" ".join(extra[:5])}{" ..." if len(extra) > 5 else ""}{hint}.')

@@ -1,6 +1,8 @@
 """Tests for mixstereo_tf.cli.flag_errors: config fields in errors become the flags typed."""
 
+from absl import app
 from absl import flags
+import pytest
 
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
@@ -23,3 +25,17 @@ def test_flag_names_translates_only_known_flags():
       "--mixture=x; --method='model'; VideoConfig.enabled.")
   cli_flags.define_predictor()
   assert all(name in flags.FLAGS for name in cli_flags.PREDICTOR_FLAGS)
+
+
+def test_arguments_no_flag_took_are_refused_naming_them():
+  flag_errors.refuse_arguments(['mixstereo-unmix'])
+  flag_errors.refuse_arguments(['mixstereo-batch', '--runner', 'DirectRunner'], 'input',
+                               passed_on=True)  # A Beam option's value.
+  with pytest.raises(app.UsageError, match=r"taken by no flag: g/b.png g/c.png; quote a "
+                                           r"pattern .*--input='dir/\*.png'"):
+    flag_errors.refuse_arguments(['mixstereo-unmix', 'g/b.png', 'g/c.png'], 'input')
+  with pytest.raises(app.UsageError, match=r'taken by no flag: g/b.png\.$'):
+    flag_errors.refuse_arguments(['mixstereo-batch', '--runner=DirectRunner', 'g/b.png'],
+                                 passed_on=True)
+  with pytest.raises(app.UsageError, match=r'a1 a2 a3 a4 a5 \.\.\.\.'):
+    flag_errors.refuse_arguments(['train'] + [f'a{i}' for i in range(1, 8)])
