@@ -45,7 +45,6 @@ from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.unmixing import predictors
-from mixstereo_tf.unmixing import steps
 from mixstereo_tf.video import streams
 
 
@@ -129,15 +128,13 @@ def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: s
   """
   request = info_file.describe(options)
   if item.is_video:
-    opened = ({} if options.max_display_disparity and unmixer.mixture != steps.AUTO
-              else video_files.opening(unmixer, item.path))
+    opened = video_files.opening(unmixer, item.path)
     display = ((0.0, float(options.max_display_disparity)) if options.max_display_disparity
                else video_files.display_range(unmixer, opened))
     return video_files.unmix_video(
         unmixer, item, output_dir, options.layout, display,
         options.settings or video_files.default_settings(unmixer), options.video_config,
-        progress_stream, report, options.temporal_config, options.formats, request,
-        opened.get('mixture'))
+        progress_stream, report, options.temporal_config, options.formats, request, opened)
   return _unmix_image(unmixer, item, output_dir, options.layout,
                       options.max_display_disparity, report, options.formats, request)
 

@@ -83,19 +83,22 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
                 video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
                 report, temporal_config: temporal.TemporalConfig,
                 formats: Tuple[str, ...] = (), request: Optional[Dict] = None,
-                fallback: Optional[str] = None) -> int:
+                opened: Optional[Dict[str, object]] = None) -> int:
   """Unmixes every frame of a video into layout, disparity and `formats` videos
   (resumable, see `video.jobs`; side-by-side and top-bottom ones tagged as such), writes
   `<name>_info.json` (with `request`); returns the frames unmixed in this run. `report`
-  (`unmix_files.UnmixReport`) gains the seconds spent unmixing; `fallback`: the encoding
-  frames with no anaglyph found are read as until a shot finds one (`opening`).
+  (`unmix_files.UnmixReport`) gains the seconds spent unmixing; `opened`: the `opening`
+  frame's info, whose encoding frames with no anaglyph found are read as until a shot
+  finds one, and which the info file holds when this run unmixes no frame (a job resumed
+  after its last segment).
 
   Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
   encoding, range and prior; each segment's first frame starts a shot), a shot's frames
   side by side (`frame_pipeline`); their images are drawn and written in order on the
   writer's thread."""
   start = time.perf_counter()
-  shots = temporal.VideoState(temporal_config, fallback)
+  opened = opened or {}
+  shots = temporal.VideoState(temporal_config, opened.get('mixture'))
   outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
   state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
   pipeline = frame_pipeline.FramePipeline(unmixer, shots)
@@ -129,7 +132,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
       state['bar'].close()
   info = done['info']
   info_file.write_info(output_dir, item, dict(
-      state['info'] or {}, frames=done['frames'], resumed_frames=done['resumed_frames'],
+      state['info'] or opened, frames=done['frames'], resumed_frames=done['resumed_frames'],
       frame_rate=str(info.frame_rate), rotation=info.rotation, turned_upright=info.turned,
       display_range=[round(v, 3) for v in display],
       temporal=temporal_config.enabled,

@@ -335,6 +335,32 @@ def test_black_frames_of_a_video_take_its_detected_encoding(tmp_path, temporal_o
   assert frames[10].image.mean() > 60
 
 
+def test_a_video_resumed_after_its_last_segment_records_what_was_done(tmp_path,
+                                                                     monkeypatch):
+  """Writing failed after every segment was done (a full disk): the rerun only assembles,
+  and its info file still says how the video was unmixed."""
+  source = _anaglyph_clip(tmp_path / 'clip.mp4', 'gray', frames=12)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='auto', disparity_range=(0, 8)))
+  options = media.OutputOptions(video_config=jobs.VideoConfig(segment_frames=6))
+  first = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'once'), options)
+  expected = json.loads((tmp_path / 'once' / 'clip_info.json').read_text())
+  assemble = jobs.assembly.assemble
+
+  def disk_full(*args, **kwargs):
+    raise OSError(28, 'No space left on device')
+  monkeypatch.setattr(jobs.assembly, 'assemble', disk_full)
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'out'), options)
+  assert report.failures and 'No space left' in report.failures[0][1]
+  monkeypatch.setattr(jobs.assembly, 'assemble', assemble)
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'out'), options)
+  assert (first.frames, report.frames, report.failures) == (12, 0, [])
+  info = json.loads((tmp_path / 'out' / 'clip_info.json').read_text())
+  assert info['resumed_frames'] == 12
+  for key in ('method', 'mixture', 'detected', 'confidence', 'disparity_range'):
+    assert info[key] == expected[key], key
+
+
 def test_a_video_without_any_anaglyph_names_itself(tmp_path):
   source = _anaglyph_clip(tmp_path / 'dark.mp4', 'gray', frames=6, black=set(range(6)))
   unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='auto'))
