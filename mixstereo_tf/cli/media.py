@@ -31,8 +31,9 @@ VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv')
 def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
   """Writes disparity KITTI-style: uint16 PNG holding round(d * 256), 0 = invalid.
 
-  Values <= 0 and NaN are stored as 0 (invalid); positive values are stored as at least 1
-  so a valid estimate never reads back as invalid; values are clipped to 65535 (255.996 px).
+  NaN and negative values are stored as 0 (invalid); others, 0 included (a point at
+  infinity), as at least 1 so that a valid estimate never reads back as invalid; values are
+  clipped to 65535 (255.996 px).
 
   Args:
     path: output .png path.
@@ -40,9 +41,10 @@ def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
   """
   disparity = np.asarray(disparity, np.float64)
   disparity = disparity.reshape(disparity.shape[:2])
+  valid = disparity >= 0  # NaN compares False.
   disparity = np.nan_to_num(disparity, nan=0.0, posinf=65535.0 / 256.0, neginf=0.0)
   stored = np.clip(np.round(disparity * 256.0), 0, 65535)
-  stored = np.where(disparity > 0, np.maximum(stored, 1), 0).astype(np.uint16)
+  stored = np.where(valid, np.maximum(stored, 1), 0).astype(np.uint16)
   if not cv2.imwrite(path, stored):
     raise ValueError(f'Cannot write PNG file: {path}')
 
@@ -256,7 +258,7 @@ def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:
   `pic.png`'s left view): refused, naming both.
 
   Raises:
-    ValueError: `output_dir` is an existing file, or holds such an input.
+    ValueError: `output_dir` is an existing file, cannot be created, or holds such an input.
   """
   if os.path.exists(output_dir) and not os.path.isdir(output_dir):
     raise ValueError(f'The output folder --output_dir={output_dir} is an existing file, '
@@ -271,7 +273,11 @@ def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:
             f'--output_dir={output_dir} holds the input {item.path}, which the outputs of '
             f'{other.path} (named {other.name}_*) could overwrite before it is read; write '
             'the results to another folder.')
-  os.makedirs(output_dir, exist_ok=True)
+  try:
+    os.makedirs(output_dir, exist_ok=True)
+  except OSError as e:  # Read-only, a file on the way, '' ...
+    raise ValueError(f'Cannot create the output folder --output_dir={output_dir!r}: '
+                     f'{e.strerror or e}.') from None
 
 
 # EXIF orientation (tag 0x0112) -> the stored pixels as viewers show them (the TIFF / EXIF

@@ -62,10 +62,11 @@ def test_png16_round_trip_kitti_convention(tmp_path):
   media.write_disparity_png16(path, disparity)
   raw = cv2.imread(path, cv2.IMREAD_UNCHANGED)
   assert raw.dtype == np.uint16
-  np.testing.assert_array_equal(raw, [[0, 256, 2688, 9536], [0, 0, 65535, 1]])
+  # A zero disparity (a point at infinity) is valid: 1 / 256 px, not the invalid 0.
+  np.testing.assert_array_equal(raw, [[1, 256, 2688, 9536], [0, 0, 65535, 1]])
   decoded, valid = image_io.read_disparity(path, scale=256.0)
-  np.testing.assert_array_equal(valid, [[False, True, True, True], [False, False, True, True]])
-  np.testing.assert_allclose(decoded[0], [0.0, 1.0, 10.5, 37.25])
+  np.testing.assert_array_equal(valid, [[True, True, True, True], [False, False, True, True]])
+  np.testing.assert_allclose(decoded[0], [0.0, 1.0, 10.5, 37.25], atol=1 / 256)
 
 
 def _write_png(path, value, shape=(8, 10, 3)):
@@ -120,6 +121,11 @@ def test_prepare_output_dir_names_an_existing_file(tmp_path):
   (tmp_path / 'target.png').write_bytes(b'x')
   with pytest.raises(ValueError, match=r'--output_dir=.*target\.png is an existing file'):
     media.prepare_output_dir([], str(tmp_path / 'target.png'))
+  with pytest.raises(ValueError, match=r"Cannot create the output folder "
+                                       r"--output_dir='.*target\.png/sub': Not a directory"):
+    media.prepare_output_dir([], str(tmp_path / 'target.png' / 'sub'))
+  with pytest.raises(ValueError, match="--output_dir='': No such file"):
+    media.prepare_output_dir([], '')
 
 
 @pytest.mark.parametrize('orientation', range(1, 9))
