@@ -176,9 +176,10 @@ class OutputOptions:
     object.__setattr__(self, 'formats', stereo_formats.check_formats(self.formats))
     if self.layout not in LAYOUTS:
       raise ValueError(f'Unknown layout {self.layout!r}; valid: {", ".join(LAYOUTS)}.')
-    if self.max_display_disparity is not None and not self.max_display_disparity > 0:
-      raise ValueError('max_display_disparity must be positive, got '
-                       f'{self.max_display_disparity}.')
+    if self.max_display_disparity is not None and not (
+        0 < self.max_display_disparity < float('inf')):
+      raise ValueError('OutputOptions.max_display_disparity must be positive and finite, '
+                       f'got {self.max_display_disparity}.')
 
 
 @dataclasses.dataclass(frozen=True)

@@ -211,8 +211,9 @@ def test_iter_inputs_marks_videos(tmp_path):
 def test_output_options_reject_bad_layout_and_display_range():
   with pytest.raises(ValueError, match="Unknown layout 'sideways'"):
     media.OutputOptions('sideways')
-  with pytest.raises(ValueError, match='max_display_disparity must be positive'):
-    media.OutputOptions(max_display_disparity=0.0)
+  for bad in (0.0, -1.0, float('inf'), float('nan')):  # inf failed every input at run time.
+    with pytest.raises(ValueError, match='max_display_disparity must be positive and finite'):
+      media.OutputOptions(max_display_disparity=bad)
 
 
 def test_output_options_formats_are_a_checked_tuple(tmp_path):
