@@ -69,18 +69,30 @@ def _keywords(message: str) -> str:
 
 def _image(image) -> np.ndarray:
   """`unmix`'s image argument as an array: a path (str, bytes, PathLike) read like the CLI
-  reads it; ValueError naming `image=` for videos and arrays that are not uint8."""
+  reads it, a PIL image as RGB turned upright by its EXIF orientation (as a file would
+  be); ValueError naming `image=` for videos, bytes that are no path, and arrays that
+  are not uint8 images."""
   from mixstereo_tf.cli import media  # pylint: disable=g-import-not-at-top
+  if isinstance(image, bytes) and (b'\0' in image or len(image) > 4096):
+    raise ValueError(f'image= is {len(image)} bytes that name no file (a file\'s contents?); '
+                     'give its path, or an array (e.g. cv2.imdecode of the bytes).')
   if isinstance(image, (str, bytes, os.PathLike)):
     path = os.fsdecode(image)
     if os.path.splitext(path)[1].lower() in media.VIDEO_EXTENSIONS:
       raise ValueError(f'image={path} is a video; unmix() takes one image (videos: '
                        f'mixstereo-unmix --input={path}).')
     return media.read_image(path)
+  if hasattr(image, 'getexif') and hasattr(image, 'convert'):  # A PIL image: as a file.
+    from PIL import ImageOps  # pylint: disable=g-import-not-at-top
+    image = ImageOps.exif_transpose(image).convert('RGB')  # Palette, CMYK, ... to RGB.
   array = np.asarray(image)
   if array.dtype != np.uint8:
     raise ValueError(f'image= must be a uint8 array (0-255), got {array.dtype}; e.g. '
                      'np.round(x * 255).astype(np.uint8) for floats in [0, 1].')
+  if array.ndim not in (2, 3) or min(array.shape[:2]) == 0 or (
+      array.ndim == 3 and array.shape[2] not in (1, 3)):
+    raise ValueError(f'image= must be a [H, W, 3] RGB or [H, W] gray image, got shape '
+                     f'{array.shape}.')
   return array
 
 
@@ -106,7 +118,7 @@ def _search(value: Union[None, str, Tuple[int, int]]) -> Union[None, str, Tuple[
     raise ValueError(f'disparity_range={value!r}: {e}') from None
 
 
-def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] = 'auto',
+def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *, mixture: Optional[str] = 'auto',
           method: str = 'model', model: Optional[str] = None,
           checkpoint: Optional[str] = None, saved_model: Optional[str] = None,
           disparity_range: Union[None, str, Tuple[int, int]] = None,
@@ -122,9 +134,10 @@ def unmix(image: Union[str, os.PathLike, np.ndarray], *, mixture: Optional[str] 
   `unmix` on many images costs the model loading once.
 
   Args:
-    image: a uint8 RGB [H, W, 3] or gray [H, W] array, or the path (str, bytes, PathLike)
-      of an image file (read like the CLI reads it: gray and 16-bit files become uint8 RGB,
-      EXIF orientation applied); videos: the `mixstereo-unmix` tool.
+    image: a uint8 RGB [H, W, 3] or gray [H, W] array, a PIL image (as RGB, EXIF
+      orientation applied), or the path (str, bytes, PathLike) of an image file (read
+      like the CLI reads it: gray and 16-bit files become uint8 RGB, EXIF orientation
+      applied); videos: the `mixstereo-unmix` tool.
     mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g. 'gray',
       'diplopia'); 'auto' detects an anaglyph's encoding; None: the model's own.
     method: 'model' (a network), 'classical' (training-free) or 'sgbm' (OpenCV's, a peer).

@@ -7,6 +7,7 @@ import sys
 
 import cv2
 import numpy as np
+import PIL.Image
 import pytest
 import skimage.data
 
@@ -68,6 +69,15 @@ def test_path_and_gray_inputs(anaglyph, tmp_path):
   assert from_gray.left.shape == (64, 80, 3) and from_gray.disparity.shape == (64, 80)
   np.testing.assert_array_equal(from_gray.disparity, from_rgb.disparity)
   assert from_gray.info['disparity_range'] == [0, 8]
+  # A PIL image: a palette image as its colours, turned upright like a file (EXIF 6).
+  palette = PIL.Image.fromarray(image).convert('P', palette=PIL.Image.ADAPTIVE, colors=256)
+  stored = np.asarray(palette.convert('RGB'))
+  exif = palette.getexif()
+  exif[0x0112] = 6
+  palette.save(tmp_path / 'turned.png', exif=exif)
+  turned = mixstereo_tf.unmix(PIL.Image.open(tmp_path / 'turned.png'), **options)
+  np.testing.assert_array_equal(turned.left, mixstereo_tf.unmix(np.rot90(stored, -1),
+                                                                **options).left)
 
 
 def test_a_photo_that_is_no_anaglyph_names_the_keyword():
@@ -118,6 +128,12 @@ def test_a_video_or_an_array_that_is_not_uint8_is_named(tmp_path):
   for dtype in (np.float32, np.uint16, bool):
     with pytest.raises(ValueError, match=f'image= must be a uint8 array .*got {np.dtype(dtype)}'):
       mixstereo_tf.unmix(np.zeros((20, 20, 3), dtype), method='classical', mixture='gray')
+  for shape in ((0, 20, 3), (20, 0), (20, 20, 2), (5, 20, 20, 3)):  # Was ZeroDivisionError.
+    with pytest.raises(ValueError, match=r'image= must be a \[H, W, 3\] RGB .*got shape'):
+      mixstereo_tf.unmix(np.zeros(shape, np.uint8), method='classical', mixture='gray')
+  contents = b'\x89PNG\r\n\x1a\n\0' + bytes(50)  # A file's contents, not its path.
+  with pytest.raises(ValueError, match="image= is 59 bytes that name no file .*contents"):
+    mixstereo_tf.unmix(contents, method='classical', mixture='gray')
 
 
 def test_defaults_are_the_predictor_configs():
