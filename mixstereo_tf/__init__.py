@@ -118,7 +118,8 @@ def _search(value: Union[None, str, Tuple[int, int]]) -> Union[None, str, Tuple[
     raise ValueError(f'disparity_range={value!r}: {e}') from None
 
 
-def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *, mixture: Optional[str] = 'auto',
+def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
+          mixture: Optional[str] = 'auto',
           method: str = 'model', model: Optional[str] = None,
           checkpoint: Optional[str] = None, saved_model: Optional[str] = None,
           disparity_range: Union[None, str, Tuple[int, int]] = None,
