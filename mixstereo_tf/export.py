@@ -34,8 +34,8 @@ cli_flags.define_pretrained()
 flags.DEFINE_string('export_dir', None, 'Where to write the SavedModel (must be new).')
 cli_flags.require_unless_listing('export_dir')
 flags.DEFINE_boolean('as_pretrained', False, 'Write --checkpoint in the pretrained format '
-                     '(mixstereo_tf/artifacts/pretrained/NAME: float16 weights and info.json) instead '
-                     'of a SavedModel.')
+                     '(mixstereo_tf/artifacts/pretrained/NAME: float16 weights and '
+                     'info.json) instead of a SavedModel.')
 flags.DEFINE_string('recipe', '', 'With --as_pretrained: the command that retrains it.')
 flags.DEFINE_string('results', '', 'With --as_pretrained: its held-out numbers.')
 

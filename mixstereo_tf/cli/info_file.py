@@ -3,10 +3,10 @@
 `mixstereo-unmix` and the batch pipeline record under `request` the predictor's settings
 (`media.OutputOptions.settings`: the PredictorConfig as the flags gave it, `mixture='auto'`
 included, and the identity of the weights it loads, so that a checkpoint retrained at the
-same path counts as another request) and how the results are written (layout, stereo formats, colour-map span). A
-batch run skips an input whose complete results were asked for in the same way, and
-refuses (a dead letter naming the differences) results asked for otherwise, which it would
-otherwise keep silently beside this run's.
+same path counts as another request) and how the results are written (layout, stereo
+formats, colour-map span). A batch run skips an input whose complete results were asked
+for in the same way, and refuses (a dead letter naming the differences) results asked for
+otherwise, which it would otherwise keep silently beside this run's.
 """
 
 import json

@@ -1,9 +1,9 @@
 """Joining encoded video parts and a source's audio into one file, by copying packets.
 
 `assemble` concatenates the parts (files of one encoder configuration, `streams.VideoWriter`)
-packet by packet, shifted by each part's start time, and interleaves the audio packets of
-a source file and its subtitles unchanged (no re-encode); rotation and the stereo layout become stream
-metadata (`streams.STEREO_MODES`).
+packet by packet, shifted by each part's start time, and interleaves the audio and
+subtitle packets of a source file unchanged (no re-encode); rotation and the stereo layout
+become stream metadata (`streams.STEREO_MODES`).
 """
 
 import dataclasses

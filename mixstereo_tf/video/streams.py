@@ -9,9 +9,9 @@
 Times are exact `Fraction` seconds (a frame's pts times its stream's time base), so frame
 rates like 30000/1001 and variable frame rates survive. The encoder follows the output
 extension (`encoder_for`). `assembly.assemble` concatenates encoded parts packet by packet
-and copies the audio packets of the source unchanged (no re-encode). Rotation (the display matrix) is
-read from the decoded frames; FFmpeg's libraries take it into a file only through the
-stream's side data, which PyAV cannot set, so `assemble` adds it with a stream-copy pass of
+and copies the audio and subtitle packets of the source unchanged (no re-encode).
+Rotation (the display matrix) is read from the decoded frames; FFmpeg's libraries take it
+into a file only through the stream's side data, which PyAV cannot set, so `assemble` adds it with a stream-copy pass of
 imageio-ffmpeg's ffmpeg binary when that package is installed (else it is logged as lost).
 """
 
