@@ -158,6 +158,9 @@ class _UnmixFn(beam.DoFn):
   def process(self, element: Tuple[int, str, bool, str]) -> Iterator[object]:
     index, item = element[0], media.MediaItem(*element[1:])
     info = completed_info(self._output_dir, item.name)
+    if info and info_file.changed(info, item.path):
+      logging.info('%s changed since its results were written: done again.', item.path)
+      info = None
     other = info and foreign_results(info, item, self._unmixer.method, self._request)
     if other:
       yield from _failed(index, item, other, 0.0)

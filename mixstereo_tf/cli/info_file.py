@@ -43,14 +43,29 @@ def differences(recorded: Optional[object], current: Dict[str, object]) -> List[
           for key in sorted(old) if old[key] != new.get(key)]
 
 
+def input_stamp(path: str) -> Dict[str, int]:
+  """{'input_size', 'input_mtime_ns'} of an input file, recorded in its info file: a batch
+  rerun redoes an input replaced since (`changed`)."""
+  stat = os.stat(path)
+  return {'input_size': stat.st_size, 'input_mtime_ns': stat.st_mtime_ns}
+
+
+def changed(info: Dict[str, object], path: str) -> bool:
+  """Whether the input at `path` differs in size or modification time from the one an
+  info file recorded (False where it recorded none, or the file is gone)."""
+  if 'input_size' not in info or not os.path.exists(path):
+    return False
+  return {key: info.get(key) for key in ('input_size', 'input_mtime_ns')} != input_stamp(path)
+
+
 def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
                request: Optional[Dict] = None) -> str:
-  """Writes `<name>_info.json` beside an input's results: what was done (the mixture used
-  and detected, with its confidence, the disparity range searched, the network's shift and
-  scale, the method, the seconds spent), the files written and what was asked
-  (`describe`)."""
+  """Writes `<name>_info.json` beside an input's results: what was done to which file (its
+  size and modification time, `input_stamp`; the mixture used and detected, with its
+  confidence, the disparity range searched, the network's shift and scale, the method,
+  the seconds spent), the files written and what was asked (`describe`)."""
   path = os.path.join(output_dir, f'{item.name}_info.json')
   with open(path, 'w', encoding='utf-8') as f:
-    json.dump(dict(info, input=item.path, **({'request': request} if request else {})), f,
-              indent=2, sort_keys=True)
+    json.dump(dict(info, input=item.path, **input_stamp(item.path),
+                   **({'request': request} if request else {})), f, indent=2, sort_keys=True)
   return path

@@ -89,6 +89,12 @@ def test_outputs_equal_the_cli_failures_dead_letter_and_a_rerun_skips(tmp_path, 
   assert [row['status'] for row in _csv(out / beam_batch.SUMMARY)] == [
       'skipped', 'skipped', 'done', 'failed']
   assert len(_csv(out / beam_batch.DEAD_LETTERS)) == 1
+  # An input replaced at the same path (size, modification time) is done again.
+  b_info = json.loads((out / 'b_info.json').read_text())
+  assert b_info['input_size'] == os.stat(folder / 'b.png').st_size
+  os.utime(folder / 'b.png', ns=(b_info['input_mtime_ns'] + 10**9,) * 2)
+  counts = beam_batch.run(items, CONFIG, str(out), OPTIONS)
+  assert counts == {'done': 1, 'skipped': 2, 'failed': 1}
   # Other flags on the same folder: refused per input, nothing overwritten or kept silently.
   other = dataclasses.replace(OPTIONS, layout='tb')
   counts = beam_batch.run(items, CONFIG, str(out), other)
