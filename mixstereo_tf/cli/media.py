@@ -25,7 +25,10 @@ LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
 STEREO_MODES = {'sbs': 'left_right', 'sbs_half': 'left_right', 'tb': 'top_bottom'}
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
                     '.tiff', '.webp')
-VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv')
+VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv', '.webm')
+# Video inputs whose results go in another container: WebM holds only VP8 / VP9 / AV1,
+# and the outputs are H.264 (`streams.ENCODERS`), so Matroska, WebM's parent format.
+OUTPUT_CONTAINERS = {'.webm': '.mkv'}
 
 
 def write_disparity_png16(path: str, disparity: np.ndarray) -> None:

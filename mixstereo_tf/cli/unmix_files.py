@@ -11,9 +11,9 @@ when every disparity lies in 0..255.996 px) and float32 signed pixels
 `stereo_formats`), and a side-car `<name>_info.json` (mixture used and detected, range
 searched, scale, method, seconds, files, the EXIF orientation applied, the request;
 `info_file`). Per
-video, in the input's container (`.mp4`, `.mov`, `.mkv`, `.avi`) with its frame rate,
-timestamps, audio and subtitle streams (copied), frames a player turns by quarter turns (portrait
-phone videos) turned upright before they are unmixed and written so (other rotations
+video, in the input's container (`.mp4`, `.mov`, `.mkv`, `.avi`; `.webm` in `.mkv`) with
+its frame rate, timestamps, audio and subtitle streams (copied), frames a player turns by
+quarter turns (portrait phone videos) turned upright before they are unmixed and written so (other rotations
 copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`; side by side and
 top-bottom tagged as such: `streams.STEREO_MODES`), `<name>_disparity<ext>`,
 `<name>_<format><ext>` for the formats drawn as videos (rgbd, anaglyphs; the others are

@@ -38,6 +38,7 @@ def _video_outputs(item: media.MediaItem, output_dir: str, layout: str,
   """A video's ({key: output path}, the stereo formats drawn as videos, {format skipped:
   why}); the skipped ones are logged."""
   extension = os.path.splitext(item.path)[1].lower()
+  extension = media.OUTPUT_CONTAINERS.get(extension, extension)
   drawn, skipped = stereo_formats.video_formats(formats)
   for name, why in skipped.items():
     logging.warning('%s: --output_format=%s %s.', item.path, name, why)

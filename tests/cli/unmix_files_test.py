@@ -361,6 +361,19 @@ def test_a_video_resumed_after_its_last_segment_records_what_was_done(tmp_path,
     assert info[key] == expected[key], key
 
 
+def test_a_webm_video_is_unmixed_into_matroska_with_its_audio(tmp_path):
+  """WebM holds no H.264: its results go in Matroska, WebM's parent format."""
+  source = _anaglyph_clip(tmp_path / 'clip.webm', 'gray', frames=6)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='gray', disparity_range=(0, 8)))
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path), str(tmp_path / 'out'))
+  assert (report.processed, report.frames, report.failures) == (1, 6, [])
+  for key in ('left', 'right', 'disparity'):
+    info, frames = streams_test.read_all(tmp_path / 'out' / f'clip_{key}.mkv')
+    assert len(frames) == 6 and (info.width, info.height) == (96, 64)
+    assert info.audio_streams == 1
+
+
 def test_a_video_without_any_anaglyph_names_itself(tmp_path):
   source = _anaglyph_clip(tmp_path / 'dark.mp4', 'gray', frames=6, black=set(range(6)))
   unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='auto'))

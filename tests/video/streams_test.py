@@ -15,7 +15,8 @@ from mixstereo_tf.video import streams
 Fraction = fractions.Fraction
 # Lossless audio where the container takes it, AAC in MP4 (its decoded samples compare
 # exactly too when the packets are copied).
-AUDIO = {'.mp4': 'aac', '.mov': 'pcm_s16le', '.mkv': 'flac', '.avi': 'pcm_s16le'}
+AUDIO = {'.mp4': 'aac', '.mov': 'pcm_s16le', '.mkv': 'flac', '.avi': 'pcm_s16le',
+         '.webm': 'libopus'}
 
 
 def pattern(index, height=64, width=96):
@@ -32,7 +33,7 @@ def make_video(path, frames, rate=Fraction(12), audio_rate=48000, rotation=0, ta
   audio's language 'fra'; `aspect`: the sample aspect ratio. Returns the path."""
   extension = str(path)[str(path).rfind('.'):]
   with av.open(str(path), 'w') as out:
-    codec = 'mjpeg' if extension == '.avi' else 'libx264'
+    codec = {'.avi': 'mjpeg', '.webm': 'libvpx-vp9'}.get(extension, 'libx264')
     options = {'qmin': '1', 'qmax': '2'} if codec == 'mjpeg' else {'crf': '12'}
     video = out.add_stream(codec, rate=rate, options=options)
     video.height, video.width = frames[0].shape[:2]
