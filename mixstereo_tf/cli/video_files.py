@@ -86,17 +86,12 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
                 formats: Tuple[str, ...] = (), request: Optional[Dict] = None,
                 opened: Optional[Dict[str, object]] = None) -> int:
   """Unmixes every frame of a video into layout, disparity and `formats` videos
-  (resumable, see `video.jobs`; side-by-side and top-bottom ones tagged as such), writes
-  `<name>_info.json` (with `request`); returns the frames unmixed in this run. `report`
-  (`unmix_files.UnmixReport`) gains the seconds spent unmixing; `opened`: the `opening`
-  frame's info, whose encoding frames with no anaglyph found are read as until a shot
-  finds one, and which the info file holds when this run unmixes no frame (a job resumed
-  after its last segment).
-
-  Frames go through a `temporal.VideoState` (with `temporal_config.enabled`: a shot's
-  encoding, range and prior; each segment's first frame starts a shot), a shot's frames
-  side by side (`frame_pipeline`); their images are drawn and written in order on the
-  writer's thread."""
+  (resumable, `video.jobs`; side by side and top-bottom tagged so), writes
+  `<name>_info.json` (with `request`; `opened`, the `opening` frame's info, when this run
+  unmixes no frame) and returns the frames unmixed in this run; `report` gains the seconds
+  spent unmixing. Frames go through a `temporal.VideoState` (shots; frames with no
+  anaglyph found read as `opened`'s encoding until a shot finds one) and `frame_pipeline`;
+  their images are drawn and written in order on the writer's thread."""
   start = time.perf_counter()
   opened = opened or {}
   shots = temporal.VideoState(temporal_config, opened.get('mixture'))
