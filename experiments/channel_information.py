@@ -19,6 +19,11 @@ range +- 3 px) on the ground-truth pairs with the eyes given as:
     green and blue by a least-squares fit R ~ a G + b B + c in (2r + 1)^2 windows whose
     coefficients are fitted on the right eye's TRUE red (an oracle): the best any
     locally linear colour mapping between the channels can do.
+The shipped learned stage (`--pretrained=anaglyph_matching`, float32, over the same range)
+is run on the pairings it can take, as anaglyphs: luma vs luma and R vs R and G vs G as
+gray anaglyphs (its same-channel branch), R vs G, B as the colour anaglyph. Its R vs R is
+what a perfect separation of the right eye's red would give it: the floor of any
+separation under this stage.
 Sources: the scenes of `same_channel.scenes` (window-aligned at 30%) and the 12 validation
 photo warps of `matching_validation.py`; the rendered ones (procedural scenes, photo
 warps) again with independent noise (sigma 2 grey levels) added to each view
@@ -36,9 +41,11 @@ from absl import flags
 import cv2
 import numpy as np
 
+from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.unmixing import learned_matching
 
 from experiments import matching_validation  # WARP: the validation pairs' size.
 from experiments import same_channel  # Defines --shared_dir (its scenes).
@@ -87,17 +94,42 @@ PAIRINGS: Dict[str, Callable[[np.ndarray, np.ndarray], Eyes]] = {
 }
 
 
-def bad1s(pair: dict, valid: np.ndarray) -> Dict[str, float]:
-  """{pairing: bad-1 of the census matcher's left disparity over `valid`}, every pairing
-  searched over the true range +- MARGIN px."""
+def gray_anaglyph(left_eye: np.ndarray, right_eye: np.ndarray) -> np.ndarray:
+  """The anaglyph of two single-channel eyes (float 0..255 [H, W]) as the gray encoding
+  stores them: [H, W, 3] in [0, 1], the left eye in red, the right in green and blue."""
+  return np.stack([left_eye, right_eye, right_eye], -1).astype(np.float32) / 255.0
+
+
+def _colour_anaglyph(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+  return np.concatenate([left[..., :1], right[..., 1:]], -1) / 255.0
+
+
+# label -> (left RGB, right RGB, float32 0..255) -> (anaglyph in [0, 1], its encoding):
+# the pairings the learned stage takes.
+LEARNED_PAIRINGS: Dict[str, Callable[[np.ndarray, np.ndarray], Tuple[np.ndarray, str]]] = {
+    REFERENCE: lambda left, right: (gray_anaglyph(left @ LUMA, right @ LUMA), 'gray'),
+    'R vs G, B': lambda left, right: (_colour_anaglyph(left, right), 'anaglyph'),
+    'R vs R': lambda left, right: (gray_anaglyph(left[..., 0], right[..., 0]), 'gray'),
+    'G vs G': lambda left, right: (gray_anaglyph(left[..., 1], right[..., 1]), 'gray'),
+}
+
+
+def bad1s(pair: dict, valid: np.ndarray,
+          descriptors: learned_matching.Descriptors) -> Dict[str, float]:
+  """{pairing: bad-1 of the left disparity over `valid`}: the census matcher's for
+  PAIRINGS, the learned stage's (`descriptors`) for LEARNED_PAIRINGS (keys prefixed
+  'learned '), every pairing searched over the true range +- MARGIN px."""
   truth = pair['disparity_left']
   low = int(np.floor(truth[valid].min())) - MARGIN
   high = int(np.ceil(truth[valid].max())) + MARGIN
   left, right = (pair[k].astype(np.float32) for k in ('left', 'right'))
+  bad1 = lambda out: float(np.mean(np.abs(out['disparity_left'] - truth)[valid] > 1.0))
   scores = {}
   for pairing, eyes in PAIRINGS.items():
-    out = matcher.match(*eyes(left, right), low, high)
-    scores[pairing] = float(np.mean(np.abs(out['disparity_left'] - truth)[valid] > 1.0))
+    scores[pairing] = bad1(matcher.match(*eyes(left, right), low, high))
+  for pairing, mixture in LEARNED_PAIRINGS.items():
+    out = learned_matching.match(descriptors, *mixture(left, right), low, high)
+    scores['learned ' + pairing] = bad1(out)
   return scores
 
 
@@ -115,14 +147,16 @@ def sources(shared_dir: str, photo_dir: str):
            validation.noisy(pair, number), pair['nonocc_left'])
 
 
-def table(rows: List[dict]) -> List[str]:
-  """Markdown: per group, each pairing's mean bad-1 and its ratio to the reference."""
-  lines = ['| scenes | ' + ' | '.join(PAIRINGS) + ' |', '| --- ' * (1 + len(PAIRINGS)) + '|']
+def table(rows: List[dict], pairings: List[str], prefix: str = '') -> List[str]:
+  """Markdown: per group, each pairing's mean bad-1 (row keys `prefix` + pairing) and its
+  ratio to the reference's."""
+  lines = ['| scenes | ' + ' | '.join(pairings) + ' |', '| --- ' * (1 + len(pairings)) + '|']
   for group in dict.fromkeys(r['group'] for r in rows):
-    mean = {p: np.mean([r[p] for r in rows if r['group'] == group]) for p in PAIRINGS}
+    mean = {p: np.mean([r[prefix + p] for r in rows if r['group'] == group])
+            for p in pairings}
     cells = [f'{100 * mean[p]:.1f}%' + ('' if p == REFERENCE else
                                          f' ({mean[p] / mean[REFERENCE]:.2f}x)')
-             for p in PAIRINGS]
+             for p in pairings]
     lines.append(f'| {group} | ' + ' | '.join(cells) + ' |')
   return lines
 
@@ -130,20 +164,28 @@ def table(rows: List[dict]) -> List[str]:
 def main(argv):
   del argv
   start = time.perf_counter()
+  descriptors = learned_matching.descriptor_function(
+      pretrained.load_model(pretrained.get('anaglyph_matching')))  # float32
   rows = []
   for group, name, pair, valid in sources(FLAGS.shared_dir, FLAGS.photo_dir):
-    rows.append(dict(group=group, scene=name, **bad1s(pair, valid)))
-    print(name, ' '.join(f'{p}: {100 * rows[-1][p]:.1f}%' for p in PAIRINGS),
-          file=sys.stderr, flush=True)
+    rows.append(dict(group=group, scene=name, **bad1s(pair, valid, descriptors)))
+    print(name, ' '.join(f'{p}: {100 * s:.1f}%' for p, s in rows[-1].items()
+                         if p not in ('group', 'scene')), file=sys.stderr, flush=True)
   header = (f'# Channel information: the census matcher on channel pairings\n\nWritten by '
             f'`python -m experiments.channel_information` in '
             f'{time.perf_counter() - start:.0f} s. bad-1 of the left disparity over the '
             'valid ground truth (photo warps: the visible pixels), the true range +- 3 px; '
             'in brackets the ratio to luma vs luma. Pairings and sources: the module '
             'docstring. procedural: mean of 8 scenes; photo warps: mean of 12.\n')
+  learned = ('\n## The learned stage on the pairings it takes\n\nThe shipped stage '
+             '(`anaglyph_matching`, float32): luma, R and G pairings as gray anaglyphs, '
+             'R vs G, B as the colour anaglyph. Its R vs R is the floor of any separation '
+             "of the right eye's red under this stage.\n")
+  text = '\n'.join(table(rows, list(PAIRINGS)) + [learned] +
+                   table(rows, list(LEARNED_PAIRINGS), 'learned '))
   with open(FLAGS.channel_output, 'w') as f:
-    f.write(header + '\n' + '\n'.join(table(rows)) + '\n')
-  print('\n'.join(table(rows)))
+    f.write(header + '\n' + text + '\n')
+  print(text)
 
 
 if __name__ == '__main__':

@@ -307,6 +307,24 @@ def test_channel_information_pairings_and_noise():
                                 channel_information.validation.noisy(pair, 3)['right'])
 
 
+def test_channel_information_learned_pairings_give_the_stage_those_eyes():
+  from experiments import channel_information  # pylint: disable=import-outside-toplevel
+  from mixstereo_tf.classical import anaglyph  # pylint: disable=import-outside-toplevel
+  rng = np.random.default_rng(2)
+  left, right = (rng.integers(0, 256, (8, 12, 3)).astype(np.float32) for _ in range(2))
+  eyes = {}
+  for pairing, mixture in channel_information.LEARNED_PAIRINGS.items():
+    image, name = mixture(left, right)
+    assert image.shape == (8, 12, 3) and 0.0 <= image.min() and image.max() <= 1.0
+    eyes[pairing] = anaglyph.eye_images(image, name)
+  np.testing.assert_allclose(eyes['R vs R'][0][..., 0], left[..., 0], atol=1e-3)
+  np.testing.assert_allclose(eyes['R vs R'][1][..., 0], right[..., 0], atol=1e-3)
+  np.testing.assert_allclose(eyes['G vs G'][1][..., 0], right[..., 1], atol=1e-3)
+  np.testing.assert_allclose(eyes['R vs G, B'][1], right[..., 1:], atol=1e-3)
+  np.testing.assert_allclose(eyes[channel_information.REFERENCE][0][..., 0],
+                             left @ channel_information.LUMA, atol=1e-3)
+
+
 def test_real_pairs_loso_scores_each_source_by_the_runs_that_never_saw_it(tmp_path):
   from experiments import real_pairs_loso as loso  # pylint: disable=import-outside-toplevel
   assert [loso.source_of(s) for s in ('motorcycle_div1', 'sceneflow_A-0032-0006',
