@@ -24,7 +24,7 @@ LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
 # The stereo mode a layout's video is tagged with (`streams.STEREO_MODES`).
 STEREO_MODES = {'sbs': 'left_right', 'sbs_half': 'left_right', 'tb': 'top_bottom'}
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
-                    '.tiff', '.webp')
+                    '.tiff', '.webp', '.gif')
 VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv', '.webm')
 # Video inputs whose results go in another container: WebM holds only VP8 / VP9 / AV1,
 # and the outputs are H.264 (`streams.ENCODERS`), so Matroska, WebM's parent format.
@@ -228,7 +228,8 @@ def iter_inputs(spec: str) -> Iterator[MediaItem]:
   Args:
     spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images and
       videos, sorted by name; other files ignored) or a glob pattern (matching images and
-      videos, sorted). Items are named by `output_names`.
+      videos, sorted; `**` matches any depth of folders). Items are named by
+      `output_names`.
 
   Raises:
     ValueError: nothing exists at `spec`, or the folder / pattern holds no usable file.
@@ -243,7 +244,7 @@ def iter_inputs(spec: str) -> Iterator[MediaItem]:
   elif os.path.isfile(spec):
     paths = [spec]
   elif glob.has_magic(spec):
-    paths = sorted(p for p in glob.glob(spec) if os.path.isfile(p)
+    paths = sorted(p for p in glob.glob(spec, recursive=True) if os.path.isfile(p)
                    and _extension(p) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)
     if not paths:
       raise ValueError(f'No images or videos match the pattern {spec}')
@@ -301,10 +302,26 @@ def exif_orientation(path: str) -> int:
   return value if value in _ORIENTATIONS else 1
 
 
+def frame_count(path: str) -> int:
+  """How many frames an image file holds (an animated GIF or WebP: more than 1); 1 for a
+  file Pillow cannot read."""
+  try:
+    with Image.open(path) as image:
+      return int(getattr(image, 'n_frames', 1))
+  except (OSError, ValueError, SyntaxError):
+    return 1
+
+
 def read_upright(path: str) -> Tuple[np.ndarray, int]:
   """(uint8 RGB [H, W, 3] as viewers show the file, its EXIF orientation): a phone's
   portrait photo of an anaglyph has its eyes side by side only once turned. Gray and
-  alpha images are converted (`image_io.read_image`); ValueError naming bad files."""
+  alpha images are converted (`image_io.read_image`); ValueError naming bad files and
+  animated images (of which a still reader sees only the first frame)."""
+  frames = frame_count(path) if _extension(path) in ('.gif', '.webp') else 1
+  if frames > 1:
+    raise ValueError(f'{path} is an animated image ({frames} frames); only its first frame '
+                     'would be read. Convert it to a video to unmix every frame, e.g. '
+                     f'ffmpeg -i {path} -pix_fmt yuv420p out.mp4')
   image = image_io.read_image(path)
   orientation = exif_orientation(path)
   if orientation == 1:

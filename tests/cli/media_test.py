@@ -87,6 +87,28 @@ def test_iter_inputs_folder_glob_single(tmp_path):
   assert len(single) == 1 and single[0].path == str(tmp_path / 'a.jpg')
 
 
+def test_iter_inputs_glob_double_star_reaches_nested_folders(tmp_path):
+  os.makedirs(tmp_path / 'scans' / '1950' / 'box2')
+  _write_png(tmp_path / 'scans' / 'top.png', 10)
+  _write_png(tmp_path / 'scans' / '1950' / 'box2' / 'deep.png', 20)
+  items = list(media.iter_inputs(str(tmp_path / 'scans' / '**' / '*.png')))
+  assert sorted(os.path.basename(i.path) for i in items) == ['deep.png', 'top.png']
+
+
+def test_gif_images_are_inputs_and_animated_ones_are_refused(tmp_path):
+  rng = np.random.default_rng(0)
+  frames = [rng.integers(0, 256, (12, 16, 3), dtype=np.uint8) for _ in range(2)]
+  Image.fromarray(frames[0]).save(tmp_path / 'still.gif')
+  Image.fromarray(frames[0]).save(tmp_path / 'wiggle.gif', save_all=True,
+                                  append_images=[Image.fromarray(frames[1])], loop=0)
+  items = list(media.iter_inputs(str(tmp_path)))
+  assert [i.name for i in items] == ['still', 'wiggle']
+  expected = np.asarray(Image.open(tmp_path / 'still.gif').convert('RGB'))
+  np.testing.assert_array_equal(media.read_image(str(tmp_path / 'still.gif')), expected)
+  with pytest.raises(ValueError, match=r'wiggle\.gif is an animated image \(2 frames\)'):
+    media.read_image(str(tmp_path / 'wiggle.gif'))
+
+
 def test_iter_inputs_folder_lists_videos_too(tmp_path):
   _write_png(tmp_path / 'b.png', 10)
   (tmp_path / 'a.mp4').write_bytes(b'not decoded when listed')
