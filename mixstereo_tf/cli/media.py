@@ -324,8 +324,8 @@ def read_upright(path: str) -> Tuple[np.ndarray, int]:
                      f'ffmpeg -i {path} -pix_fmt yuv420p out.mp4')
   image = image_io.read_image(path)
   orientation = exif_orientation(path)
-  if orientation == 1:
-    return image, orientation
+  if orientation == 1 or _extension(path) in image_io.TIFF_EXTENSIONS:
+    return image, orientation  # TIFF decoders apply the tag (`image_io._read_raw`).
   return np.ascontiguousarray(_ORIENTATIONS[orientation](image)), orientation
 
 

@@ -11,6 +11,7 @@ from typing import Dict, Optional, Tuple
 
 import cv2
 import numpy as np
+from PIL import Image
 
 from mixstereo_tf.data import records
 
@@ -28,12 +29,35 @@ def _check_file(path: str) -> None:
     raise ValueError(f'File not found: {path}{where}')
 
 
+# Pillow modes -> the mode whose pixels `_read_raw` returns (8/16-bit gray, RGB, RGBA).
+_PILLOW_MODES = {'L': 'L', 'LA': 'LA', 'I;16': 'I;16', 'RGB': 'RGB', 'RGBA': 'RGBA'}
+TIFF_EXTENSIONS = ('.tif', '.tiff')
+
+
+def _read_with_pillow(path: str) -> Optional[np.ndarray]:
+  """The pixels in OpenCV's channel order, or None when Pillow cannot decode the file."""
+  try:
+    with Image.open(path) as image:
+      image = image.convert(_PILLOW_MODES.get(image.mode, 'RGB'))
+      array = np.asarray(image)
+  except (OSError, ValueError, SyntaxError):
+    return None
+  if array.ndim == 3 and array.shape[2] >= 3:  # RGB(A) -> BGR(A), as cv2.imread.
+    array = np.concatenate([array[..., 2::-1], array[..., 3:]], axis=2)
+  return np.ascontiguousarray(array)
+
+
 def _read_raw(path: str) -> np.ndarray:
-  """cv2.imread(IMREAD_UNCHANGED) with a ValueError naming a missing or unreadable file."""
+  """cv2.imread(IMREAD_UNCHANGED), else Pillow, with a ValueError naming a missing or
+  unreadable file. Both decoders apply a TIFF's orientation tag themselves (OpenCV 5.0
+  fails on the tags that transpose, 5-8: Pillow reads those); other formats' EXIF
+  orientation is left to the caller (`cli/media.py`)."""
   _check_file(path)
   # IMREAD_UNCHANGED keeps 16-bit depth and ignores EXIF rotation (which would break the
   # stereo geometry); palette PNGs are still expanded to BGR by the decoder.
   array = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+  if array is None:
+    array = _read_with_pillow(path)
   if array is None:
     raise ValueError(f'Cannot decode image file: {path}')
   return array

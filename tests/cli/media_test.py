@@ -109,6 +109,20 @@ def test_gif_images_are_inputs_and_animated_ones_are_refused(tmp_path):
     media.read_image(str(tmp_path / 'wiggle.gif'))
 
 
+@pytest.mark.parametrize('orientation, stored', [(6, Image.ROTATE_90), (8, Image.ROTATE_270),
+                                                  (3, Image.ROTATE_180),
+                                                  (2, Image.FLIP_LEFT_RIGHT)])
+def test_rotated_tiff_reads_upright(tmp_path, orientation, stored):
+  # TIFF decoders apply the orientation tag themselves; OpenCV 5.0 cannot decode the
+  # tags that transpose (6, 8), which Pillow then reads. The tag is applied once.
+  upright = np.random.default_rng(orientation).integers(0, 256, (12, 16, 3), dtype=np.uint8)
+  path = str(tmp_path / f'phone_{orientation}.tiff')
+  Image.fromarray(upright).transpose(stored).save(path, tiffinfo={0x0112: orientation})
+  image, found = media.read_upright(path)
+  assert found == orientation
+  np.testing.assert_array_equal(image, upright)
+
+
 def test_iter_inputs_folder_lists_videos_too(tmp_path):
   _write_png(tmp_path / 'b.png', 10)
   (tmp_path / 'a.mp4').write_bytes(b'not decoded when listed')
