@@ -52,9 +52,16 @@ def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
     raise ValueError(f'Cannot write PNG file: {path}')
 
 
-def write_image(path: str, image: np.ndarray) -> None:
-  """Writes a uint8 RGB image (format from the extension)."""
-  if not cv2.imwrite(path, np.ascontiguousarray(image[:, :, ::-1])):
+def write_image(path: str, image: np.ndarray, icc_profile: Optional[bytes] = None) -> None:
+  """Writes a uint8 RGB image (format from the extension), with `icc_profile` (the input's
+  colour space, `icc_profile_of`) embedded when given."""
+  if icc_profile:
+    try:
+      Image.fromarray(np.ascontiguousarray(image, np.uint8), 'RGB').save(
+          path, icc_profile=icc_profile)
+    except (OSError, ValueError, KeyError) as e:
+      raise ValueError(f'Cannot write image file: {path} ({e})') from None
+  elif not cv2.imwrite(path, np.ascontiguousarray(image[:, :, ::-1])):
     raise ValueError(f'Cannot write image file: {path}')
 
 
@@ -110,8 +117,8 @@ def display_range(disparity: np.ndarray,
 
 def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: str,
                         layout: str, max_display_disparity: Optional[float] = None,
-                        formats: Sequence[str] = (), mixture: Optional[np.ndarray] = None
-                        ) -> Dict[str, object]:
+                        formats: Sequence[str] = (), mixture: Optional[np.ndarray] = None,
+                        icc_profile: Optional[bytes] = None) -> Dict[str, object]:
   """Writes one image's results (mixstereo_tf/cli/unmix_files.py).
 
   Args:
@@ -123,6 +130,8 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
     formats: `stereo_formats.FORMATS` names also written (depth images span the colour
       map's range).
     mixture: the input image, uint8 RGB [H, W, 3] (the 'html' viewer page needs it).
+    icc_profile: the input's ICC profile (`icc_profile_of`), embedded in the views and the
+      formats drawn from them; the disparity maps carry none.
 
   Returns:
     {'files': the paths written, 'display_range': the colour map's (low, high),
@@ -132,7 +141,7 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
   paths = []
   for suffix, image in layout_images(outputs['left'], outputs['right'], layout):
     paths.append(os.path.join(output_dir, f'{name}_{suffix}.png'))
-    write_image(paths[-1], image)
+    write_image(paths[-1], image, icc_profile)
   disparity = np.asarray(outputs['disparity_left'], np.float32)
   low, high = display_range(disparity, max_display_disparity)
   paths.append(os.path.join(output_dir, f'{name}_disparity.png'))
@@ -150,7 +159,8 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
   paths.append(os.path.join(output_dir, f'{name}_disparity.npy'))
   np.save(paths[-1], disparity)
   paths.extend(stereo_formats.write_formats(stereo_formats.StereoResult(
-      outputs['left'], outputs['right'], disparity, colour, (low, high), mixture),
+      outputs['left'], outputs['right'], disparity, colour, (low, high), mixture,
+      icc_profile),
       os.path.join(output_dir, name), formats))
   written['files'] = [os.path.basename(p) for p in paths]
   return written
@@ -290,6 +300,17 @@ def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:
 _ORIENTATIONS = {2: lambda a: a[:, ::-1], 3: lambda a: a[::-1, ::-1], 4: lambda a: a[::-1],
                  5: lambda a: a.transpose(1, 0, 2), 6: lambda a: np.rot90(a, -1),
                  7: lambda a: np.rot90(a, 2).transpose(1, 0, 2), 8: lambda a: np.rot90(a, 1)}
+
+
+def icc_profile_of(path: str) -> Optional[bytes]:
+  """The ICC colour profile an image file embeds (a phone's Display P3, Adobe RGB), or None
+  (none: sRGB, as viewers assume; or a file Pillow cannot read). The views keep the
+  input's pixel values, so they are in its colour space and carry its profile."""
+  try:
+    with Image.open(path) as image:
+      return image.info.get('icc_profile') or None
+  except (OSError, ValueError, SyntaxError):
+    return None
 
 
 def exif_orientation(path: str) -> int:

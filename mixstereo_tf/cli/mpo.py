@@ -17,7 +17,7 @@ MP endian field (0 for the first picture); pictures left to right.
 
 import io
 import struct
-from typing import List, Sequence
+from typing import List, Optional, Sequence
 
 import numpy as np
 from PIL import Image
@@ -72,13 +72,16 @@ def _insert_app2(jpeg: bytes, payload: bytes) -> bytes:
   return jpeg[:at] + segment + jpeg[at:]
 
 
-def encode(views: Sequence[np.ndarray], quality: int) -> bytes:
-  """The MPO bytes of uint8 RGB `views` [H, W, 3], left to right (module docstring)."""
+def encode(views: Sequence[np.ndarray], quality: int,
+           icc_profile: Optional[bytes] = None) -> bytes:
+  """The MPO bytes of uint8 RGB `views` [H, W, 3], left to right (module docstring), each
+  picture with `icc_profile` embedded when given."""
   jpegs: List[bytes] = []
+  colour = {'icc_profile': icc_profile} if icc_profile else {}
   for view in views:
     buffer = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(view, np.uint8), 'RGB').save(
-        buffer, 'JPEG', quality=quality)
+        buffer, 'JPEG', quality=quality, **colour)
     jpegs.append(buffer.getvalue())
   rest = [_insert_app2(jpeg, b'MPF\x00' + _TIFF_HEADER + _attributes(number, 8))
           for number, jpeg in enumerate(jpegs[1:], 2)]

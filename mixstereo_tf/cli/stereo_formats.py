@@ -47,6 +47,8 @@ class StereoResult:
     disparity_colour: uint8 RGB [H, W, 3], the colour-mapped disparity.
     depth_range: (low, high) disparity in pixels shown black .. white in depth images.
     mixture: the input image, uint8 RGB [H, W, 3] (the viewer page's before / after).
+    icc_profile: the input's ICC profile, embedded in the formats that show the views'
+      colours (MPO, JPS, anaglyphs); None: none (sRGB).
   """
   left: np.ndarray
   right: np.ndarray
@@ -54,6 +56,7 @@ class StereoResult:
   disparity_colour: np.ndarray
   depth_range: Tuple[float, float]
   mixture: Optional[np.ndarray] = None
+  icc_profile: Optional[bytes] = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -171,12 +174,18 @@ def _pil(image: np.ndarray) -> Image.Image:
   return Image.fromarray(np.ascontiguousarray(image, np.uint8), 'RGB')
 
 
-def _image_writer(suffix: str, draw: Callable[[StereoResult], np.ndarray]
-                  ) -> Callable[[StereoResult, str], List[str]]:
-  """A writer of one PNG `<stem><suffix>` holding `draw(result)`."""
+def _colour_options(result: StereoResult) -> Dict[str, bytes]:
+  """Pillow save options embedding the views' colour profile, if any."""
+  return {'icc_profile': result.icc_profile} if result.icc_profile else {}
+
+
+def _image_writer(suffix: str, draw: Callable[[StereoResult], np.ndarray],
+                  views_colours: bool = False) -> Callable[[StereoResult, str], List[str]]:
+  """A writer of one PNG `<stem><suffix>` holding `draw(result)`, with the views' colour
+  profile when `views_colours` (the image shows only the views' colours)."""
   def write(result: StereoResult, stem: str) -> List[str]:
     path = stem + suffix
-    _pil(draw(result)).save(path, 'PNG')
+    _pil(draw(result)).save(path, 'PNG', **(_colour_options(result) if views_colours else {}))
     return [path]
   return write
 
@@ -184,14 +193,14 @@ def _image_writer(suffix: str, draw: Callable[[StereoResult], np.ndarray]
 def _write_mpo(result: StereoResult, stem: str) -> List[str]:
   path = stem + '.mpo'
   with open(path, 'wb') as f:
-    f.write(mpo.encode([result.left, result.right], JPEG_QUALITY))
+    f.write(mpo.encode([result.left, result.right], JPEG_QUALITY, result.icc_profile))
   return [path]
 
 
 def _write_jps(result: StereoResult, stem: str) -> List[str]:
   path = stem + '.jps'
   pair = np.concatenate([result.right, result.left], axis=1)  # Cross-eyed: right first.
-  _pil(pair).save(path, 'JPEG', quality=JPEG_QUALITY)
+  _pil(pair).save(path, 'JPEG', quality=JPEG_QUALITY, **_colour_options(result))
   return [path]
 
 
@@ -251,7 +260,8 @@ def _formats() -> Dict[str, StereoFormat]:
   for name, (mixture, description) in _ANAGLYPHS.items():
     draw = functools.partial(_anaglyph_frame, mixture)
     formats[f'anaglyph_{name}'] = StereoFormat(
-        _image_writer(f'_anaglyph_{name}.png', draw), draw, '', description)
+        _image_writer(f'_anaglyph_{name}.png', draw, views_colours=True), draw, '',
+        description)
   return formats
 
 

@@ -106,8 +106,11 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   unmix_start = time.perf_counter()
   outputs = unmixer(image)
   report.unmix_seconds += time.perf_counter() - unmix_start
+  icc_profile = media.icc_profile_of(item.path)
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,
-                                      max_display_disparity, formats, image)
+                                      max_display_disparity, formats, image, icc_profile)
+  if icc_profile:
+    written['icc_profile'] = f'the input\'s, {len(icc_profile)} bytes: kept in the views'
   if orientation != 1:
     written['exif_orientation'] = orientation  # Applied: the outputs are upright.
   if media.truncated_jpeg(item.path):

@@ -10,6 +10,7 @@ import subprocess
 import av
 import cv2
 import numpy as np
+from PIL import Image
 import pytest
 import tensorflow as tf
 
@@ -49,6 +50,35 @@ def _image(path, shape=(40, 50, 3), seed=0):
   image = np.random.RandomState(seed).randint(0, 256, shape).astype(np.uint8)
   media.write_image(str(path), image)
   return image
+
+
+def test_an_inputs_colour_profile_is_kept_in_the_views(setup, tmp_path):
+  from PIL import ImageCms  # pylint: disable=import-outside-toplevel
+  profile = ImageCms.ImageCmsProfile(ImageCms.createProfile('sRGB')).tobytes()
+  image = np.random.RandomState(3).randint(0, 256, (40, 50, 3)).astype(np.uint8)
+  Image.fromarray(image).save(tmp_path / 'p3.png', icc_profile=profile)
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'p3.png'), str(tmp_path / 'out'),
+                                    media.OutputOptions('separate', formats=('mpo', 'jps')))
+  assert report.failures == []
+  out = tmp_path / 'out'
+  for name in ('p3_left.png', 'p3_right.png', 'p3.jps'):
+    with Image.open(out / name) as written:
+      assert written.info.get('icc_profile') == profile, name
+  with Image.open(out / 'p3.mpo') as mpo:
+    assert mpo.n_frames == 2
+    for index in range(2):
+      mpo.seek(index)
+      assert mpo.info.get('icc_profile') == profile
+  with Image.open(out / 'p3_disparity.png') as colour_map:  # Its colours are the map's.
+    assert 'icc_profile' not in colour_map.info
+  with open(out / 'p3_info.json', encoding='utf-8') as f:
+    assert f'{len(profile)} bytes' in json.load(f)['icc_profile']
+  # Without a profile the views carry none (sRGB, as viewers assume).
+  _image(tmp_path / 'plain.png')
+  unmix_files.unmix_inputs(setup, str(tmp_path / 'plain.png'), str(tmp_path / 'out2'),
+                           media.OutputOptions('separate'))
+  with Image.open(tmp_path / 'out2' / 'plain_left.png') as written:
+    assert 'icc_profile' not in written.info
 
 
 class _Terminal(io.StringIO):
