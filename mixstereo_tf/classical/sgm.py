@@ -181,14 +181,16 @@ def lr_check(disparity_left: np.ndarray, disparity_right: np.ndarray,
   Returns:
     (consistent_left, consistent_right): bool [H, W]. A left pixel x is consistent when
     its match m = round(x - d_L) is inside the image and |d_L(x) - d_R(m)| <= threshold;
-    symmetrically m = round(x + d_R) for the right map.
+    symmetrically m = round(x + d_R) for the right map. NaN disparities (no estimate, e.g.
+    occlusions of a forward-warped map) are inconsistent.
   """
   w = disparity_left.shape[1]
   cols = np.arange(w, dtype=np.float32)[None, :]
 
   def check(own, other, sign):
-    match = np.rint(cols + sign * own).astype(np.int64)
-    inside = (match >= 0) & (match < w)
+    finite = np.isfinite(own)
+    match = np.rint(cols + sign * np.where(finite, own, 0.0)).astype(np.int64)
+    inside = finite & (match >= 0) & (match < w)
     looked_up = np.take_along_axis(other, np.clip(match, 0, w - 1), axis=1)
     return inside & (np.abs(own - looked_up) <= threshold)
 

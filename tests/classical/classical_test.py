@@ -1,6 +1,7 @@
 """Classical de-anaglyph / de-diplopia baselines on synthetic scenes with known disparity."""
 
 import dataclasses
+import warnings
 
 import cv2
 import numpy as np
@@ -72,6 +73,17 @@ def test_lr_check_flags_an_inconsistent_pixel():
   ok_left, ok_right = sgm.lr_check(d_left, d_right, 1.0)
   np.testing.assert_array_equal(ok_left[0], [0, 0, 1, 1, 1, 0, 1, 1])
   np.testing.assert_array_equal(ok_right[0], [1, 1, 1, 0, 1, 1, 0, 0])
+
+
+def test_lr_check_reads_nan_as_inconsistent_without_a_cast_warning():
+  d_left = np.full((1, 6), 1.0, np.float32)
+  d_right = d_left.copy()
+  d_left[0, 2], d_right[0, 4] = np.nan, np.nan  # No estimate there (occluded).
+  with warnings.catch_warnings():
+    warnings.simplefilter('error')  # NaN cast to an index warned, and read garbage.
+    ok_left, ok_right = sgm.lr_check(d_left, d_right, 1.0)
+  np.testing.assert_array_equal(ok_left[0], [0, 1, 0, 1, 1, 0])
+  np.testing.assert_array_equal(ok_right[0], [1, 0, 1, 1, 0, 0])
 
 
 def _y_psnr(image, truth):
