@@ -48,7 +48,7 @@ class StereoResult:
     depth_range: (low, high) disparity in pixels shown black .. white in depth images.
     mixture: the input image, uint8 RGB [H, W, 3] (the viewer page's before / after).
     icc_profile: the input's ICC profile, embedded in the formats that show the views'
-      colours (MPO, JPS, anaglyphs); None: none (sRGB).
+      colours (MPO, JPS, anaglyphs, the viewer page's images); None: none (sRGB).
   """
   left: np.ndarray
   right: np.ndarray
@@ -221,7 +221,7 @@ def _write_viewer(result: StereoResult, stem: str) -> List[str]:
       right=result.right, mixture=result.mixture, disparity=result.disparity_colour,
       anaglyph=reencode('dubois', result.left, result.right),
       between=between_views(result.left, result.right, result.disparity),
-      frame_ms=WIGGLE_FRAME_MS)
+      frame_ms=WIGGLE_FRAME_MS, icc_profile=result.icc_profile)
   with open(path, 'w', encoding='utf-8') as f:
     f.write(page)
   return [path]

@@ -18,7 +18,7 @@ import html
 import io
 import json
 import string
-from typing import Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 from PIL import Image
@@ -148,17 +148,19 @@ var FRAME_MS = $frame_ms;
 ''')
 
 
-def data_uri(image: np.ndarray) -> str:
-  """A uint8 RGB image [H, W, 3] as a base64 JPEG data URI."""
+def data_uri(image: np.ndarray, icc_profile: Optional[bytes] = None) -> str:
+  """A uint8 RGB image [H, W, 3] as a base64 JPEG data URI, with `icc_profile` embedded
+  when given."""
   buffer = io.BytesIO()
   Image.fromarray(np.ascontiguousarray(image, np.uint8), 'RGB').save(
-      buffer, 'JPEG', quality=EMBED_QUALITY)
+      buffer, 'JPEG', quality=EMBED_QUALITY, **({'icc_profile': icc_profile}
+                                                if icc_profile else {}))
   return 'data:image/jpeg;base64,' + base64.b64encode(buffer.getvalue()).decode('ascii')
 
 
 def render(title: str, left: np.ndarray, right: np.ndarray, mixture: np.ndarray,
            disparity: np.ndarray, anaglyph: np.ndarray, between: Sequence[np.ndarray],
-           frame_ms: int) -> str:
+           frame_ms: int, icc_profile: Optional[bytes] = None) -> str:
   """The page's HTML text.
 
   Args:
@@ -167,10 +169,12 @@ def render(title: str, left: np.ndarray, right: np.ndarray, mixture: np.ndarray,
       the colour-mapped disparity and the views re-encoded as an anaglyph.
     between: the wiggle's synthesised views from left to right, uint8 RGB [H, W, 3] each.
     frame_ms: milliseconds each wiggle frame is shown.
+    icc_profile: the input's colour profile, embedded in every image but the disparity's.
   """
-  images = {key: data_uri(image) for key, image in (
-      ('left', left), ('right', right), ('mixture', mixture), ('disparity', disparity),
-      ('anaglyph', anaglyph))}
+  images = {key: data_uri(image, None if key == 'disparity' else icc_profile)
+            for key, image in (('left', left), ('right', right), ('mixture', mixture),
+                               ('disparity', disparity), ('anaglyph', anaglyph))}
   return _PAGE.substitute(
       title=html.escape(title), images=json.dumps(images),
-      between=json.dumps([data_uri(image) for image in between]), frame_ms=int(frame_ms))
+      between=json.dumps([data_uri(image, icc_profile) for image in between]),
+      frame_ms=int(frame_ms))

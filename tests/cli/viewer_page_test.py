@@ -1,5 +1,8 @@
 """Tests for mixstereo_tf.cli.viewer_page: the self-contained page, in a headless browser."""
 
+import base64
+import io
+import json
 import re
 import shutil
 import subprocess
@@ -46,6 +49,16 @@ def test_page_is_self_contained(tmp_path):
   assert '://' not in text and re.search(r'(?i)https?:|url\(|@import|src="', text) is None
   assert '<title>scene &lt;1&gt;: recovered stereo pair</title>' in text
   assert text.count('data:image/jpeg;base64,') == 7  # 5 images, 2 synthesised views.
+
+
+def test_images_carry_the_inputs_colour_profile_but_the_disparity_map(tmp_path):
+  profile = b'a colour profile'  # Embedded as given: Pillow does not parse it.
+  gray = np.full(SIZE + (3,), 128, np.uint8)
+  text = viewer_page.render('p3', gray, gray, gray, gray, gray, [gray], 110, profile)
+  images = json.loads(re.search(r'var IMAGES = (\{.*?\});', text).group(1))
+  read = lambda uri: Image.open(io.BytesIO(base64.b64decode(uri.split(',', 1)[1])))
+  for key, uri in images.items():
+    assert read(uri).info.get('icc_profile') == (None if key == 'disparity' else profile), key
 
 
 def test_slider_and_wiggle_change_the_picture_in_a_headless_browser(tmp_path):
