@@ -133,6 +133,24 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
   return families.allowed_name(name, allowed), info
 
 
+def within_image(requested: Tuple[int, int], width: int) -> Tuple[int, int]:
+  """A requested (low, high) range clipped to the disparities an image `width` px wide can
+  hold (|d| <= width - 1), with a warning when that changes it: the info then records the
+  range searched, not the one asked for.
+
+  Raises:
+    ValueError: no disparity of the range fits the image.
+  """
+  low, high = max(int(requested[0]), 1 - width), min(int(requested[1]), width - 1)
+  if low > high:
+    raise ValueError(f'The disparity range {list(requested)} holds no disparity of an image '
+                     f'{width} px wide (at most {width - 1} px either way).')
+  if (low, high) != tuple(requested):
+    logging.warning('The disparity range %s reaches beyond the image (%d px wide): '
+                    'searching [%d, %d].', list(requested), width, low, high)
+  return low, high
+
+
 def estimate_range(image: np.ndarray, name: str, requested: Range,
                    default: Tuple[int, int],
                    hint: Optional[hints.FrameHint] = None,
@@ -144,7 +162,7 @@ def estimate_range(image: np.ndarray, name: str, requested: Range,
   if requested == disparity_range.NETWORK:
     return default
   if requested is not None:
-    return requested
+    return within_image(requested, image.shape[1])
   if plan is not None:
     return plan(image, name, hint)
   return families.of(name).estimate_range(image, name, default, hint)

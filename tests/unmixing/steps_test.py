@@ -123,3 +123,13 @@ def test_a_range_with_min_not_below_max_is_refused():
   with pytest.raises(ValueError, match='MIN < MAX'):
     predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='anaglyph',
                                                       disparity_range=(5, 5)))
+
+
+def test_a_requested_range_beyond_the_image_is_clipped_and_said(caplog):
+  image = np.zeros((8, 40, 3), np.uint8)
+  assert steps.estimate_range(image, 'anaglyph', (-5, 7), (0, 9)) == (-5, 7)
+  with caplog.at_level('WARNING'):
+    assert steps.estimate_range(image, 'anaglyph', (-2000, 2000), (0, 9)) == (-39, 39)
+  assert 'searching [-39, 39]' in caplog.text
+  with pytest.raises(ValueError, match=r'\[100, 200\] holds no disparity of an image 40 px'):
+    steps.estimate_range(image, 'anaglyph', (100, 200), (0, 9))
