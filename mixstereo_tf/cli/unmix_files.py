@@ -19,7 +19,9 @@ top-bottom tagged as such: `streams.STEREO_MODES`), `<name>_disparity<ext>`,
 `<name>_<format><ext>` for the formats drawn as videos (rgbd, anaglyphs; the others are
 skipped, saying why) and `<name>_info.json` (the first unmixed frame's info, frames, frame
 rate, rotation left to players, `turned_upright` degrees, audio streams, the scene cuts
-found in this run, files, the colour maps' `display_range`; `video_files`). Videos are
+found in this run, `shots`: each shot's first frame and decisions (mixture, range, eye
+order, weight; from `shots_from_frame` on when a run resumed), files, the colour maps'
+`display_range`; `video_files`). Videos are
 written resumably (`video.jobs`). Progress
 (`progress.ProgressBar`) is shown for several inputs and for every video's frames.
 

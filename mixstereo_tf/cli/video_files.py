@@ -9,7 +9,7 @@ range searched on the first frame (`display_range`).
 import dataclasses
 import os
 import time
-from typing import Callable, Dict, Optional, TextIO, Tuple
+from typing import Callable, Dict, List, Optional, TextIO, Tuple
 
 from absl import logging
 
@@ -61,16 +61,38 @@ def _frame_images(result: Dict[str, object], layout: str, display: Tuple[float, 
   return images
 
 
+# A shot's decisions, as the video's info lists them (`shot_entry`).
+SHOT_KEYS = ('mixture', 'disparity_range', 'eye_order', 'mixing_weight')
+
+
+def shot_entry(frame: int, info: Dict[str, object]) -> Dict[str, object]:
+  """{'first_frame': frame} and the SHOT_KEYS a frame's info holds."""
+  return dict(first_frame=frame, **{k: info[k] for k in SHOT_KEYS if k in info})
+
+
+def record_shot(shots: List[Dict[str, object]], frame: int, info: Dict[str, object],
+                starts_shot: bool) -> None:
+  """Appends the entry of `frame` to `shots` when it starts a shot (a scene cut or a
+  segment's first frame, with --temporal) or decides otherwise than the last entry
+  (frame by frame)."""
+  entry = shot_entry(frame, info)
+  last = shots[-1] if shots else {}
+  if starts_shot or any(entry.get(k) != last.get(k) for k in ('mixture', 'eye_order')):
+    shots.append(entry)
+
+
 def _drawn_when_done(pending, state: Dict[str, object], layout: str,
-                     display: Tuple[float, float],
-                     drawn: Tuple[str, ...]) -> Callable[[], Dict[str, object]]:
+                     display: Tuple[float, float], drawn: Tuple[str, ...],
+                     starts_shot: bool) -> Callable[[], Dict[str, object]]:
   """The call that draws a frame's images once its unmixing (`pending`, a Future) is done,
   made in frame order on the video writer's thread (`jobs.Rendered`); it records the first
-  frame's info and the progress in `state`."""
+  frame's info, the shot the frame starts (`record_shot`) and the progress in `state`."""
   def images():
     result = pending.result()
     if state['info'] is None:
       state['info'] = dict(result.get('info', {}))
+    record_shot(state['shots'], state['done'] + state['rendered'], result.get('info', {}),
+                starts_shot)
     drawn_images = _frame_images(result, layout, display, drawn)
     state['rendered'] += 1
     state['bar'].update(state['done'] + state['rendered'], state['rendered'])
@@ -96,7 +118,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
   opened = opened or {}
   shots = temporal.VideoState(temporal_config, opened.get('mixture'))
   outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
-  state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None}
+  state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None, 'shots': []}
   pipeline = frame_pipeline.FramePipeline(unmixer, shots)
 
   def on_start(info, done):
@@ -111,7 +133,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
     pending = pipeline.submit(frame, cut=index % video_config.segment_frames == 0,
                               unread='disparity_right')
     report.unmix_seconds += time.perf_counter() - unmix_start
-    return _drawn_when_done(pending, state, layout, display, drawn)
+    return _drawn_when_done(pending, state, layout, display, drawn, shots.started_shot())
 
   job = jobs.VideoJob(item.path, outputs,
                       dict(settings, layout=layout, display_range=list(display),
@@ -133,6 +155,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
       display_range=[round(v, 3) for v in display],
       temporal=temporal_config.enabled,
       scene_cuts=[state['done'] + index for index in shots.cuts],
+      shots=state['shots'], **({'shots_from_frame': state['done']} if state['done'] else {}),
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
       files=[os.path.basename(path) for path in outputs.values()],
       **({'skipped_formats': skipped} if skipped else {}), **_odd_size_note(info)),

@@ -185,6 +185,12 @@ class VideoState:
                      mixing_weight=self._shot.get('mixing_weight'),
                      fallback_mixture=self.fallback_mixture)
 
+  def started_shot(self) -> bool:
+    """Whether the frame begun last started a shot (a scene cut, the first frame or
+    `begin(cut=True)`); never with `config.enabled` off, where every frame is alone."""
+    return (self.config.enabled and bool(self.shot_starts)
+            and self.shot_starts[-1] == self.frames - 1)
+
   def end(self, outputs: Dict[str, object]) -> None:
     """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range,
     mixing weight) when it started the shot, or when its mixture is the larger encoding

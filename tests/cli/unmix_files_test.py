@@ -20,6 +20,7 @@ from mixstereo_tf.artifacts import runs
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import colormap
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
@@ -214,6 +215,10 @@ def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extensio
   info = json.loads((tmp_path / 'once' / 'clip_info.json').read_text())
   assert (info['frames'], info['frame_rate'], info['audio_streams']) == (24, '12', 1)
   assert info['method'] == 'classical' and info['files'] == names
+  # A shot starts at each segment (10 frames): each listed with its decisions.
+  assert [(s['first_frame'], s['mixture'], s['disparity_range']) for s in info['shots']] == [
+      (0, mixture, [0, 8]), (10, mixture, [0, 8]), (20, mixture, [0, 8])]
+  assert 'shots_from_frame' not in info
   # Interrupted after 13 frames: nothing under a final name; the re-run resumes at 10.
   with pytest.raises(Interrupted):
     unmix_files.unmix_inputs(_failing_after(unmixer, 13), source, str(tmp_path / 'again'),
@@ -222,7 +227,9 @@ def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extensio
   report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'again'),
                                     media.OutputOptions(layout, video_config=config))
   assert (report.processed, report.frames) == (1, 14)
-  assert json.loads((tmp_path / 'again' / 'clip_info.json').read_text())['resumed_frames'] == 10
+  resumed = json.loads((tmp_path / 'again' / 'clip_info.json').read_text())
+  assert resumed['resumed_frames'] == 10 and resumed['shots_from_frame'] == 10
+  assert [s['first_frame'] for s in resumed['shots']] == [10, 20]
   assert sorted(os.listdir(tmp_path / 'again')) == sorted(names + ['clip_info.json'])
   for name in names:
     _, once = streams_test.read_all(tmp_path / 'once' / name)
@@ -363,6 +370,17 @@ def test_black_frames_of_a_video_take_its_detected_encoding(tmp_path, temporal_o
   _, frames = streams_test.read_all(tmp_path / 'out' / 'clip_left.mp4')
   assert len(frames) == 30 and frames[3].image.max() < 24  # Black stays black.
   assert frames[10].image.mean() > 60
+
+
+def test_shots_list_each_change_of_decision_frame_by_frame():
+  shots = []
+  for frame, (mixture, starts) in enumerate([('gray', True), ('gray', False),
+                                             ('anaglyph', False), ('anaglyph', True)]):
+    video_files.record_shot(shots, frame, {'mixture': mixture, 'disparity_range': [0, frame],
+                                           'seconds': 1.0}, starts)
+  assert shots == [{'first_frame': 0, 'mixture': 'gray', 'disparity_range': [0, 0]},
+                   {'first_frame': 2, 'mixture': 'anaglyph', 'disparity_range': [0, 2]},
+                   {'first_frame': 3, 'mixture': 'anaglyph', 'disparity_range': [0, 3]}]
 
 
 def test_a_video_resumed_after_its_last_segment_records_what_was_done(tmp_path,

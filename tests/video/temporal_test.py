@@ -53,10 +53,15 @@ def test_cut_found_exactly_at_the_planted_cut(two_shots):
     state.begin(frame)
   assert state.cuts == [7] and state.shot_starts == [0, 7]
   # A forced cut (a segment start) starts a shot without being a scene cut.
-  state = temporal.VideoState()
+  state, started = temporal.VideoState(), []
   for index, frame in enumerate(two_shots):
     state.begin(frame, cut=index == 4)
+    started.append(state.started_shot())
   assert state.cuts == [7] and state.shot_starts == [0, 4, 7]
+  assert [i for i, s in enumerate(started) if s] == [0, 4, 7]
+  alone = temporal.VideoState(temporal.TemporalConfig(enabled=False))
+  alone.begin(two_shots[0])
+  assert not alone.started_shot()  # Every frame decided alone: no shot to list.
 
 
 def test_histogram_distance_known_answers():
