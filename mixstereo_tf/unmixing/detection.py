@@ -91,6 +91,11 @@ class DetectConfig:
     ghost_softness: the logistic's scale on the leak's distance to ghost_fraction: 0.08,
       the standard deviation of the colour encodings' leaks above (0.083; a Dubois
       decision claimed confidence 1 before, whatever its leak).
+    min_brightness: an image whose brightest channel's 99th percentile is below this
+      (0..1) is too dark to tell (no encoding named): the frames of a fade from black,
+      whose colours lie under the codec's noise, read as gray with confidence 1 (a colour
+      video that faded in was unmixed gray throughout). 0.15: a fade's frames read so up
+      to 13% of the picture's brightness, and from 20% on as the picture does.
   """
   width: int = 320
   reach_fraction: float = 0.2
@@ -112,6 +117,7 @@ class DetectConfig:
   ghost_collinearity: float = 0.3
   ghost_fraction: float = 0.3
   ghost_softness: float = 0.08
+  min_brightness: float = 0.15
 
 
 @dataclasses.dataclass(frozen=True)
@@ -179,6 +185,11 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   if min(small.shape[:2]) < 16:
     raise ValueError(f'detect needs an image of at least 16x16 px after downsampling to '
                      f'{config.width} px wide; got {small.shape[1]}x{small.shape[0]}.')
+  brightness = float(np.percentile(small.max(axis=-1), 99.0)) / 255.0
+  if brightness < config.min_brightness:
+    return Detection(None, 0.0, f'too dark to tell its encoding (99% of the pixels below '
+                     f'{brightness:.2f} of full scale, < {config.min_brightness})',
+                     {'brightness': round(brightness, 3)})
   families = family_scores(small, config)
   scores = {f'family:{k}': round(v, 4) for k, v in families.items()}
   family = max(families, key=families.get)

@@ -91,8 +91,9 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
       (`families.undetectable`: a double image model's 'diplopia').
     allowed: the encodings the predictor can unmix.
     weighted: a mixing weight was given (only weighted encodings take one).
-    fallback: for 'auto', the encoding an image with no anaglyph found (or too small to
-      tell) is read as: a video's (`hints.FrameHint.fallback_mixture`: black frames, fades).
+    fallback: for 'auto', the encoding an image with no anaglyph found (or too small or
+      dark to tell) is read as: a video's (`hints.FrameHint.fallback_mixture`: black
+      frames, fades); its info then says 'undecided' (a shot is not decided by it).
 
   Raises:
     NoAnaglyphError: 'auto' on an image that is not an anaglyph or too small to tell.
@@ -104,7 +105,8 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
     if requested == AUTO and not fallback:
       raise NoAnaglyphError(str(e)) from None
     if requested == AUTO:
-      return fallback, {'detected': None, 'detection': str(e), 'read_as': fallback}
+      return fallback, {'detected': None, 'detection': str(e), 'read_as': fallback,
+                        'undecided': True}
     return families.allowed_name(requested, allowed), {'detected': None, 'detection': str(e)}
   info = _detection_info(found)
   if requested == AUTO:
@@ -113,7 +115,7 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
       why = ('a mixing weight given' if weighted else 'the only encoding this predictor '
              'takes') if only else "the video's encoding"
       return only or fallback, dict(info, read_as=f'{only or fallback}: no anaglyph found, '
-                                    f'{why}')
+                                    f'{why}', **({} if only else {'undecided': True}))
     if found.name is None:
       raise NoAnaglyphError(f'This image does not look like an anaglyph ({found.reason}); '
                             'name its mixture (e.g. PredictorConfig.mixture=diplopia).')

@@ -193,8 +193,10 @@ class VideoState:
 
   def end(self, outputs: Dict[str, object]) -> None:
     """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range,
-    mixing weight) when it started the shot, or when its mixture is the larger encoding
-    the shot may still be (`hints.FrameHint.may_be`: the shot settles on it); and its
+    mixing weight) when it is the shot's first frame that decided its encoding (not one
+    read as the video's, 'undecided': black or dark frames of a fade), or when its mixture
+    is the larger encoding the shot may still be (`hints.FrameHint.may_be`: the shot
+    settles on it); and its
     'disparity_left' as the next frame's prior, NaN where its 'consistent_left' (when
     given) says the match failed the left-right check: there the next frame searches the
     valid prior's range nearby (or everything), so a wrong disparity is not inherited."""
@@ -203,7 +205,7 @@ class VideoState:
       self.fallback_mixture = info['mixture']  # The latest encoding found in the video.
     if not self.config.enabled:
       return
-    if not self._shot and 'mixture' in info:
+    if not self._shot and 'mixture' in info and not info.get('undecided'):
       search = info.get('disparity_range')
       self._shot = {'mixture': info['mixture'], 'may_be': info.get('also_fits'),
                     'detection': _detection_of(info),

@@ -147,14 +147,24 @@ def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
   assert '1 of 1 input(s) failed' in unmix_files.failure_message(report)
 
 
-def _anaglyph_clip(path, mixture, frames=24, rotation=0, black=()):
+def _correlated(texture):
+  """A texture whose channels vary together, as a photograph's do (a colour anaglyph of
+  independent random channels shows no displaced channel to detect)."""
+  luma = texture.mean(-1, keepdims=True)
+  return np.clip(luma * 1.3 - 0.5 + 0.35 * (texture - luma) + 0.15 + 0.5
+                 + np.array([0.1, 0.0, -0.1], np.float32), 0, 1)
+
+
+def _anaglyph_clip(path, mixture, frames=24, rotation=0, black=(), fade=0):
   """A stereo clip (a textured plane 3 px behind a box 6 px, both moving) encoded as
   `mixture` anaglyph frames, with a sine audio track; returns the path. With `rotation`
   (degrees counter-clockwise, a multiple of 90) the frames are stored turned back by it
   and the display matrix turns them upright, as a phone filming in portrait stores them.
-  The frames of `black` (indices) are black."""
+  The frames of `black` (indices) are black; the first `fade` frames fade in from black
+  (the texture's channels then vary together: `_correlated`)."""
   texture = cv2.resize(np.random.RandomState(4).rand(20, 60, 3).astype(np.float32), (240, 64),
                        interpolation=cv2.INTER_CUBIC)
+  texture = _correlated(texture) if fade else texture
   images = []
   for index in range(frames):
     shift = 2 * index
@@ -168,6 +178,8 @@ def _anaglyph_clip(path, mixture, frames=24, rotation=0, black=()):
                                                 -(rotation // 90))))
     if index in black:
       images[-1][:] = 0
+    if index < fade:
+      images[-1] = np.round(images[-1] * (index / fade)).astype(np.uint8)
   return streams_test.make_video(path, images, rotation=rotation)
 
 
@@ -370,6 +382,22 @@ def test_black_frames_of_a_video_take_its_detected_encoding(tmp_path, temporal_o
   _, frames = streams_test.read_all(tmp_path / 'out' / 'clip_left.mp4')
   assert len(frames) == 30 and frames[3].image.max() < 24  # Black stays black.
   assert frames[10].image.mean() > 60
+
+
+def test_a_colour_video_fading_in_from_black_is_unmixed_in_colour(tmp_path):
+  """End to end through a fade (its darkest frames too dark to tell, read as the video's
+  encoding; unit tests: detection_test, temporal_test): colour views at the end."""
+  source = _anaglyph_clip(tmp_path / 'fade.mp4', 'anaglyph', frames=36, fade=20)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='auto', disparity_range=(0, 8)))
+  report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'out'))
+  assert (report.processed, report.frames, report.failures) == (1, 36, [])
+  info = json.loads((tmp_path / 'out' / 'fade_info.json').read_text())
+  assert info['shots'][-1]['mixture'] == 'anaglyph'
+  assert 'gray' not in [shot['mixture'] for shot in info['shots']]
+  _, frames = streams_test.read_all(tmp_path / 'out' / 'fade_left.mp4')
+  last = frames[-1].image.astype(float)
+  assert (last.max(-1) - last.min(-1)).mean() > 20  # Colour views, not gray ones.
 
 
 def test_shots_list_each_change_of_decision_frame_by_frame():

@@ -194,3 +194,13 @@ def test_a_dubois_decision_is_as_sure_as_its_leak_is_far_from_the_threshold():
   at_threshold = detection.detect(image, detection.DetectConfig(ghost_fraction=leak - 1e-3))
   assert at_threshold.name == 'dubois_ffmpeg'
   assert at_threshold.confidence == pytest.approx(found.confidence / 2, abs=0.05)
+
+
+def test_a_dark_frame_is_too_dark_to_tell_and_a_dim_one_is_read():
+  """A fade from black: at 6% of its brightness a colour anaglyph read as 'optimized' (and
+  a video's shot kept that); such frames now name no encoding."""
+  left, right, _ = _pair()
+  mixture = _ours('anaglyph', left, right)
+  dark = detection.detect(np.round(mixture * 0.06).astype(np.uint8))
+  assert dark.name is None and 'too dark' in dark.reason
+  assert detection.detect(np.round(mixture * 0.2).astype(np.uint8)).name == 'anaglyph'

@@ -242,3 +242,17 @@ def test_a_frame_of_an_unsettled_shot_is_read_as_the_larger_encoding_only_when_d
   info = unmixer(image, hint=hint)['info']
   assert info['mixture'] == read
   assert info['detected'] == (found if read == 'anaglyph' else 'half_color')
+
+
+def test_a_frame_read_as_the_videos_encoding_does_not_decide_its_shot(two_shots):
+  """The dark frames of a fade are read as the video's encoding ('undecided'); the shot is
+  decided by its first frame whose encoding was found."""
+  state = temporal.VideoState(fallback_mixture='half_color')
+  state.begin(two_shots[0])
+  state.end({'info': {'mixture': 'half_color', 'detected': None, 'undecided': True,
+                      'disparity_range': [0, 5]}})
+  assert state.begin(two_shots[1]).mixture is None  # Still to decide: detected anew.
+  state.end({'info': {'mixture': 'anaglyph', 'detected': 'anaglyph',
+                      'disparity_range': [0, 9]}})
+  hint = state.begin(two_shots[2])
+  assert (hint.mixture, hint.disparity_range) == ('anaglyph', (0, 9))
