@@ -58,13 +58,34 @@ def changed(info: Dict[str, object], path: str) -> bool:
   return {key: info.get(key) for key in ('input_size', 'input_mtime_ns')} != input_stamp(path)
 
 
+def _stale_files(path: str, name: str, files: List[str]) -> List[str]:
+  """The files an earlier `<name>_info.json` at `path` lists that are not in `files`:
+  plain names of that input's outputs (`<name>_*` or `<name>.*`), nothing else."""
+  try:
+    with open(path, encoding='utf-8') as f:
+      earlier = json.load(f).get('files')
+  except (OSError, ValueError, AttributeError):
+    return []
+  if not isinstance(earlier, list):
+    return []
+  return [old for old in earlier if isinstance(old, str) and old not in files
+          and os.path.basename(old) == old and old not in ('.', '..')
+          and (old.startswith(name + '_') or old.startswith(name + '.'))]
+
+
 def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
                request: Optional[Dict] = None) -> str:
   """Writes `<name>_info.json` beside an input's results: what was done to which file (its
   size and modification time, `input_stamp`; the mixture used and detected, with its
   confidence, the disparity range searched, the network's shift and scale, the method,
-  the seconds spent), the files written and what was asked (`describe`)."""
+  the seconds spent), the files written and what was asked (`describe`). Files an earlier
+  run's info listed for this name and this run did not write (another layout, a
+  `disparity16` not written now) are removed first, so that the folder holds one run's
+  results and its info describes all of them."""
   path = os.path.join(output_dir, f'{item.name}_info.json')
+  for stale in _stale_files(path, item.name, list(info.get('files', []))):
+    if os.path.isfile(os.path.join(output_dir, stale)):
+      os.remove(os.path.join(output_dir, stale))
   with open(path, 'w', encoding='utf-8') as f:
     json.dump(dict(info, input=item.path, **input_stamp(item.path),
                    **({'request': request} if request else {})), f, indent=2, sort_keys=True)

@@ -82,6 +82,23 @@ def test_an_inputs_colour_profile_is_kept_in_the_views(setup, tmp_path):
     assert 'icc_profile' not in written.info
 
 
+def test_a_rerun_into_the_same_folder_leaves_only_its_own_results(setup, tmp_path):
+  _image(tmp_path / 'scene.png')
+  out = tmp_path / 'out'
+  (out / 'keep').mkdir(parents=True)
+  (out / 'scene_notes.txt').write_text('not ours: no info lists it')
+  unmix_files.unmix_inputs(setup, str(tmp_path / 'scene.png'), str(out),
+                           media.OutputOptions('separate', formats=('jps',)))
+  assert (out / 'scene_left.png').exists() and (out / 'scene.jps').exists()
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'scene.png'), str(out),
+                                    media.OutputOptions('sbs'))
+  assert report.failures == []
+  info = json.loads((out / 'scene_info.json').read_text())
+  assert sorted(os.listdir(out)) == sorted(info['files'] + ['scene_info.json', 'keep',
+                                                            'scene_notes.txt'])
+  assert 'scene_sbs.png' in info['files'] and not (out / 'scene_left.png').exists()
+
+
 class _Terminal(io.StringIO):
   """A stream that says it is a terminal, so progress is drawn on it."""
 
