@@ -3,7 +3,7 @@ r"""Separates mixture images or videos into two views and a disparity map.
   python -m mixstereo_tf.unmix --saved_model=exports/demo --input=photos/ \
       --output_dir=out --layout=sbs
 
-Inputs: an image, a video (.mp4 .avi .mov .mkv .webm), a folder of them or a glob pattern.
+Inputs: an image, a video (.mp4 .m4v .avi .mov .mkv .webm), a folder of them or a glob pattern.
 An input that cannot be read, unmixed or written is reported with the reason and skipped;
 the others still run, and the exit status is non-zero if any failed. A progress bar with
 the measured frames per second is drawn on stderr when it is a terminal (logged otherwise).

@@ -23,12 +23,13 @@ from mixstereo_tf.video import temporal
 LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
 # The stereo mode a layout's video is tagged with (`streams.STEREO_MODES`).
 STEREO_MODES = {'sbs': 'left_right', 'sbs_half': 'left_right', 'tb': 'top_bottom'}
-IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.bmp', '.ppm', '.pgm', '.pnm', '.tif',
-                    '.tiff', '.webp', '.gif')
-VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv', '.webm')
+IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.jfif', '.bmp', '.ppm', '.pgm', '.pnm',
+                    '.tif', '.tiff', '.webp', '.gif')
+VIDEO_EXTENSIONS = ('.mp4', '.m4v', '.avi', '.mov', '.mkv', '.webm')
 # Video inputs whose results go in another container: WebM holds only VP8 / VP9 / AV1,
-# and the outputs are H.264 (`streams.ENCODERS`), so Matroska, WebM's parent format.
-OUTPUT_CONTAINERS = {'.webm': '.mkv'}
+# and the outputs are H.264 (`streams.ENCODERS`), so Matroska, WebM's parent format; an
+# .m4v (Apple's name for MP4) gives .mp4 files.
+OUTPUT_CONTAINERS = {'.webm': '.mkv', '.m4v': '.mp4'}
 
 
 def write_disparity_png16(path: str, disparity: np.ndarray) -> None:

@@ -467,6 +467,22 @@ def test_a_webm_video_is_unmixed_into_matroska_with_its_audio(tmp_path):
     assert info.audio_streams == 1
 
 
+def test_m4v_videos_and_jfif_images_are_inputs(tmp_path):
+  """Apple's .m4v (MP4) and the .jfif name some browsers save JPEGs under: in a folder
+  they were skipped without a word, named directly refused as images."""
+  source = _anaglyph_clip(tmp_path / 'clip.mp4', 'gray', frames=6)
+  os.rename(source, tmp_path / 'clip.m4v')
+  image = _image(tmp_path / 'photo.png')
+  (tmp_path / 'photo.jfif').write_bytes(cv2.imencode('.jpg', image[..., ::-1])[1].tobytes())
+  os.remove(tmp_path / 'photo.png')
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='gray', disparity_range=(0, 8)))
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path), str(tmp_path / 'out'))
+  assert (report.processed, report.frames, report.failures) == (2, 7, [])
+  _, frames = streams_test.read_all(tmp_path / 'out' / 'clip_left.mp4')
+  assert len(frames) == 6 and (tmp_path / 'out' / 'photo_left.png').exists()
+
+
 def test_a_video_without_any_anaglyph_names_itself(tmp_path):
   source = _anaglyph_clip(tmp_path / 'dark.mp4', 'gray', frames=6, black=set(range(6)))
   unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='auto'))
