@@ -148,6 +148,9 @@ def _sgbm(config: PredictorConfig) -> Unmixer:
     raise ValueError("PredictorConfig.method='sgbm' takes neither "
                      'PredictorConfig.saved_model nor PredictorConfig.checkpoint.')
   supported = families.detected().names
+  if config.mixture is None:
+    raise ValueError("PredictorConfig.method='sgbm' needs PredictorConfig.mixture (an "
+                     "anaglyph encoding or 'auto').")
   if config.mixture not in supported + (steps.AUTO,):
     raise ValueError(f"PredictorConfig.method='sgbm' needs PredictorConfig.mixture, an "
                      f"anaglyph encoding or 'auto' (got {config.mixture}); supported: "

@@ -121,6 +121,9 @@ def test_build_unmixer_checks_its_arguments(tmp_path):
     build(method='classical', saved_model='a', mixture='anaglyph')
   with pytest.raises(ValueError, match='needs PredictorConfig.mixture'):
     build(method='classical')
+  with pytest.raises(ValueError, match=r"needs PredictorConfig.mixture \(an anaglyph encoding "
+                     r"or 'auto'\)\.$"):
+    build(method='sgbm')  # It said '(got None)', as if None were a wrong name.
   with pytest.raises(ValueError, match='monocular'):
     build(method='classical', mixture='monocular')
   with pytest.raises(ValueError, match='anaglyph'):
