@@ -85,11 +85,12 @@ def _drawn_when_done(pending, state: Dict[str, object], layout: str,
                      display: Tuple[float, float], drawn: Tuple[str, ...],
                      starts_shot: bool) -> Callable[[], Dict[str, object]]:
   """The call that draws a frame's images once its unmixing (`pending`, a Future) is done,
-  made in frame order on the video writer's thread (`jobs.Rendered`); it records the first
-  frame's info, the shot the frame starts (`record_shot`) and the progress in `state`."""
+  made in frame order on the video writer's thread (`jobs.Rendered`); it records the
+  video's first frame's info (not a resumed run's first: `opening`'s stands for it), the
+  shot the frame starts (`record_shot`) and the progress in `state`."""
   def images():
     result = pending.result()
-    if state['info'] is None:
+    if state['info'] is None and not state['done']:
       state['info'] = dict(result.get('info', {}))
     record_shot(state['shots'], state['done'] + state['rendered'], result.get('info', {}),
                 starts_shot)
@@ -110,7 +111,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
   """Unmixes every frame of a video into layout, disparity and `formats` videos
   (resumable, `video.jobs`; side by side and top-bottom tagged so), writes
   `<name>_info.json` (with `request`; `opened`, the `opening` frame's info, when this run
-  unmixes no frame) and returns the frames unmixed in this run; `report` gains the seconds
+  resumed) and returns the frames unmixed in this run; `report` gains the seconds
   spent unmixing. Frames go through a `temporal.VideoState` (shots; frames with no
   anaglyph found read as `opened`'s encoding until a shot finds one) and `frame_pipeline`;
   their images are drawn and written in order on the writer's thread."""

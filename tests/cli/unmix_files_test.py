@@ -258,6 +258,10 @@ def test_video_resumes_after_interruption_with_audio(tmp_path, mixture, extensio
   assert (report.processed, report.frames) == (1, 14)
   resumed = json.loads((tmp_path / 'again' / 'clip_info.json').read_text())
   assert resumed['resumed_frames'] == 10 and resumed['shots_from_frame'] == 10
+  # The top level describes the video's first frame, as an uninterrupted run's does, not
+  # the resumed part's first.
+  for key in ('mixture', 'disparity_range', 'detected', 'confidence'):
+    assert resumed[key] == info[key], key
   assert [s['first_frame'] for s in resumed['shots']] == [10, 20]
   assert sorted(os.listdir(tmp_path / 'again')) == sorted(names + ['clip_info.json'])
   for name in names:
