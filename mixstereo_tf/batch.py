@@ -60,7 +60,7 @@ def main(argv):
   try:
     config = cli_flags.unmix_predictor_config()
     predictors.build_unmixer(config)  # A bad predictor flag fails here, not on workers.
-    items = beam_batch.list_inputs(FLAGS.input, FLAGS.input_list)
+    items = beam_batch.list_inputs(FLAGS.input, FLAGS.input_list, FLAGS.output_dir)
     options = cli_flags.output_options(config)
     pipeline_options = beam_batch.pipeline_options(argv[1:])
     media.prepare_output_dir(items, FLAGS.output_dir)

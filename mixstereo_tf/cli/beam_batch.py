@@ -2,8 +2,9 @@
 
 The one module that imports Beam (the `.[beam]` extra), so the base install stays light.
 Each input gets exactly the outputs and `<name>_info.json` that `mixstereo-unmix` writes
-(`unmix_files`), names from `media.output_names` over the whole input list. The unmixer is
-built once per worker (`_UnmixFn.setup`). Runs are resumable: an input whose outputs are
+(`unmix_files`), names from `media.output_names` over the whole input list (an input an
+earlier run into the folder named keeps its name, so a grown archive renames nothing). The
+unmixer is built once per worker (`_UnmixFn.setup`). Runs are resumable: an input whose outputs are
 complete (`completed_info`) is skipped. An input that fails with one of
 `unmix_files.INPUT_ERRORS` goes to the dead-letter list and the job goes on; any other
 error is a bug and fails the job, as in `mixstereo-unmix`. The output folder also gets
@@ -47,10 +48,12 @@ _DEAD = 'dead_letters'  # The DoFn's tagged output of failed inputs.
 DEFAULT_RUNNER = 'FnApiRunner'
 
 
-def read_input_list(path: str) -> List[media.MediaItem]:
+def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
+                    ) -> List[media.MediaItem]:
   """The items of a text file holding one input path per line (blank lines and lines
   starting with '#' ignored, a repeated path taken once), on any file system Beam reads
-  (`.gz` and other compressed lists are decompressed).
+  (`.gz` and other compressed lists are decompressed), named by `media.output_names` (with
+  `earlier`, the names an earlier run gave).
 
   Raises:
     ValueError: the list cannot be read, is empty, or names a non-local path (workers
@@ -71,21 +74,24 @@ def read_input_list(path: str) -> List[media.MediaItem]:
                        'path; workers read inputs as local files (mount the file system '
                        'and list the mounted paths).')
   return [media.MediaItem(entry, os.path.splitext(entry)[1].lower() in media.VIDEO_EXTENSIONS,
-                          name) for entry, name in zip(paths, media.output_names(paths))]
+                          name) for entry, name in zip(paths, media.output_names(paths, earlier))]
 
 
-def list_inputs(input_spec: Optional[str], input_list: Optional[str]) -> List[media.MediaItem]:
+def list_inputs(input_spec: Optional[str], input_list: Optional[str],
+                output_dir: str = '') -> List[media.MediaItem]:
   """The items of `--input` (as `mixstereo-unmix` expands it: `media.iter_inputs`) or of
-  `--input_list` (`read_input_list`); exactly one must be given.
+  `--input_list` (`read_input_list`); exactly one must be given. Inputs an earlier run into
+  `output_dir` named keep their names (`info_file.earlier_names`).
 
   Raises:
     ValueError: both or neither given, or the given one names nothing usable.
   """
   if (input_spec is None) == (input_list is None):
     raise ValueError('Give exactly one of --input and --input_list.')
+  earlier = info_file.earlier_names(output_dir) if output_dir else {}
   if input_list is not None:
-    return read_input_list(input_list)
-  return list(media.iter_inputs(input_spec))
+    return read_input_list(input_list, earlier)
+  return list(media.iter_inputs(input_spec, earlier))
 
 
 def completed_info(output_dir: str, name: str) -> Optional[Dict[str, object]]:

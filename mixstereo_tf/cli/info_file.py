@@ -58,6 +58,28 @@ def changed(info: Dict[str, object], path: str) -> bool:
   return {key: info.get(key) for key in ('input_size', 'input_mtime_ns')} != input_stamp(path)
 
 
+INFO_SUFFIX = '_info.json'
+
+
+def earlier_names(output_dir: str) -> Dict[str, str]:
+  """{real path of an input: its output name} of the info files in `output_dir` (none
+  when it does not exist; unreadable ones skipped): what earlier runs named each input."""
+  if not os.path.isdir(output_dir):
+    return {}
+  names = {}
+  for file_name in sorted(os.listdir(output_dir)):
+    if not file_name.endswith(INFO_SUFFIX):
+      continue
+    try:
+      with open(os.path.join(output_dir, file_name), encoding='utf-8') as f:
+        source = json.load(f).get('input')
+    except (OSError, ValueError, AttributeError):
+      continue
+    if isinstance(source, str):
+      names[os.path.realpath(source)] = file_name[:-len(INFO_SUFFIX)]
+  return names
+
+
 def _stale_files(path: str, name: str, files: List[str]) -> List[str]:
   """The files an earlier `<name>_info.json` at `path` lists that are not in `files`:
   plain names of that input's outputs (`<name>_*` or `<name>.*`), nothing else."""
@@ -82,7 +104,7 @@ def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
   run's info listed for this name and this run did not write (another layout, a
   `disparity16` not written now) are removed first, so that the folder holds one run's
   results and its info describes all of them."""
-  path = os.path.join(output_dir, f'{item.name}_info.json')
+  path = os.path.join(output_dir, item.name + INFO_SUFFIX)
   for stale in _stale_files(path, item.name, list(info.get('files', []))):
     if os.path.isfile(os.path.join(output_dir, stale)):
       os.remove(os.path.join(output_dir, stale))

@@ -208,21 +208,31 @@ def _extension(path: str) -> str:
   return os.path.splitext(path)[1].lower()
 
 
-def output_names(paths: Sequence[str]) -> List[str]:
+def output_names(paths: Sequence[str],
+                 earlier: Optional[Dict[str, str]] = None) -> List[str]:
   """Output-name prefixes for input paths, distinct so no input overwrites another's files.
 
   The file stem, unless several inputs share it (`a.png` and `a.jpg`): then stem + '_' +
   extension (`a_png`, `a_jpg`). A name still taken (the same file name in two folders of a
   glob, or another input's stem) gets '_2', '_3', ... in input order. Names are compared
   case-insensitively, so outputs also stay apart on case-insensitive file systems.
+  `earlier` ({real path: name}, `info_file.earlier_names`): the names an earlier run into
+  the output folder gave; an input keeps its own, and no other input takes one, so that a
+  rerun over a grown archive neither renames nor overwrites earlier results.
   """
+  earlier = earlier or {}
+  kept = [earlier.get(os.path.realpath(path)) for path in paths]
   stems = [os.path.splitext(os.path.basename(path))[0] for path in paths]
   shared = collections.Counter(stem.casefold() for stem in stems)
   wanted = [stem if shared[stem.casefold()] == 1 else f'{stem}_{os.path.splitext(path)[1][1:]}'
             for stem, path in zip(stems, paths)]
   reserved = {name.casefold() for name in wanted}
-  names, taken = [], set()
-  for name in wanted:
+  taken = {name.casefold() for name in earlier.values()}
+  names = []
+  for name, keep in zip(wanted, kept):
+    if keep is not None:
+      names.append(keep)
+      continue
     unique, number = name, 1
     # A numbered name must not take a name another input wants as it is.
     while unique.casefold() in taken or (number > 1 and unique.casefold() in reserved):
@@ -233,14 +243,14 @@ def output_names(paths: Sequence[str]) -> List[str]:
   return names
 
 
-def iter_inputs(spec: str) -> Iterator[MediaItem]:
+def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None) -> Iterator[MediaItem]:
   """Expands an input specification into items, without reading them.
 
   Args:
     spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images and
       videos, sorted by name; other files ignored) or a glob pattern (matching images and
       videos, sorted; `**` matches any depth of folders). Items are named by
-      `output_names`.
+      `output_names` (with `earlier`, the names an earlier run gave).
 
   Raises:
     ValueError: nothing exists at `spec`, or the folder / pattern holds no usable file.
@@ -261,7 +271,7 @@ def iter_inputs(spec: str) -> Iterator[MediaItem]:
       raise ValueError(f'No images or videos match the pattern {spec}')
   else:
     raise ValueError(f'Input not found: {spec}')
-  for path, name in zip(paths, output_names(paths)):
+  for path, name in zip(paths, output_names(paths, earlier)):
     yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS, name)
 
 

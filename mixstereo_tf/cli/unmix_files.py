@@ -161,7 +161,7 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
     ValueError: `input_spec` names nothing usable, or `output_dir` cannot take the results
       (`media.prepare_output_dir`).
   """
-  items = list(media.iter_inputs(input_spec))
+  items = list(media.iter_inputs(input_spec, info_file.earlier_names(output_dir)))
   media.prepare_output_dir(items, output_dir)
   report = UnmixReport()
   run_start = time.perf_counter()

@@ -123,6 +123,15 @@ def test_rotated_tiff_reads_upright(tmp_path, orientation, stored):
   np.testing.assert_array_equal(image, upright)
 
 
+def test_output_names_keep_the_names_an_earlier_run_gave(tmp_path):
+  old, new = str(tmp_path / 'b' / 'x.png'), str(tmp_path / 'a' / 'x.png')
+  assert media.output_names([new, old]) == ['x_png', 'x_png_2']  # Renamed by the list.
+  earlier = {os.path.realpath(old): 'x', os.path.realpath(str(tmp_path / 'gone.png')): 'y'}
+  # The earlier input keeps 'x'; no new input takes 'x' or the name of one not listed now.
+  assert media.output_names([new, old], earlier) == ['x_png', 'x']
+  assert media.output_names([str(tmp_path / 'y.png')], earlier) == ['y_2']
+
+
 def test_iter_inputs_folder_lists_videos_too(tmp_path):
   _write_png(tmp_path / 'b.png', 10)
   (tmp_path / 'a.mp4').write_bytes(b'not decoded when listed')

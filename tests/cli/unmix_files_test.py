@@ -99,6 +99,26 @@ def test_a_rerun_into_the_same_folder_leaves_only_its_own_results(setup, tmp_pat
   assert 'scene_sbs.png' in info['files'] and not (out / 'scene_left.png').exists()
 
 
+def test_a_rerun_over_a_grown_archive_keeps_every_earlier_name(setup, tmp_path):
+  """Names came from the whole input list: an input added beside one of the same file name
+  renamed the earlier one's results and overwrote them with its own."""
+  os.makedirs(tmp_path / 'scans' / 'b')
+  _image(tmp_path / 'scans' / 'b' / 'x.png', seed=1)
+  pattern, out = str(tmp_path / 'scans' / '**' / '*.png'), tmp_path / 'out'
+  unmix_files.unmix_inputs(setup, pattern, str(out))
+  before = (out / 'x_left.png').read_bytes()
+  os.makedirs(tmp_path / 'scans' / 'a')
+  _image(tmp_path / 'scans' / 'a' / 'x.png', seed=2)
+  report = unmix_files.unmix_inputs(setup, pattern, str(out))
+  assert (report.processed, report.failures) == (2, [])
+  assert (out / 'x_left.png').read_bytes() == before
+  info = lambda name: json.loads((out / f'{name}_info.json').read_text())['input']
+  assert info('x').endswith(os.path.join('b', 'x.png'))
+  assert info('x_png').endswith(os.path.join('a', 'x.png'))
+  assert sorted(f for f in os.listdir(out) if f.endswith('_info.json')) == [
+      'x_info.json', 'x_png_info.json']  # b's results were not made again as x_png_2.
+
+
 class _Terminal(io.StringIO):
   """A stream that says it is a terminal, so progress is drawn on it."""
 
