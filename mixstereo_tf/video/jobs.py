@@ -12,7 +12,8 @@ replaced atomically after it. A re-run with a matching manifest keeps the finish
 and renders from the first missing one; otherwise it starts afresh. At the end each output
 is assembled (`assembly.assemble`: the segments' packets and the input's audio, copied) under
 a temporary name `<stem>.partial<ext>` and renamed, so an interrupted run never leaves a
-file with a final name that is not complete; then the folder is removed.
+file with a final name that is not complete; then the folder is removed, with those of
+earlier runs of the same input that stopped before their end (other outputs or settings).
 """
 
 import dataclasses
@@ -205,6 +206,23 @@ def _render_segments(job, manifest, info, frames, done, render) -> None:
       segment.abort()
 
 
+def _abandoned_folders(job: VideoJob):
+  """The other segment folders beside `job.folder` whose manifest names the same input:
+  runs of it with other outputs or settings that stopped before their end."""
+  parent = os.path.dirname(job.folder) or '.'
+  source = os.path.abspath(job.input_path)
+  for name in sorted(os.listdir(parent)):
+    folder = os.path.join(parent, name)
+    if not name.endswith('.segments') or os.path.abspath(folder) == os.path.abspath(job.folder):
+      continue
+    try:
+      with open(os.path.join(folder, MANIFEST), encoding='utf-8') as f:
+        if json.load(f).get('input') == source:
+          yield folder
+    except (OSError, ValueError, AttributeError):
+      continue
+
+
 def run(job: VideoJob, render: Callable[[np.ndarray], Rendered],
         on_start: Optional[Callable[[streams.VideoInfo, int], None]] = None
         ) -> Dict[str, object]:
@@ -247,5 +265,7 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Rendered],
                       job.input_path, info.rotation, job.stereo_modes.get(key))
     os.replace(partial_path(path), path)
   shutil.rmtree(job.folder)
+  for folder in _abandoned_folders(job):  # Its results are these now.
+    shutil.rmtree(folder, ignore_errors=True)
   total = sum(entry['frames'] for entry in manifest['segments'])
   return {'info': info, 'frames': total, 'resumed_frames': done}

@@ -89,6 +89,22 @@ def test_changed_settings_or_input_start_afresh(tmp_path):
   assert streams_test.read_all(job.outputs['sbs'])[0].width == 192
 
 
+def test_a_finished_run_removes_the_folders_of_its_inputs_stopped_runs(tmp_path):
+  """Stopped with other outputs (another layout), then run to the end: the stopped run's
+  segments stayed for good. Another input's stopped run is kept."""
+  source = streams_test.make_video(tmp_path / 'in.mp4',
+                                    [streams_test.pattern(i) for i in range(12)])
+  other = streams_test.make_video(tmp_path / 'other.mp4',
+                                   [streams_test.pattern(i) for i in range(12)])
+  stopped, kept = _job(tmp_path, source, 'left'), _job(tmp_path, other, 'its')
+  for job in (stopped, kept):
+    with pytest.raises(Interrupted):
+      jobs.run(job, _renderer([], fail_at=9))
+  assert os.path.isdir(stopped.folder) and os.path.isdir(kept.folder)
+  jobs.run(_job(tmp_path, source, 'tb'), _renderer([]))
+  assert not os.path.exists(stopped.folder) and os.path.isdir(kept.folder)
+
+
 def test_an_unreadable_input_leaves_no_job_folder(tmp_path):
   source = tmp_path / 'broken.mp4'
   source.write_bytes(b'\x00\x00\x00\x18ftypmp42 truncated')
