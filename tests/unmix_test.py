@@ -90,6 +90,9 @@ def test_bad_input_is_named(tmp_path):
                  f'--input={tmp_path}/gray.png'], tmp_path)
   assert result.returncode != 0
   assert '--disparity_range: disparity range needs MIN < MAX' in result.stderr
+  # The message alone, not under the whole help text (absl's usage printout).
+  assert 'Separates mixture images' not in result.stderr
+  assert '(--help shows the usage)' in result.stderr
 
 
 def test_unmix_with_no_model_flag_uses_the_shipped_model(tmp_path):

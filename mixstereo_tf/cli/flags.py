@@ -8,6 +8,7 @@ config dataclasses. Library code raises errors naming config fields
 
 import dataclasses
 import functools
+import os
 import sys
 from typing import Any, Dict, Optional, Sequence, Tuple
 
@@ -218,11 +219,22 @@ def require_unless_listing(*names: str) -> None:
 def run_binary(main, doc: str, **kwargs) -> None:
   """`app.run(main, **kwargs)` with `doc` (the binary's module docstring) as the `--help`
   text, also under a console-script wrapper (`mixstereo-unmix`), whose `__main__` has
-  none: absl printed a bare usage line there."""
+  none: absl printed a bare usage line there. A usage error raised by `main` (a bad flag
+  value, a missing input, an output folder that cannot be made) is printed as its message
+  alone: absl printed the whole help text above it."""
   module = sys.modules['__main__']
   if not getattr(module, '__doc__', None):
     module.__doc__ = doc
-  app.run(main, **kwargs)
+
+  def main_with_short_errors(argv):
+    try:
+      return main(argv)
+    except app.UsageError as e:
+      name = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else 'error'
+      sys.stderr.write(f'{name}: {e}\n(--help shows the usage)\n')
+      sys.exit(e.exitcode)
+
+  app.run(main_with_short_errors, **kwargs)
 
 
 def exit_if_listing() -> None:
