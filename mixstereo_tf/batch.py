@@ -72,6 +72,8 @@ def main(argv):
   # job service relays each line again: relayed lines are dropped.
   std_logging.getLogger('apache_beam.runners.portability.local_job_service').setLevel(
       std_logging.CRITICAL)
+  for name in ('apache_beam.runners.common', 'apache_beam.runners.worker.bundle_processor'):
+    std_logging.getLogger(name).addFilter(beam_batch.DropInterrupts())  # Ctrl-C's traceback.
   try:
     counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
   except (KeyboardInterrupt, RuntimeError) as e:  # Beam re-raises Ctrl-C as RuntimeError.

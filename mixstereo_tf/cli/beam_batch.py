@@ -19,6 +19,7 @@ from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 
 import csv  # pylint: disable=g-bad-import-order
 import json
+import logging as std_logging
 import os
 import time
 from typing import Dict, Iterator, List, Optional, Sequence, Tuple
@@ -221,6 +222,14 @@ def build(pipeline: beam.Pipeline, items: Sequence[media.MediaItem],
        | 'WriteSummary' >> beam.Map(lambda rows: _write_csv(summary, SUMMARY_FIELDS, rows)))
   _ = (results[_DEAD] | 'AllFailures' >> beam.combiners.ToList()
        | 'WriteDeadLetters' >> beam.Map(lambda rows: _write_csv(dead, ('input', 'error'), rows)))
+
+
+class DropInterrupts(std_logging.Filter):
+  """Drops the log record (with its traceback) Beam writes when Ctrl-C stops a transform:
+  the tool then says in one line that it was interrupted and how to continue."""
+
+  def filter(self, record: std_logging.LogRecord) -> bool:
+    return 'KeyboardInterrupt' not in record.getMessage()
 
 
 def pipeline_options(args: Sequence[str]) -> PipelineOptions:

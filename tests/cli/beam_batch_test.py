@@ -4,6 +4,7 @@ import csv
 import dataclasses
 import gzip
 import json
+import logging as std_logging
 import os
 import subprocess
 import sys
@@ -228,3 +229,11 @@ def test_an_interrupted_binary_exits_130_saying_how_to_continue(tmp_path):
   assert 'Interrupted: the inputs finished so far are kept' in result.stderr
   assert 'Traceback' not in result.stderr
 
+
+
+def test_beams_record_of_a_ctrl_c_is_dropped_and_others_kept():
+  keep = beam_batch.DropInterrupts().filter
+  record = lambda message: std_logging.LogRecord('beam', std_logging.ERROR, 'f.py', 1,
+                                                 message, (), None)
+  assert not keep(record("KeyboardInterrupt [while running 'Unmix/ParDo(_UnmixFn)']"))
+  assert keep(record("ValueError [while running 'Unmix/ParDo(_UnmixFn)']"))
