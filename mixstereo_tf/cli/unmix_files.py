@@ -32,9 +32,11 @@ a new shot, so a resumed run starts each segment from the state an uninterrupted
 there.
 """
 
+import contextlib
 import dataclasses
+import logging as std_logging
 import time
-from typing import Dict, List, Optional, TextIO, Tuple
+from typing import Dict, Iterator, List, Optional, TextIO, Tuple
 
 from absl import logging
 import cv2
@@ -144,6 +146,31 @@ def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: s
                       options.max_display_disparity, report, options.formats, request)
 
 
+class _NamingInput(std_logging.Filter):
+  """Prefixes warnings and errors with the input they concern (`naming_input`)."""
+
+  def __init__(self, path: str):
+    super().__init__()
+    self.path = path
+
+  def filter(self, record: std_logging.LogRecord) -> bool:
+    if record.levelno >= std_logging.WARNING and not str(record.msg).startswith(self.path):
+      record.msg = f'{self.path}: {record.msg}'
+    return True
+
+
+@contextlib.contextmanager
+def naming_input(path: str) -> Iterator[None]:
+  """While inside, the warnings logged (by any thread) name `path`: the library's own
+  (a detected encoding's doubt, a clipped range) do not know the file."""
+  naming = _NamingInput(path)
+  logging.get_absl_logger().addFilter(naming)
+  try:
+    yield
+  finally:
+    logging.get_absl_logger().removeFilter(naming)
+
+
 def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
                  options: media.OutputOptions = media.OutputOptions(),
                  progress_stream: Optional[TextIO] = None) -> UnmixReport:
@@ -170,7 +197,8 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
     if bar and item.is_video:
       bar.clear()  # The video draws its own frame progress.
     try:
-      frames = unmix_item(unmixer, item, output_dir, options, report, progress_stream)
+      with naming_input(item.path):
+        frames = unmix_item(unmixer, item, output_dir, options, report, progress_stream)
     except INPUT_ERRORS as e:
       if bar:
         bar.clear()

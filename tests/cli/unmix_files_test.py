@@ -643,3 +643,13 @@ def test_side_by_side_video_is_tagged_and_draws_rgbd(tmp_path):
   assert len(frames) == 4 and frames[0].image.shape == (64, 192, 3)
   depth = frames[0].image[:, 96:].astype(int)
   assert np.abs(depth[..., 0] - depth[..., 2]).max() <= 6  # Gray (after 4:2:0 chroma).
+
+
+def test_warnings_while_an_input_runs_name_it(caplog):
+  from absl import logging  # pylint: disable=import-outside-toplevel
+  with caplog.at_level('WARNING'):
+    with unmix_files.naming_input('scans/a.jpg'):
+      logging.warning('Detected %s, the smallest encoding', 'half_color')
+    logging.warning('after it')
+  assert [r.getMessage() for r in caplog.records] == [
+      'scans/a.jpg: Detected half_color, the smallest encoding', 'after it']
