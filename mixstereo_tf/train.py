@@ -218,7 +218,7 @@ def main(argv):
                         flags_text=FLAGS.flags_into_string(),
                         extra_configs={'data': data_config, 'pipeline': pipeline_config})
   except runs.RunDirError as e:
-    raise app.UsageError(str(e)) from None
+    raise flag_errors.usage_error(e, stage_training.RENAMED) from None
   except loop.NonFiniteLossError as e:
     logging.error('%s', e)
     sys.exit(f'error: {e}')

@@ -14,6 +14,7 @@ checkpoint) or a checkpoint prefix such as `runs/demo/ckpt-7000` (its folder is 
 import dataclasses
 import json
 import os
+import re
 from typing import Any, Dict, Iterator, Optional, Tuple
 
 import tensorflow as tf
@@ -92,6 +93,11 @@ def check_resumable(model_dir: str, **configs: Any) -> None:
     except json.JSONDecodeError:
       return  # Nothing to compare: the run is rewritten from these configs.
   changed = list(_changes(old, json.loads(to_json(**configs))))
+  # 'train.learning_rate' as 'TrainConfig.learning_rate': the tools name its flag.
+  classes = {name: type(config).__name__ for name, config in configs.items()
+             if dataclasses.is_dataclass(config)}
+  changed = [re.sub(r'^(\w+)\.(\w+):', lambda m: f'{classes.get(m[1], m[1])}.{m[2]}:', c)
+             for c in changed]
   if changed:
     raise RunDirError(f'{model_dir} holds checkpoints of another run configuration; resuming '
                      f'would change {"; ".join(changed)}. Give these flags as that run did, '

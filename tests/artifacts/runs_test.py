@@ -1,5 +1,6 @@
 """Tests for mixstereo_tf.artifacts.runs: the run directory, RunInfo and checkpoint lookup."""
 
+import dataclasses
 import json
 import os
 import shutil
@@ -95,6 +96,21 @@ def test_resuming_refuses_another_configuration(tmp_path):
   assert json.loads((tmp_path / 'r' / runs.CONFIG_FILE).read_text())['pipeline'] == pipeline
   with pytest.raises(runs.RunDirError, match='model.'):
     runs.write_run_files(run_dir, None, train=train, model={'other': 1}, pipeline=pipeline)
+
+
+@dataclasses.dataclass(frozen=True)
+class _StepConfig:
+  learning_rate: float = 1e-4
+  widths: tuple = (8, 16)
+
+
+def test_a_refused_resume_names_config_fields_the_tools_turn_into_flags(tmp_path):
+  run_dir = str(tmp_path / 'r')
+  runs.write_run_files(run_dir, None, train=_StepConfig(), model=TINY)
+  tf.train.Checkpoint(step=tf.Variable(1)).save(os.path.join(run_dir, 'ckpt'))
+  with pytest.raises(runs.RunDirError, match=r'would change _StepConfig\.learning_rate: '
+                     r'0\.0001 -> 0\.001\. Give'):
+    runs.write_run_files(run_dir, None, train=_StepConfig(learning_rate=1e-3), model=TINY)
 
 
 def test_a_file_as_run_directory_is_named(tmp_path):
