@@ -12,6 +12,7 @@ a model sees the image as it is, as in the paper) unless --disparity_range is gi
 """
 
 import dataclasses
+import sys
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
 
@@ -98,7 +99,8 @@ def main(argv):
   if FLAGS.output_csv:
     report.write_csv(FLAGS.output_csv, result.rows)
   if FLAGS.output_markdown:
-    report.write_markdown(FLAGS.output_markdown, result)
+    report.write_markdown(FLAGS.output_markdown, result, report.provenance(
+        sys.argv, predictors.weights_identity(predictor)))
 
 
 def run():

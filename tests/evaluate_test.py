@@ -80,6 +80,13 @@ def test_kitti_tables_partial_rule_and_paper_rows(tmp_path):
   text = report.markdown_report(diplopia)
   assert '| paper: oracle (clean pair) |' in text and '5.28%' in text and '6.67%' in text
   assert '17.03' in text and '13.66%' not in text
+  # What wrote it comes first: the command, the machine and the weights.
+  source = report.provenance(['/usr/bin/mixstereo-eval', '--protocol=kitti2015',
+                              '--data_dir=my data'], 'ckpt-8.index sha256:0123')
+  assert source.startswith("Written by `mixstereo-eval --protocol=kitti2015 "
+                           "'--data_dir=my data'` on ")
+  assert source.endswith('CPU cores; weights ckpt-8.index sha256:0123.')
+  assert report.markdown_report(diplopia, source).startswith(source + '\n\n**')
 
 
 def test_eigen_and_sample_tables(tmp_path):

@@ -6,8 +6,10 @@ paper's with its published rows beside ours; `evaluation/protocols/`).
 
 import csv
 import os
+import platform
+import shlex
 import statistics
-from typing import Any, Dict, Sequence
+from typing import Any, Dict, Optional, Sequence
 
 from mixstereo_tf.evaluation import protocols
 from mixstereo_tf.evaluation import results
@@ -30,11 +32,22 @@ def format_report(result: results.EvalResult) -> str:
   return '\n'.join(parts) + _footer(result) + '\n'
 
 
-def markdown_report(result: results.EvalResult) -> str:
-  """The same tables as GitHub Markdown."""
+def provenance(command: Sequence[str], weights: Optional[str]) -> str:
+  """One Markdown line saying what wrote a report: the command (shell-quoted), the machine
+  (OS, architecture, CPU cores) and the weights' identity (`predictors.weights_identity`;
+  None: no weights named, e.g. the classical method or a shipped default)."""
+  machine = f'{platform.system()} {platform.machine()}, {os.cpu_count()} CPU cores'
+  named = f'; weights {weights}' if weights else ''
+  shown = shlex.join([os.path.basename(command[0]), *command[1:]]) if command else ''
+  return f'Written by `{shown}` on {machine}{named}.'
+
+
+def markdown_report(result: results.EvalResult, source: Optional[str] = None) -> str:
+  """The same tables as GitHub Markdown, after `source` (`provenance`) when given."""
   parts = [tables.markdown_table(*table)
            for table in protocols.get(result.config.protocol).tables(result)]
-  return '\n'.join(parts) + '\n' + _footer(result) + '\n'
+  head = f'{source}\n\n' if source else ''
+  return head + '\n'.join(parts) + '\n' + _footer(result) + '\n'
 
 
 def prepare_path(path: str, name: str) -> None:
@@ -52,10 +65,10 @@ def prepare_path(path: str, name: str) -> None:
     raise ValueError(f'{name}={path}: cannot make its folder ({e.strerror}).') from None
 
 
-def write_markdown(path: str, result: results.EvalResult) -> None:
-  """Writes `markdown_report(result)` to `path`."""
+def write_markdown(path: str, result: results.EvalResult, source: Optional[str] = None) -> None:
+  """Writes `markdown_report(result, source)` to `path`."""
   with open(path, 'w', encoding='utf-8') as f:
-    f.write(markdown_report(result))
+    f.write(markdown_report(result, source))
 
 
 def write_csv(path: str, rows: Sequence[Dict[str, Any]]) -> None:
