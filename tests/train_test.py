@@ -98,7 +98,7 @@ def test_sigterm_leaves_a_checkpoint_and_a_second_run_resumes_from_it(tmp_path):
   # Resuming under another mixture would train it under the old run's label: refused.
   third = _train_cli(model_dir, f'--num_steps={saved_step + 4}', '--mixture=diplopia')
   output = third.communicate(timeout=240)[0]
-  assert third.returncode != 0 and "pipeline.mixture: 'anaglyph' -> 'diplopia'" in output
+  assert third.returncode != 0 and "--mixture: 'anaglyph' -> 'diplopia'" in output
   assert tf.train.latest_checkpoint(str(model_dir)) == resumed
 
 
