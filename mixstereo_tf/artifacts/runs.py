@@ -67,7 +67,9 @@ class RunDirError(ValueError):
 # trains (the architecture, data, loss, optimizer and seed must stay).
 RESUMABLE_FIELDS = frozenset({
     'num_steps', 'model_dir', 'log_every', 'checkpoint_every', 'summary_every',
-    'image_summary_every', 'jit_compile', 'strategy', 'init_checkpoint', 'init_from'})
+    'image_summary_every', 'jit_compile', 'strategy', 'init_checkpoint', 'init_from',
+    # Drops pairs whose files cannot be read: what an unreadable pair's error advises.
+    'skip_bad_pairs'})
 
 
 def _changes(old: Any, new: Any, path: str = '') -> Iterator[str]:

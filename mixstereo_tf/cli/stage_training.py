@@ -101,7 +101,7 @@ def train_refiner() -> None:
   try:
     refiner_loop.train(config, examples, architecture, FLAGS.flags_into_string())
   except runs.RunDirError as e:
-    raise app.UsageError(str(e)) from None
+    raise flag_errors.usage_error(e, RENAMED) from None
 
 
 def train_features() -> None:
@@ -132,7 +132,7 @@ def train_features() -> None:
   try:
     feature_loop.train(config, warp, features, FLAGS.flags_into_string())
   except runs.RunDirError as e:
-    raise app.UsageError(str(e)) from None
+    raise flag_errors.usage_error(e, RENAMED) from None
 
 
 # --architecture -> its trainer (the joint network is train.py's own).

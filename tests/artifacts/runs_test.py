@@ -87,13 +87,14 @@ def test_resuming_refuses_another_configuration(tmp_path):
   # How long and how it runs may change on resume...
   runs.write_run_files(run_dir, None, train=dict(train, num_steps=40, log_every=1,
                                                  model_dir='moved'), model=TINY,
-                       pipeline=pipeline)
+                       pipeline=dict(pipeline, skip_bad_pairs=True))  # As its error advises.
   # ...what it trains may not: every difference is named, config.json is kept.
   with pytest.raises(runs.RunDirError,
                      match=r"pipeline.mixture: 'anaglyph' -> 'diplopia'; train.learning_rate"):
     runs.write_run_files(run_dir, None, train=dict(train, learning_rate=1e-3), model=TINY,
                          pipeline=dict(pipeline, mixture='diplopia'))
-  assert json.loads((tmp_path / 'r' / runs.CONFIG_FILE).read_text())['pipeline'] == pipeline
+  assert json.loads((tmp_path / 'r' / runs.CONFIG_FILE).read_text())['pipeline'] == dict(
+      pipeline, skip_bad_pairs=True)
   with pytest.raises(runs.RunDirError, match='model.'):
     runs.write_run_files(run_dir, None, train=train, model={'other': 1}, pipeline=pipeline)
 
