@@ -101,7 +101,7 @@ def completed_info(output_dir: str, name: str) -> Optional[Dict[str, object]]:
   Complete: the info file (which `unmix_item` writes last) parses and every file it lists
   exists. A half-written info file or a missing output means the input is done again.
   """
-  path = os.path.join(output_dir, f'{name}_info.json')
+  path = os.path.join(output_dir, name + info_file.INFO_SUFFIX)
   try:
     with open(path, encoding='utf-8') as f:
       info = json.load(f)
