@@ -77,11 +77,10 @@ def encode(views: Sequence[np.ndarray], quality: int,
   """The MPO bytes of uint8 RGB `views` [H, W, 3], left to right (module docstring), each
   picture with `icc_profile` embedded when given."""
   jpegs: List[bytes] = []
-  colour = {'icc_profile': icc_profile} if icc_profile else {}
   for view in views:
     buffer = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(view, np.uint8), 'RGB').save(
-        buffer, 'JPEG', quality=quality, **colour)
+        buffer, 'JPEG', quality=quality, icc_profile=icc_profile)
     jpegs.append(buffer.getvalue())
   rest = [_insert_app2(jpeg, b'MPF\x00' + _TIFF_HEADER + _attributes(number, 8))
           for number, jpeg in enumerate(jpegs[1:], 2)]

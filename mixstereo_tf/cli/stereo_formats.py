@@ -174,18 +174,14 @@ def _pil(image: np.ndarray) -> Image.Image:
   return Image.fromarray(np.ascontiguousarray(image, np.uint8), 'RGB')
 
 
-def _colour_options(result: StereoResult) -> Dict[str, bytes]:
-  """Pillow save options embedding the views' colour profile, if any."""
-  return {'icc_profile': result.icc_profile} if result.icc_profile else {}
-
-
 def _image_writer(suffix: str, draw: Callable[[StereoResult], np.ndarray],
                   views_colours: bool = False) -> Callable[[StereoResult, str], List[str]]:
   """A writer of one PNG `<stem><suffix>` holding `draw(result)`, with the views' colour
   profile when `views_colours` (the image shows only the views' colours)."""
   def write(result: StereoResult, stem: str) -> List[str]:
     path = stem + suffix
-    _pil(draw(result)).save(path, 'PNG', **(_colour_options(result) if views_colours else {}))
+    _pil(draw(result)).save(path, 'PNG',
+                            icc_profile=result.icc_profile if views_colours else None)
     return [path]
   return write
 
@@ -200,7 +196,7 @@ def _write_mpo(result: StereoResult, stem: str) -> List[str]:
 def _write_jps(result: StereoResult, stem: str) -> List[str]:
   path = stem + '.jps'
   pair = np.concatenate([result.right, result.left], axis=1)  # Cross-eyed: right first.
-  _pil(pair).save(path, 'JPEG', quality=JPEG_QUALITY, **_colour_options(result))
+  _pil(pair).save(path, 'JPEG', quality=JPEG_QUALITY, icc_profile=result.icc_profile)
   return [path]
 
 

@@ -153,8 +153,7 @@ def data_uri(image: np.ndarray, icc_profile: Optional[bytes] = None) -> str:
   when given."""
   buffer = io.BytesIO()
   Image.fromarray(np.ascontiguousarray(image, np.uint8), 'RGB').save(
-      buffer, 'JPEG', quality=EMBED_QUALITY, **({'icc_profile': icc_profile}
-                                                if icc_profile else {}))
+      buffer, 'JPEG', quality=EMBED_QUALITY, icc_profile=icc_profile)
   return 'data:image/jpeg;base64,' + base64.b64encode(buffer.getvalue()).decode('ascii')
 
 
