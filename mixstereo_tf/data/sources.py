@@ -110,7 +110,7 @@ def _sample(config: DataConfig, split: str) -> List[records.StereoSample]:
 
 def _kitti_raw(config: DataConfig, split: str) -> List[records.StereoSample]:
   del split  # The split list is the split.
-  split_list = kitti.read_split_list(config.split_list, config.data_dir,
+  split_list = kitti.read_split_list(split_lists.resolve(config.split_list), config.data_dir,
                                      skip_bad_pairs=config.skip_bad_pairs)
   if split_list.skipped:
     total = len(split_list.samples) + len(split_list.skipped)

@@ -185,3 +185,16 @@ def test_training_refuses_the_kitti2015_training_frames(tmp_path):
   assert len(sources.list_samples(config, split='heldout')) == 1
   assert len(sources.list_samples(dataclasses.replace(config, allow_evaluation_scenes=True),
                                   split='train')) == 1
+
+
+def test_shipped_split_list_resolves_from_any_directory(tmp_path, monkeypatch):
+  # The KITTI flagfiles name 'data_lists/kitti/...'; it resolves outside the repository root.
+  data_dir = str(tmp_path / 'raw')
+  _raw_frame(data_dir, '0000000069')
+  monkeypatch.chdir(tmp_path)
+  config = sources.DataConfig(dataset='kitti_raw', data_dir=data_dir,
+                              split_list='data_lists/kitti/eigen_test_files.txt',
+                              skip_bad_pairs=True)
+  samples = sources.list_samples(config)
+  assert [s.name for s in samples] == ['2011_09_26_drive_0002_sync/0000000069']
+  assert samples[0].source.endswith(os.path.join('kitti', 'eigen_test_files.txt:1'))
