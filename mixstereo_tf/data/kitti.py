@@ -22,6 +22,8 @@ from mixstereo_tf.data import image_io
 from mixstereo_tf.data import records
 
 KITTI_DISPARITY_SCALE = 256.0
+# Pairs skipped for missing files that get a warning of their own (the rest: a count).
+_WARNED_PAIRS = 5
 
 # Raw-drive folders start with the recording date, which is also the calibration folder.
 _DATE_FOLDER = re.compile(r'^\d{4}_\d{2}_\d{2}$')
@@ -126,7 +128,8 @@ def read_split_list(list_path: str, data_dir: str, skip_bad_pairs: bool = False,
         message = f'{source}: {e}'
         if not skip_bad_pairs:
           raise ValueError(message) from None
-        logging.warning('Skipping pair: %s', message)
+        if len(skipped) < _WARNED_PAIRS:
+          logging.warning('Skipping pair: %s', message)
         skipped.append(message)
         skipped_lines.append(number)
         continue
@@ -139,6 +142,17 @@ def read_split_list(list_path: str, data_dir: str, skip_bad_pairs: bool = False,
     raise ValueError(f"{list_path}: no pairs{what}; expected lines 'left right' with paths "
                      f'relative to {data_dir}')
   return SplitList(samples=samples, skipped=skipped, skipped_lines=skipped_lines)
+
+
+def line_ranges(numbers: List[int]) -> str:
+  """Increasing line numbers as ranges: [2, 3, 4, 7] -> '2-4, 7'."""
+  spans = []
+  for number in numbers:
+    if spans and number == spans[-1][1] + 1:
+      spans[-1][1] = number
+    else:
+      spans.append([number, number])
+  return ', '.join(str(a) if a == b else f'{a}-{b}' for a, b in spans)
 
 
 def _split_folder(data_dir: str, split: str, left_folder: str) -> str:

@@ -116,7 +116,7 @@ def _kitti_raw(config: DataConfig, split: str) -> List[records.StereoSample]:
     total = len(split_list.samples) + len(split_list.skipped)
     logging.warning('skip_bad_pairs: skipped %d of %d pairs of %s (missing files), at '
                     'lines %s.', len(split_list.skipped), total, config.split_list,
-                    ', '.join(str(n) for n in split_list.skipped_lines))
+                    kitti.line_ranges(split_list.skipped_lines))
   return split_list.samples
 
 

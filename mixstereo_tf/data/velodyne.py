@@ -19,6 +19,9 @@ from typing import Dict, Union
 
 import numpy as np
 
+# The raw calibration files of a drive's date folder the projection reads.
+CALIB_FILES = ('calib_cam_to_cam.txt', 'calib_velo_to_cam.txt')
+
 CalibValue = Union[np.ndarray, str]
 
 
@@ -183,8 +186,7 @@ def eigen_ground_truth(calib_dir: str, velodyne_bin: str, image_height: int,
     image_height, image_width: size of the camera image the depth is for.
     camera: 2 (left colour) or 3 (right colour).
   """
-  cam_path = os.path.join(calib_dir, 'calib_cam_to_cam.txt')
-  velo_path = os.path.join(calib_dir, 'calib_velo_to_cam.txt')
+  cam_path, velo_path = (os.path.join(calib_dir, name) for name in CALIB_FILES)
   try:
     projection = velo_to_camera_projection(read_calib_file(cam_path),
                                            read_calib_file(velo_path), camera)

@@ -48,6 +48,8 @@ class Protocol:
     needs_data_dir: False for the embedded data ('sample').
     default_split_list: the package's split list of list-based protocols, relative to
       `data_lists/` (see `data.split_lists`).
+    check_record: raises ValueError when a listed pair lacks what `score` reads (run on
+      every pair before any is evaluated); None: nothing beyond the images.
   """
   name: str
   dataset: str
@@ -57,6 +59,7 @@ class Protocol:
   full_count: Optional[int] = None
   needs_data_dir: bool = True
   default_split_list: Optional[str] = None
+  check_record: Optional[Callable[[records.StereoSample], None]] = None
 
 
 _REGISTRY: Dict[str, Protocol] = {}

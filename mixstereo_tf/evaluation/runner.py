@@ -37,7 +37,11 @@ Progress = Callable[[int, int, Dict[str, Any]], None]
 
 
 def data_config(config: results.EvalConfig) -> sources.DataConfig:
-  """The `sources.DataConfig` of a run's held-out pairs."""
+  """The `sources.DataConfig` of a run's held-out pairs.
+
+  A partial run (`allow_partial`) skips list entries whose images are missing, with a
+  warning naming their lines: a partial download evaluates what it holds.
+  """
   protocol = protocols.get(config.protocol)
   if protocol.needs_data_dir and not config.data_dir:
     raise ValueError(f'Protocol {config.protocol!r} needs EvalConfig.data_dir.')
@@ -47,7 +51,7 @@ def data_config(config: results.EvalConfig) -> sources.DataConfig:
   return sources.DataConfig(
       dataset=protocol.dataset, data_dir=config.data_dir, split_list=split_list,
       heldout_scenes=config.heldout_scenes, max_disparity=config.max_disparity,
-      middlebury_scales=config.middlebury_scales)
+      middlebury_scales=config.middlebury_scales, skip_bad_pairs=config.allow_partial)
 
 
 def list_samples(config: results.EvalConfig) -> List[records.StereoSample]:
@@ -116,6 +120,9 @@ def evaluate(config: results.EvalConfig, unmixer: predictors.Unmixer,
   if config.max_images is not None:
     samples = samples[:config.max_images]
   protocol_lib.check_coverage(config, len(samples))
+  if protocol.check_record:
+    for record in samples:
+      protocol.check_record(record)
   rows, accumulator = [], metrics.Accumulator()
   for index, record in enumerate(samples):
     row = evaluate_sample(config, record, unmixer)

@@ -103,7 +103,7 @@ def test_list_samples_reports_skipped_pairs(tmp_path, caplog):
   samples = sources.list_samples(config)
   assert [s.name[-1] for s in samples] == ['1', '4']
   summary = [r.getMessage() for r in caplog.records if 'skipped 2 of 4 pairs' in r.getMessage()]
-  assert len(summary) == 1 and summary[0].endswith('at lines 3, 4.'), caplog.text
+  assert len(summary) == 1 and summary[0].endswith('at lines 3-4.'), caplog.text
   assert list_path in summary[0]
   caplog.clear()
   sources.list_samples(dataclasses.replace(config, split_list=_list(tmp_path, _entry(
@@ -198,3 +198,9 @@ def test_shipped_split_list_resolves_from_any_directory(tmp_path, monkeypatch):
   samples = sources.list_samples(config)
   assert [s.name for s in samples] == ['2011_09_26_drive_0002_sync/0000000069']
   assert samples[0].source.endswith(os.path.join('kitti', 'eigen_test_files.txt:1'))
+
+
+@pytest.mark.parametrize('numbers, text', [([2, 3, 4, 7], '2-4, 7'), ([5], '5'),
+                                           ([1, 3, 4], '1, 3-4'), ([], '')])
+def test_line_ranges(numbers, text):
+  assert kitti.line_ranges(numbers) == text

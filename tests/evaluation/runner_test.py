@@ -323,3 +323,29 @@ def test_oracle_method_feeds_the_clean_pair(tmp_path):
                                            method='oracle'))
   assert result.averages['d1_all'] == 0.0 and 'psnr_left' not in result.averages
   assert result.averages['mixture_psnr_left'] < 40.0 and result.method == 'oracle'
+
+
+@pytest.mark.parametrize('missing', ['calib_velo_to_cam.txt', 'scan'])
+def test_eigen_refuses_a_frame_without_ground_truth_files_before_predicting(tmp_path, missing):
+  list_path = _write_eigen(str(tmp_path))
+  date, drive = '2011_09_26', '2011_09_26_drive_0001_sync'
+  gone = (os.path.join(tmp_path, date, missing) if missing != 'scan' else
+          os.path.join(tmp_path, date, drive, 'velodyne_points', 'data', '0000000000.bin'))
+  os.remove(gone)
+  calls = []
+  config = EvalConfig('eigen', 'monocular', str(tmp_path), split_list=list_path)
+  with pytest.raises(ValueError, match=rf'eigen_test.txt:1: .* needs {gone}, not found'):
+    runner.evaluate(config, unmixer(lambda m: calls.append(m)))
+  assert not calls
+
+
+def test_partial_run_skips_missing_pairs_of_a_list(tmp_path):
+  list_path = _write_eigen(str(tmp_path))
+  with open(list_path, 'a', encoding='utf-8') as f:
+    f.write('2011_09_26/gone/image_02/data/1.png 2011_09_26/gone/image_03/data/1.png\n')
+  config = EvalConfig('eigen', 'monocular', str(tmp_path), split_list=list_path)
+  with pytest.raises(ValueError, match='eigen_test.txt:2: Image not found'):
+    runner.list_samples(config)
+  partial = EvalConfig('eigen', 'monocular', str(tmp_path), split_list=list_path,
+                       allow_partial=True)
+  assert [s.source[-2:] for s in runner.list_samples(partial)] == [':1']

@@ -7,6 +7,7 @@ one table per cap with the paper's Table 6 rows of that cap (`paper_numbers.EIGE
 Godard, Garg and the paper's own at 50 m, Zhou at 80 m). Row keys: `<metric>_cap<cap>`.
 """
 
+import os
 from typing import Dict, List
 
 import numpy as np
@@ -24,13 +25,28 @@ def metric_key(name: str, cap: float) -> str:
   return f'{name}_cap{cap:g}'
 
 
+def check_record(record: records.StereoSample) -> None:
+  """ValueError naming the list line and the file when a frame lacks its calibration or
+  Velodyne scan (KITTI raw's `<date>/calib_*_to_cam.txt`, `velodyne_points/data/*.bin`)."""
+  if not record.calib:
+    raise ValueError(f'{record.source}: no calibration folder (the date folder holding '
+                     f'{", ".join(velodyne.CALIB_FILES)}) for {record.left}.')
+  if not record.velodyne:
+    raise ValueError(f'{record.source}: {record.left} is not in the raw-drive layout '
+                     '(.../image_02/data/<frame>), so it has no Velodyne scan.')
+  needed = [os.path.join(record.calib, name) for name in velodyne.CALIB_FILES]
+  missing = [path for path in needed + [record.velodyne] if not os.path.isfile(path)]
+  if missing:
+    raise ValueError(f'{record.source}: the Eigen ground truth of {record.left} needs '
+                     f'{" and ".join(missing)}, not found (KITTI raw\'s calibration and '
+                     'Velodyne downloads).')
+
+
 def score(config: results.EvalConfig, record: records.StereoSample,
           data: Dict[str, np.ndarray], pred: np.ndarray) -> Dict[str, float]:
   """The depth metrics of one frame against its projected Velodyne scan, at every cap."""
   del data
-  if not record.calib or not record.velodyne:
-    raise ValueError(f'{record.source}: no calibration folder (the date folder holding '
-                     f'calib_cam_to_cam.txt) or Velodyne scan for {record.left}.')
+  check_record(record)
   height, width = pred.shape
   gt = velodyne.eigen_ground_truth(record.calib, record.velodyne, height, width)
   focal = velodyne.rectified_focal_length(record.calib, height, width)
@@ -62,5 +78,5 @@ def tables(result: results.EvalResult) -> List[protocol.Table]:
 
 protocol.register(protocol.Protocol(
     name='eigen', dataset='kitti_raw', score=score, tables=tables,
-    default_split_list='kitti/eigen_test_files.txt',
+    default_split_list='kitti/eigen_test_files.txt', check_record=check_record,
     description='KITTI raw Eigen test split (697 frames): depth metrics'))
