@@ -78,6 +78,11 @@ class DataConfig:
                        f'{", ".join(DATASETS)}.')
     if self.dataset != 'sample' and not self.data_dir:
       raise ValueError(f'DataConfig.data_dir is required for dataset {self.dataset!r}.')
+    if self.dataset == 'sample' and (self.data_dir or self.split_list):
+      given = 'data_dir' if self.data_dir else 'split_list'
+      raise ValueError(f"DataConfig.{given} is given but dataset 'sample' is generated and "
+                       'reads no files; name the dataset it holds (DataConfig.dataset: '
+                       f'{", ".join(d for d in DATASETS if d != "sample")}).')
     if self.dataset == 'sample' and self.max_disparity is None:
       raise ValueError("DataConfig.max_disparity is required for dataset 'sample'.")
     if self.dataset == 'kitti_raw' and not self.split_list:

@@ -45,6 +45,11 @@ def data_config(config: results.EvalConfig) -> sources.DataConfig:
   protocol = protocols.get(config.protocol)
   if protocol.needs_data_dir and not config.data_dir:
     raise ValueError(f'Protocol {config.protocol!r} needs EvalConfig.data_dir.')
+  if config.data_dir and not protocol.needs_data_dir:
+    reading = ', '.join(n for n in protocols.names() if protocols.get(n).needs_data_dir)
+    raise ValueError(f'EvalConfig.data_dir is given but EvalConfig.protocol='
+                     f'{config.protocol!r} reads no files; name the benchmark it holds '
+                     f'({reading}).')
   split_list = config.split_list
   if protocol.default_split_list:
     split_list = split_lists.resolve(split_list or protocol.default_split_list)

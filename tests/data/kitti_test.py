@@ -204,3 +204,11 @@ def test_shipped_split_list_resolves_from_any_directory(tmp_path, monkeypatch):
                                            ([1, 3, 4], '1, 3-4'), ([], '')])
 def test_line_ranges(numbers, text):
   assert kitti.line_ranges(numbers) == text
+
+
+@pytest.mark.parametrize('given', ['data_dir', 'split_list'])
+def test_files_for_the_generated_dataset_are_refused(given):
+  # The default dataset ('sample') would ignore them and train on procedural scenes.
+  with pytest.raises(ValueError, match=rf"DataConfig.{given} is given but dataset 'sample' "
+                                       r'is generated .*kitti_raw, kitti2015'):
+    sources.DataConfig(max_disparity=8, **{given: 'x'})

@@ -349,3 +349,9 @@ def test_partial_run_skips_missing_pairs_of_a_list(tmp_path):
   partial = EvalConfig('eigen', 'monocular', str(tmp_path), split_list=list_path,
                        allow_partial=True)
   assert [s.source[-2:] for s in runner.list_samples(partial)] == [':1']
+
+
+def test_data_dir_with_the_generated_protocol_is_refused():
+  with pytest.raises(ValueError, match=r"data_dir is given but EvalConfig.protocol='sample' "
+                                       r'reads no files; .*\(eigen, .*middlebury\)'):
+    runner.data_config(EvalConfig('sample', 'anaglyph', 'data/kitti'))
