@@ -190,14 +190,31 @@ def _op_error_line(error: tf.errors.OpError) -> str:
   return next(iter(inner[-1:] or [line for line in lines if line]), type(error).__name__)
 
 
+def _one_training_length() -> None:
+  """Exactly one of --num_steps and --num_epochs; one typed on the command line replaces the
+  other read from a --flagfile (a short try of a recipe)."""
+  names = ('num_steps', 'num_epochs')
+  given = [name for name in names if getattr(FLAGS, name) is not None]
+  if len(given) == 2:
+    typed = flag_errors.typed_flags(sys.argv, names)
+    if len(typed) != 1:
+      raise app.UsageError('Give exactly one of --num_steps and --num_epochs (both given: '
+                           f'--num_steps={FLAGS.num_steps}, --num_epochs={FLAGS.num_epochs}).')
+    dropped = next(name for name in names if name not in typed)
+    logging.info('--%s=%s on the command line replaces --%s=%s of the flagfile.', typed[0],
+                 getattr(FLAGS, typed[0]), dropped, getattr(FLAGS, dropped))
+    setattr(FLAGS, dropped, None)
+  elif not given:
+    raise app.UsageError('Give exactly one of --num_steps and --num_epochs.')
+
+
 def main(argv):
   flag_errors.refuse_arguments(argv)
   device.log_line()
   if FLAGS.architecture in stage_training.TRAINERS:
     stage_training.TRAINERS[FLAGS.architecture]()
     return
-  if (FLAGS.num_steps is None) == (FLAGS.num_epochs is None):
-    raise app.UsageError('Give exactly one of --num_steps and --num_epochs.')
+  _one_training_length()
   try:
     data_config, pipeline_config, model_config, loss_config = build_configs()
     for name in ('crop_height', 'crop_width'):

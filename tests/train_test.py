@@ -218,3 +218,17 @@ def test_bad_real_pair_flags_are_usage_errors_naming_the_flag(tmp_path):
     process = _train_cli(tmp_path / 'run', '--architecture=features', '--num_steps=1', *flags)
     output = process.communicate(timeout=120)[0]
     assert process.returncode != 0 and message in output, output[-2000:]
+
+
+def test_a_typed_length_replaces_the_flagfile_one_and_two_typed_are_refused(tmp_path):
+  flagfile = tmp_path / 'recipe.flags'
+  flagfile.write_text('--num_epochs=3\n')
+  process = _train_cli(tmp_path / 'run', f'--flagfile={flagfile}', '--num_steps=1')
+  output = process.communicate(timeout=240)[0]
+  assert process.returncode == 0, output[-2000:]
+  assert '--num_steps=1 on the command line replaces --num_epochs=3.0 of the flagfile' in output
+  assert tf.train.latest_checkpoint(str(tmp_path / 'run')).endswith('ckpt-1')
+  process = _train_cli(tmp_path / 'both', '--num_epochs=3', '--num_steps=1')
+  output = process.communicate(timeout=120)[0]
+  assert process.returncode != 0
+  assert '(both given: --num_steps=1, --num_epochs=3.0)' in output

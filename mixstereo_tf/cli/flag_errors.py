@@ -5,7 +5,7 @@ them into "--checkpoint must ..." here, for every flag defined in the process.
 """
 
 import re
-from typing import Container, Dict, Optional
+from typing import Container, Dict, Iterable, List, Optional, Sequence
 
 from absl import app
 from absl import flags
@@ -58,3 +58,19 @@ def refuse_arguments(argv, glob_flag: Optional[str] = None, passed_on: bool = Fa
             f".png') or give a folder" if glob_flag else '')
     raise app.UsageError(f'Unexpected argument(s), taken by no flag: '
                          f'{" ".join(extra[:5])}{" ..." if len(extra) > 5 else ""}{hint}.')
+
+
+def typed_flags(argv: Sequence[str], names: Iterable[str]) -> List[str]:
+  """Those of `names` typed on the command line `argv` (not read from a --flagfile).
+
+  E.g. (['prog', '--flagfile=f', '--num_steps=5'], ['num_steps', 'num_epochs']) ->
+  ['num_steps']; '--name value', '--noname' and single-dash forms count as typed.
+  """
+  typed = set()
+  for token in argv[1:]:
+    if token == '--':
+      break
+    name = token.lstrip('-').split('=', 1)[0]
+    if token.startswith('-'):
+      typed.update({name, name[2:]} if name.startswith('no') else {name})
+  return [name for name in names if name in typed]

@@ -39,3 +39,11 @@ def test_arguments_no_flag_took_are_refused_naming_them():
                                  passed_on=True)
   with pytest.raises(app.UsageError, match=r'a1 a2 a3 a4 a5 \.\.\.\.'):
     flag_errors.refuse_arguments(['train'] + [f'a{i}' for i in range(1, 8)])
+
+
+def test_typed_flags_are_those_on_the_command_line_not_in_a_flagfile():
+  names = ('num_steps', 'num_epochs', 'temporal')
+  assert flag_errors.typed_flags(['p', '--flagfile=f', '--num_steps=5'], names) == ['num_steps']
+  assert flag_errors.typed_flags(['p', '-num_epochs', '2', '--notemporal'], names) == [
+      'num_epochs', 'temporal']
+  assert flag_errors.typed_flags(['p', '--', '--num_steps=5'], names) == []
