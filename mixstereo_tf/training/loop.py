@@ -137,7 +137,13 @@ def _restore_or_initialise(session: _Session, config: config_lib.TrainConfig) ->
   elif config.init_checkpoint:
     try:
       _, init = runs.resolve_checkpoint(config.init_checkpoint)
-      tf.train.Checkpoint(model=session.model).read(init).expect_partial()
+      status = tf.train.Checkpoint(model=session.model).read(init)
+      status.expect_partial().assert_existing_objects_matched()  # Optimizer slots unread.
+    except AssertionError:
+      raise runs.RunDirError(
+          f'--init_checkpoint={config.init_checkpoint}: lacks weights of this '
+          f'{type(session.model).__name__} (a refiner or feature stage run? Its '
+          "architecture flags must be this run's; see its config.json)") from None
     except (ValueError, tf.errors.OpError) as e:
       raise runs.RunDirError(
           f'--init_checkpoint={config.init_checkpoint}: {str(e).splitlines()[0]} (its '

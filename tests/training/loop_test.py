@@ -4,6 +4,7 @@ precision and determinism."""
 import glob
 import json
 import math
+import os
 import types
 
 import numpy as np
@@ -191,3 +192,12 @@ def test_forty_updates_in_a_row_skipped_by_loss_scaling_stop_the_run():
   loop._check_finite(0.5, math.inf, session, 7, skipped=39)  # Overflow: a normal skip.
   with pytest.raises(loop.NonFiniteLossError, match='40 updates skipped in a row'):
     loop._check_finite(0.5, math.inf, session, 7, skipped=40)
+
+
+def test_init_checkpoint_of_another_kind_of_model_is_refused(tmp_path):
+  dense = tf.keras.layers.Dense(3)
+  dense.build((None, 2))
+  other = tf.train.Checkpoint(model=dense).write(str(tmp_path / 'other' / 'ckpt-1'))
+  with pytest.raises(ValueError, match=r'ckpt-1: lacks weights of this MixStereoNet'):
+    _train(tmp_path / 'run', 1, init_checkpoint=other)
+  assert not os.path.exists(tmp_path / 'run' / 'checkpoint')
