@@ -232,3 +232,14 @@ def test_a_typed_length_replaces_the_flagfile_one_and_two_typed_are_refused(tmp_
   output = process.communicate(timeout=120)[0]
   assert process.returncode != 0
   assert '(both given: --num_steps=1, --num_epochs=3.0)' in output
+
+
+def test_a_stopped_stage_training_exits_with_the_signal_code_after_its_checkpoint(tmp_path):
+  process = _train_cli(tmp_path / 'run', '--architecture=refiner', '--num_steps=100000',
+                       '--checkpoint_every=100000', '--sample_scenes=8')
+  _wait_for_step(process, 2)
+  process.send_signal(signal.SIGTERM)
+  output = process.communicate(timeout=120)[0]
+  assert process.returncode == 128 + signal.SIGTERM, output[-2000:]
+  assert 'Stopped by SIGTERM at step' in output and 'Traceback' not in output
+  assert tf.train.latest_checkpoint(str(tmp_path / 'run')) is not None

@@ -5,6 +5,8 @@ trainers, by --architecture (`TRAINERS`): 'refiner', the hybrid refiner
 the paper's joint network.
 """
 
+import sys
+
 from absl import app
 from absl import flags
 from absl import logging
@@ -17,6 +19,7 @@ from mixstereo_tf.models import refiner
 from mixstereo_tf.training import feature_loop
 from mixstereo_tf.training import refiner_data
 from mixstereo_tf.training import refiner_loop
+from mixstereo_tf.training import resumable
 
 FLAGS = flags.FLAGS
 
@@ -102,6 +105,9 @@ def train_refiner() -> None:
     refiner_loop.train(config, examples, architecture, FLAGS.flags_into_string())
   except runs.RunDirError as e:
     raise flag_errors.usage_error(e, RENAMED) from None
+  except resumable.Interrupted as e:
+    logging.warning('%s', e)
+    sys.exit(e.exit_code)
 
 
 def train_features() -> None:
@@ -133,6 +139,9 @@ def train_features() -> None:
     feature_loop.train(config, warp, features, FLAGS.flags_into_string())
   except runs.RunDirError as e:
     raise flag_errors.usage_error(e, RENAMED) from None
+  except resumable.Interrupted as e:
+    logging.warning('%s', e)
+    sys.exit(e.exit_code)
 
 
 # --architecture -> its trainer (the joint network is train.py's own).

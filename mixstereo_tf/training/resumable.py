@@ -1,6 +1,8 @@
 """The step loop shared by the small trainers (refiner, matching features): log lines,
 checkpoints every few steps, and a checkpoint on SIGINT / SIGTERM and at the end, so that
-re-running the same command continues from the newest one."""
+re-running the same command continues from the newest one. A signal ends the loop with
+`Interrupted` after that checkpoint, so that a tool exits non-zero, as the joint trainer's
+does."""
 
 import os
 import signal
@@ -10,6 +12,21 @@ from typing import Callable, Sequence, Tuple
 from absl import logging
 import numpy as np
 import tensorflow as tf
+
+
+class Interrupted(Exception):
+  """SIGINT / SIGTERM stopped the loop; the newest checkpoint holds its last step.
+
+  Attributes:
+    signal_name: 'SIGINT' or 'SIGTERM'.
+    exit_code: the shell's code for that signal (128 + its number).
+  """
+
+  def __init__(self, signal_name: str, step: int, checkpoint: str):
+    super().__init__(f'Stopped by {signal_name} at step {step}; checkpoint {checkpoint} '
+                     '(the same command resumes from it).')
+    self.signal_name = signal_name
+    self.exit_code = 128 + signal.Signals[signal_name].value
 
 
 def checkpointed(model: tf.keras.Model, optimizer, model_dir: str
@@ -44,10 +61,13 @@ def run_steps(one_step: Callable[[], Sequence[float]], step: tf.Variable, num_st
     manager: saves the checkpoints (numbered by step).
     checkpoint_every, log_every: steps between checkpoints / log lines.
     log_format: %-format of the mean of `one_step`'s numbers over the last log_every steps.
+
+  Raises:
+    Interrupted: a SIGINT / SIGTERM stopped the loop (after its checkpoint).
   """
   warn_if_trained(manager.directory, int(step), num_steps)
   stop = []
-  previous = {s: signal.signal(s, lambda *_: stop.append(True))
+  previous = {s: signal.signal(s, lambda signum, _: stop.append(signal.Signals(signum).name))
               for s in (signal.SIGINT, signal.SIGTERM)}
   try:
     start, running = time.perf_counter(), []
@@ -64,3 +84,5 @@ def run_steps(one_step: Callable[[], Sequence[float]], step: tf.Variable, num_st
       signal.signal(sig, handler)
     if manager.latest_checkpoint != os.path.join(manager.directory, f'ckpt-{int(step)}'):
       manager.save(checkpoint_number=int(step))
+  if stop:
+    raise Interrupted(stop[0], int(step), manager.latest_checkpoint)
