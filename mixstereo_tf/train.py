@@ -11,7 +11,9 @@ data.sources.DataConfig, training.config.TrainConfig): the paper's configuration
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import (first: quiet TF)
 
 import math  # pylint: disable=g-bad-import-order
+import re
 import sys
+from typing import Tuple
 
 from absl import app
 from absl import flags
@@ -182,12 +184,19 @@ def _train_config(num_steps: int) -> config_lib.TrainConfig:
       seed=FLAGS.seed)
 
 
-def _op_error_line(error: tf.errors.OpError) -> str:
-  """The line of a TensorFlow error that says what failed: a Python error raised inside
-  the input pipeline (it names the list, line and file) or else the first line."""
+def _op_error_line(error: tf.errors.OpError) -> Tuple[str, bool]:
+  """(the line of a TensorFlow error that says what failed, whether the input pipeline
+  raised it): a Python error raised inside the pipeline names the list, line and file;
+  else the first line naming an op (the model's own errors open with Keras' "Exception
+  encountered when calling ..." and say what failed in a later line)."""
   lines = [line.split('[[')[0].strip() for line in error.message.splitlines()]
   inner = [line[line.index('ValueError: '):] for line in lines if 'ValueError: ' in line]
-  return next(iter(inner[-1:] or [line for line in lines if line]), type(error).__name__)
+  if inner:
+    return inner[-1], True
+  lines = [line for line in lines if line and not line.startswith('Exception encountered')]
+  named = [line for line in lines if '{{function_node' in line or '[Op:' in line]
+  line = (named or lines or [type(error).__name__])[0]
+  return re.sub(r'\x1b\[[0-9;]*m|\{\{function_node [^}]*\}\}\s*', '', line), False
 
 
 def _one_training_length() -> None:
@@ -218,9 +227,11 @@ def main(argv):
   try:
     data_config, pipeline_config, model_config, loss_config = build_configs()
     for name in ('crop_height', 'crop_width'):
-      if getattr(FLAGS, name) % model_config.size_multiple:
-        raise ValueError(f'--{name}={getattr(FLAGS, name)} must be a multiple of '
-                         f'{model_config.size_multiple} for this architecture.')
+      value = getattr(FLAGS, name)
+      if value % model_config.size_multiple or value < model_config.smallest_input:
+        raise ValueError(f'--{name}={value} must be a multiple of '
+                         f'{model_config.size_multiple} for this architecture, at least '
+                         f'{model_config.smallest_input}.')
     samples = sources.list_samples(data_config, split='train')
     num_steps = FLAGS.num_steps or max(1, math.ceil(
         FLAGS.num_epochs * len(samples) / FLAGS.batch_size))
@@ -240,9 +251,10 @@ def main(argv):
     logging.error('%s', e)
     sys.exit(f'error: {e}')
   except tf.errors.OpError as e:  # E.g. a pair of the list that does not decode.
-    sys.exit(f'error: {_op_error_line(e)} (the newest checkpoint holds the last completed '
-             'step: fix the cause and run the same command to resume; --skip_bad_pairs '
-             'drops pairs that fail to decode)')
+    line, from_data = _op_error_line(e)
+    hint = '; --skip_bad_pairs drops pairs that fail to decode' if from_data else ''
+    sys.exit(f'error: {line} (the newest checkpoint holds the last completed step: fix the '
+             f'cause and run the same command to resume{hint})')
   if result.interrupted_by:
     sys.exit(128 + {'SIGINT': 2, 'SIGTERM': 15}[result.interrupted_by])
 

@@ -14,6 +14,7 @@ import numpy as np
 import tensorflow as tf
 
 from mixstereo_tf import models
+from mixstereo_tf import train
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.data import sample
 from mixstereo_tf.training import config as config_lib
@@ -243,3 +244,25 @@ def test_a_stopped_stage_training_exits_with_the_signal_code_after_its_checkpoin
   assert process.returncode == 128 + signal.SIGTERM, output[-2000:]
   assert 'Stopped by SIGTERM at step' in output and 'Traceback' not in output
   assert tf.train.latest_checkpoint(str(tmp_path / 'run')) is not None
+
+
+def test_a_tiny_network_with_the_census_cost_trains(tmp_path):
+  process = _train_cli(tmp_path / 'run', '--census_cost', '--num_steps=1')
+  output = process.communicate(timeout=240)[0]
+  assert process.returncode == 0, output[-2000:]
+  process = _train_cli(tmp_path / 'small', '--census_cost', '--num_steps=1',
+                       '--unet_widths=4,4,4,4', '--crop_height=8', '--sample_height=8')
+  output = process.communicate(timeout=120)[0]
+  assert process.returncode != 0
+  assert '--crop_height=8 must be a multiple of 8 for this architecture, at least 16' in output
+
+
+def test_op_errors_name_the_failing_op_and_hint_at_data_only_for_the_pipeline():
+  model = ('Exception encountered when calling StereoNet.call().\n\n\x1b[1m{{function_node '
+           '__wrapped__MirrorPad_device_/job:localhost/replica:0/task:0/device:CPU:0}} '
+           'paddings must be less than the dimension size [Op:MirrorPad]\x1b[0m\n\nArguments')
+  assert train._op_error_line(tf.errors.InvalidArgumentError(None, None, model)) == (
+      'paddings must be less than the dimension size [Op:MirrorPad]', False)
+  data = 'Traceback\nValueError: files.txt:3: Image not found: x.png\n\t [[{{node PyFunc}}]]'
+  assert train._op_error_line(tf.errors.InvalidArgumentError(None, None, data)) == (
+      'ValueError: files.txt:3: Image not found: x.png', True)

@@ -3,6 +3,7 @@
 import dataclasses
 from typing import Any, Dict, Mapping, Tuple
 
+from mixstereo_tf.ops import census
 from mixstereo_tf.ops import conv3d
 
 
@@ -66,6 +67,15 @@ class ModelConfig:
     """Input height and width must be multiples of this (32 for the paper's model)."""
     return max(2 ** (len(self.separation_widths) - 1),
                2 ** (len(self.stereo_3d_widths) + 1))
+
+  @property
+  def smallest_input(self) -> int:
+    """The smallest valid input height and width: `size_multiple`, or with `census_cost`
+    the smallest multiple of it whose half-resolution views hold the census window."""
+    if not self.census_cost:
+      return self.size_multiple
+    needed = 2 * (max(census.WINDOW) // 2 + 1)
+    return self.size_multiple * -(-needed // self.size_multiple)
 
   def to_dict(self) -> Dict[str, Any]:
     return {k: list(v) if isinstance(v, tuple) else v

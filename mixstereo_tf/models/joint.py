@@ -68,6 +68,6 @@ def build_model(model_config: config_lib.ModelConfig = config_lib.ModelConfig(),
                 name: str = 'mixstereo') -> MixStereoNet:
   """Creates the joint model and its variables (one pass on a smallest valid input)."""
   model = MixStereoNet(model_config, name=name)
-  size = model_config.size_multiple
+  size = model_config.smallest_input
   model(tf.zeros([1, size, size, 3]))
   return model

@@ -163,3 +163,15 @@ def test_checkpoint_saves_and_restores_every_variable(tmp_path):
   tf.train.Checkpoint(model=clone).read(path).assert_consumed()
   for key, value in clone(_mixture()).items():
     np.testing.assert_array_equal(value.numpy(), model(_mixture())[key].numpy())
+
+
+def test_a_tiny_model_with_the_census_cost_builds_and_runs_on_its_smallest_input():
+  config = models.ModelConfig(separation_widths=(4, 4), stereo_features=4,
+                              stereo_residual_blocks=1, stereo_3d_widths=(4,), max_disparity=8,
+                              census_cost=True)
+  # Half-resolution views must hold the 7 x 9 census window: 8 px is too small.
+  assert config.size_multiple == 4 and config.smallest_input == 12
+  assert dataclasses.replace(config, census_cost=False).smallest_input == 4
+  model = models.build_model(config)
+  outputs = model(_mixture(12, 24))
+  assert outputs['disparity_left'].shape[1:3] == (12, 24)
