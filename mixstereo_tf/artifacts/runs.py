@@ -124,6 +124,10 @@ def write_run_files(model_dir: str, flags_text: Optional[str], **configs: Any) -
     f.write(to_json(**configs))
 
 
+# The config.json sections of the stage trainers' runs, named as their --architecture.
+_STAGE_SECTIONS = ('refiner', 'features')
+
+
 def read_run_info(model_dir: str) -> RunInfo:
   """Reads the `RunInfo` of a run directory from its `config.json`.
 
@@ -138,6 +142,12 @@ def read_run_info(model_dir: str) -> RunInfo:
       config = json.load(f)
     except json.JSONDecodeError as e:
       raise ValueError(f'{path} is not valid JSON: {e}') from None
+  stage = next((name for name in _STAGE_SECTIONS if name in config), None)
+  if stage and 'model' not in config:
+    raise ValueError(
+        f'{model_dir} is a {stage} run (--architecture={stage}), not a joint '
+        'network: package it with `mixstereo-export --checkpoint='
+        f'{model_dir} --as_pretrained --export_dir=FOLDER` and give --pretrained=FOLDER.')
   try:
     pipeline = config['pipeline']
     return RunInfo(mixture=str(pipeline['mixture']), crop_height=int(pipeline['crop_height']),

@@ -118,3 +118,11 @@ def test_a_file_as_run_directory_is_named(tmp_path):
   (tmp_path / 'list.txt').write_text('x')
   with pytest.raises(runs.RunDirError, match=r'--model_dir=.*list.txt is an existing file'):
     runs.write_run_files(str(tmp_path / 'list.txt'), None, model=TINY)
+
+
+@pytest.mark.parametrize('stage', ['refiner', 'features'])
+def test_a_stage_run_is_named_with_how_to_use_it(tmp_path, stage):
+  runs.write_run_files(str(tmp_path), None, train={'num_steps': 1}, **{stage: {'width': 4}})
+  with pytest.raises(ValueError, match=rf'is a {stage} run \(--architecture={stage}\), not a '
+                                       r'joint network: .*--as_pretrained'):
+    runs.read_run_info(str(tmp_path))
