@@ -134,15 +134,23 @@ def check_mixture(config: PredictorConfig, trained: Sequence[str]) -> str:
   return requested
 
 
+# Training modes that leave a network at its initial weights -> what that does to a mixture.
+_UNTRAINED_PART = {
+    'separation_only': 'its disparities come from a stereo network at its initial weights',
+    'stereo_only': ('it learned disparities of clean pairs only; its views and the pair its '
+                    'stereo network sees come from a separation network at its initial '
+                    "weights (its own test is method 'oracle', on the clean pair)"),
+}
+
+
 def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: runs.RunInfo,
                   config: PredictorConfig = PredictorConfig()) -> Unmixer:
   """The 'model' Unmixer around a uint8 serving graph (`graphs.serving_function`) of a run."""
   trained = run_info.mixtures
   requested = check_mixture(config, trained)
-  if run_info.mode == 'separation_only':
-    logging.warning('%s was trained with mode separation_only: its disparities come from '
-                    'a stereo network at its initial weights.',
-                    config.checkpoint or config.saved_model)
+  if run_info.mode in _UNTRAINED_PART:
+    logging.warning('%s was trained with mode %s: %s.', config.checkpoint or config.saved_model,
+                    run_info.mode, _UNTRAINED_PART[run_info.mode])
   levels = run_info.model_config.max_disparity
   restore = config.restore_colour
   named = [requested] if requested != steps.AUTO else list(trained)

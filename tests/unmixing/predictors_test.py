@@ -210,6 +210,16 @@ def test_a_separation_only_run_warns_and_is_no_oracle(tmp_path, caplog):
       'separation_only')
 
 
+def test_a_stereo_only_run_used_on_a_mixture_warns_and_names_the_oracle(tmp_path, caplog):
+  path = str(tmp_path / 'stereo')
+  make_run_dir(path, mode='stereo_only')
+  caplog.set_level(logging.WARNING)
+  predictors.build_unmixer(predictors.PredictorConfig(method='oracle', checkpoint=path))
+  assert 'stereo_only' not in caplog.text
+  predictors.build_unmixer(predictors.PredictorConfig(checkpoint=path))
+  assert 'trained with mode stereo_only' in caplog.text and "method 'oracle'" in caplog.text
+
+
 
 def test_weights_identity_changes_with_the_weights_at_a_path(tmp_path):
   path = str(tmp_path / 'run')
