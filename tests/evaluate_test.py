@@ -84,7 +84,8 @@ def test_kitti_tables_partial_rule_and_paper_rows(tmp_path):
   source = report.provenance(['/usr/bin/mixstereo-eval', '--protocol=kitti2015',
                               '--data_dir=my data'], 'ckpt-8.index sha256:0123')
   assert source.startswith("Written by `mixstereo-eval --protocol=kitti2015 "
-                           "'--data_dir=my data'` on ")
+                           "'--data_dir=my data'` (mixstereo_tf ")
+  assert f'({report.code_version()}) on ' in source
   assert source.endswith('CPU cores; weights ckpt-8.index sha256:0123.')
   assert report.markdown_report(diplopia, source).startswith(source + '\n\n**')
 
@@ -243,3 +244,13 @@ def test_cli_sample_protocol_on_a_saved_model(run_dir, tmp_path):
   # left view than the restored one (so the flag reached the predictor).
   restored = _sample_rows_in_process(run_dir, restore_colour=None)
   assert abs(restored[0]['psnr_left'] - expected[0]['psnr_left']) > 0.1
+
+
+def test_code_version_names_the_commit_of_a_checkout(tmp_path):
+  text = report.code_version()
+  assert text.startswith('mixstereo_tf 0.1.0')
+  checkout = os.path.dirname(os.path.dirname(report.__file__))
+  if os.path.isdir(os.path.join(os.path.dirname(checkout), '.git')):  # CI: a fresh clone.
+    head = subprocess.run(['git', '-C', checkout, 'rev-parse', '--short=8', 'HEAD'],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    assert f'commit {head}' in text

@@ -5,10 +5,12 @@ paper's with its published rows beside ours; `evaluation/protocols/`).
 """
 
 import csv
+import importlib.metadata
 import os
 import platform
 import shlex
 import statistics
+import subprocess
 from typing import Any, Dict, Optional, Sequence
 
 from mixstereo_tf.evaluation import protocols
@@ -32,14 +34,37 @@ def format_report(result: results.EvalResult) -> str:
   return '\n'.join(parts) + _footer(result) + '\n'
 
 
+def code_version() -> str:
+  """'mixstereo_tf <version>', with the git commit of a source checkout it runs from
+  ('commit 1a2b3c4d', '+ uncommitted changes' when the package's tracked files differ)."""
+  try:
+    text = f'mixstereo_tf {importlib.metadata.version("mixstereo_tf")}'
+  except importlib.metadata.PackageNotFoundError:
+    text = 'mixstereo_tf (not installed)'
+  folder = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+  def git(*arguments):
+    return subprocess.run(['git', '-C', folder, *arguments], capture_output=True, text=True,
+                          timeout=10, check=True).stdout.strip()
+
+  try:
+    git('ls-files', '--error-unmatch', '__init__.py')  # A tracked package, not a copy.
+    commit = git('rev-parse', '--short=8', 'HEAD')
+    changed = git('status', '--porcelain', '--untracked-files=no', '--', '.')
+  except (OSError, subprocess.SubprocessError):
+    return text  # An installed copy, or no git.
+  return f'{text}, commit {commit}' + (' + uncommitted changes' if changed else '')
+
+
 def provenance(command: Sequence[str], weights: Optional[str]) -> str:
-  """One Markdown line saying what wrote a report: the command (shell-quoted), the machine
-  (OS, architecture, CPU cores) and the weights' identity (`predictors.weights_identity`;
-  None: no weights named, e.g. the classical method or a shipped default)."""
+  """One Markdown line saying what wrote a report: the command (shell-quoted), the code
+  (`code_version`), the machine (OS, architecture, CPU cores) and the weights' identity
+  (`predictors.weights_identity`; None: no weights named, e.g. the classical method or a
+  shipped default)."""
   machine = f'{platform.system()} {platform.machine()}, {os.cpu_count()} CPU cores'
   named = f'; weights {weights}' if weights else ''
   shown = shlex.join([os.path.basename(command[0]), *command[1:]]) if command else ''
-  return f'Written by `{shown}` on {machine}{named}.'
+  return f'Written by `{shown}` ({code_version()}) on {machine}{named}.'
 
 
 def markdown_report(result: results.EvalResult, source: Optional[str] = None) -> str:
