@@ -28,6 +28,8 @@ for path in sys.argv[1:]:
   flags.FLAGS.unparse_flags()
   flags.FLAGS(['train', '--flagfile=' + path, '--model_dir=/tmp/unused',
                '--data_dir=/tmp/unused'])
+  if flags.FLAGS.dataset == 'sample':  # Generated: a --data_dir is refused.
+    flags.FLAGS.data_dir = None
   data, pipe, model, loss = train.build_configs()
   out[path] = {'data': dataclasses.asdict(data), 'pipeline': dataclasses.asdict(pipe),
                'model': model.to_dict(), 'loss': dataclasses.asdict(loss),
