@@ -52,7 +52,7 @@ DEFAULT_RUNNER = 'FnApiRunner'
 def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
                     ) -> List[media.MediaItem]:
   """The items of a text file holding one input path per line (blank lines and lines
-  starting with '#' ignored, a repeated path taken once), on any file system Beam reads
+  starting with '#' ignored, a file listed twice in any spelling taken once), on any file system Beam reads
   (`.gz` and other compressed lists are decompressed), named by `media.output_names` (with
   `earlier`, the names an earlier run gave).
 
@@ -62,11 +62,16 @@ def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
   """
   try:
     with FileSystems.open(path) as f:
-      lines = f.read().decode('utf-8').splitlines()
+      lines = f.read().decode('utf-8-sig').splitlines()  # A BOM (Windows editors) dropped.
   except (OSError, UnicodeDecodeError) as e:
     raise ValueError(f'--input_list: cannot read {path}: {e}') from None
-  paths = list(dict.fromkeys(line.strip() for line in lines  # Repeats once, in order.
-                             if line.strip() and not line.lstrip().startswith('#')))
+  entries = [line.strip() for line in lines
+             if line.strip() and not line.lstrip().startswith('#')]
+  # A file listed twice, however spelt (a/x.png, ./a/x.png, /abs/a/x.png), runs once.
+  first = {}
+  for entry in entries:
+    first.setdefault(os.path.realpath(entry), entry)
+  paths = list(first.values())
   if not paths:
     raise ValueError(f'--input_list: no paths in {path}')
   for number, entry in enumerate(paths, 1):
@@ -82,17 +87,18 @@ def list_inputs(input_spec: Optional[str], input_list: Optional[str],
                 output_dir: str = '') -> List[media.MediaItem]:
   """The items of `--input` (as `mixstereo-unmix` expands it: `media.iter_inputs`) or of
   `--input_list` (`read_input_list`); exactly one must be given. Inputs an earlier run into
-  `output_dir` named keep their names (`info_file.earlier_names`).
+  `output_dir` named keep their names, and what they wrote is no input
+  (`info_file.read_earlier`).
 
   Raises:
     ValueError: both or neither given, or the given one names nothing usable.
   """
   if (input_spec is None) == (input_list is None):
     raise ValueError('Give exactly one of --input and --input_list.')
-  earlier = info_file.earlier_names(output_dir) if output_dir else {}
+  earlier = info_file.read_earlier(output_dir) if output_dir else info_file.Earlier()
   if input_list is not None:
-    return read_input_list(input_list, earlier)
-  return list(media.iter_inputs(input_spec, earlier))
+    return read_input_list(input_list, earlier.names)
+  return list(media.iter_inputs(input_spec, earlier.names, earlier.outputs))
 
 
 def completed_info(output_dir: str, name: str) -> Optional[Dict[str, object]]:

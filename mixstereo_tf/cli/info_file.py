@@ -9,9 +9,10 @@ for in the same way, and refuses (a dead letter naming the differences) results 
 otherwise, which it would otherwise keep silently beside this run's.
 """
 
+import dataclasses
 import json
 import os
-from typing import Dict, List, Optional
+from typing import Dict, FrozenSet, List, Optional
 
 from mixstereo_tf.cli import media
 
@@ -25,9 +26,12 @@ def describe(options: media.OutputOptions) -> Dict[str, object]:
 
 
 def _flat(request: Dict[str, object]) -> Dict[str, object]:
-  """{name: value}: the settings' fields beside the output options."""
+  """{name: value}: the settings' fields beside the output options (the stereo formats as
+  a sorted list: their order writes the same files)."""
   flat = dict(request.get('settings') or {})
   flat.update((key, value) for key, value in request.items() if key != 'settings')
+  if isinstance(flat.get('output_formats'), list):
+    flat['output_formats'] = sorted(map(str, flat['output_formats']))
   return flat
 
 
@@ -61,23 +65,41 @@ def changed(info: Dict[str, object], path: str) -> bool:
 INFO_SUFFIX = '_info.json'
 
 
-def earlier_names(output_dir: str) -> Dict[str, str]:
-  """{real path of an input: its output name} of the info files in `output_dir` (none
-  when it does not exist; unreadable ones skipped): what earlier runs named each input."""
+@dataclasses.dataclass(frozen=True)
+class Earlier:
+  """What earlier runs into an output folder left (`read_earlier`).
+
+  Attributes:
+    names: {real path of an input: its output name}.
+    outputs: real paths of the files their info files list (the info files included):
+      never inputs of a later run, whose glob over a tree holding the folder matches them.
+  """
+  names: Dict[str, str] = dataclasses.field(default_factory=dict)
+  outputs: FrozenSet[str] = frozenset()
+
+
+def read_earlier(output_dir: str) -> Earlier:
+  """The `Earlier` of the info files in `output_dir` (empty when it does not exist;
+  unreadable files skipped)."""
   if not os.path.isdir(output_dir):
-    return {}
-  names = {}
+    return Earlier()
+  names, outputs = {}, set()
   for file_name in sorted(os.listdir(output_dir)):
     if not file_name.endswith(INFO_SUFFIX):
       continue
+    path = os.path.join(output_dir, file_name)
     try:
-      with open(os.path.join(output_dir, file_name), encoding='utf-8') as f:
-        source = json.load(f).get('input')
+      with open(path, encoding='utf-8') as f:
+        info = json.load(f)
+      source, files = info.get('input'), info.get('files')
     except (OSError, ValueError, AttributeError):
       continue
     if isinstance(source, str):
       names[os.path.realpath(source)] = file_name[:-len(INFO_SUFFIX)]
-  return names
+    outputs.add(os.path.realpath(path))
+    outputs.update(os.path.realpath(os.path.join(output_dir, name)) for name in
+                   (files if isinstance(files, list) else []) if isinstance(name, str))
+  return Earlier(names, frozenset(outputs))
 
 
 def _stale_files(path: str, name: str, files: List[str]) -> List[str]:

@@ -8,8 +8,9 @@ import collections
 import dataclasses
 import glob
 import os
-from typing import Dict, Iterator, List, Optional, Sequence, Tuple, Union
+from typing import Collection, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
+from absl import logging
 import cv2
 import numpy as np
 from PIL import Image
@@ -216,7 +217,7 @@ def output_names(paths: Sequence[str],
   extension (`a_png`, `a_jpg`). A name still taken (the same file name in two folders of a
   glob, or another input's stem) gets '_2', '_3', ... in input order. Names are compared
   case-insensitively, so outputs also stay apart on case-insensitive file systems.
-  `earlier` ({real path: name}, `info_file.earlier_names`): the names an earlier run into
+  `earlier` ({real path: name}, `info_file.Earlier.names`): the names an earlier run into
   the output folder gave; an input keeps its own, and no other input takes one, so that a
   rerun over a grown archive neither renames nor overwrites earlier results.
   """
@@ -243,25 +244,23 @@ def output_names(paths: Sequence[str],
   return names
 
 
-def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None) -> Iterator[MediaItem]:
+def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None,
+                skip: Collection[str] = ()) -> Iterator[MediaItem]:
   """Expands an input specification into items, without reading them.
 
   Args:
     spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images and
-      videos, sorted by name; other files ignored) or a glob pattern (matching images and
-      videos, sorted; `**` matches any depth of folders). Items are named by
-      `output_names` (with `earlier`, the names an earlier run gave).
+      videos, sorted by name; other files and subfolders ignored, with a note) or a glob
+      pattern (matching images and videos, sorted; `**` matches any depth of folders).
+      Items are named by `output_names` (with `earlier`, the names an earlier run gave).
+    skip: real paths never taken from a folder or pattern (`info_file.Earlier.outputs`:
+      what earlier runs wrote into an output folder inside the input tree), with a note.
 
   Raises:
     ValueError: nothing exists at `spec`, or the folder / pattern holds no usable file.
   """
   if os.path.isdir(spec):
-    paths = sorted(os.path.join(spec, name) for name in os.listdir(spec)
-                   if _extension(name) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS
-                   and os.path.isfile(os.path.join(spec, name)))
-    if not paths:
-      raise ValueError(f'No images or videos '
-                       f'({" ".join(IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)}) in folder {spec}')
+    paths = _folder_media(spec)
   elif os.path.isfile(spec):
     paths = [spec]
   elif glob.has_magic(spec):
@@ -271,8 +270,31 @@ def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None) -> Iterator
       raise ValueError(f'No images or videos match the pattern {spec}')
   else:
     raise ValueError(f'Input not found: {spec}')
-  for path, name in zip(paths, output_names(paths, earlier)):
+  kept = [path for path in paths if path == spec or os.path.realpath(path) not in skip]
+  if len(kept) < len(paths):
+    logging.info('%s: %d file(s) that earlier runs wrote into the output folder are not '
+                 'inputs.', spec, len(paths) - len(kept))
+  if not kept:
+    raise ValueError(f'{spec} holds only results of earlier runs, no input.')
+  for path, name in zip(kept, output_names(kept, earlier)):
     yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS, name)
+
+
+def _folder_media(folder: str) -> List[str]:
+  """A folder's images and videos, sorted by name; subfolders are not searched (noted)."""
+  names = sorted(os.listdir(folder))
+  paths = [os.path.join(folder, name) for name in names
+           if _extension(name) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS
+           and os.path.isfile(os.path.join(folder, name))]
+  subfolders = sum(os.path.isdir(os.path.join(folder, name)) for name in names)
+  hint = (f"; {subfolders} subfolder(s) not searched: give '{os.path.join(folder, '**', '*')}'"
+          ' to include them') if subfolders else ''
+  if not paths:
+    raise ValueError(f'No images or videos ({" ".join(IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)}) '
+                     f'in folder {folder}{hint}')
+  if subfolders:
+    logging.info('%s: %d image(s) and video(s)%s.', folder, len(paths), hint)
+  return paths
 
 
 def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:

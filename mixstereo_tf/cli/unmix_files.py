@@ -188,7 +188,8 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
     ValueError: `input_spec` names nothing usable, or `output_dir` cannot take the results
       (`media.prepare_output_dir`).
   """
-  items = list(media.iter_inputs(input_spec, info_file.earlier_names(output_dir)))
+  earlier = info_file.read_earlier(output_dir)
+  items = list(media.iter_inputs(input_spec, earlier.names, earlier.outputs))
   media.prepare_output_dir(items, output_dir)
   report = UnmixReport()
   run_start = time.perf_counter()

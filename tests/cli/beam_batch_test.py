@@ -125,6 +125,12 @@ def test_input_list_names_like_the_cli(tmp_path):
   items = beam_batch.list_inputs(None, str(tmp_path / 'notes.txt'))
   assert [item.path for item in items] == [paths[0], paths[2]]  # Comments out, repeat once.
   assert [item.name for item in items] == ['p', 'clip']
+  # A BOM (lists saved on Windows) and one file in three spellings.
+  relative = os.path.relpath(paths[0])
+  (tmp_path / 'spelt.txt').write_text(f'\ufeff{paths[0]}\n./{relative}\n{relative}\n'
+                                      f'{paths[2]}\n', encoding='utf-8')
+  items = beam_batch.list_inputs(None, str(tmp_path / 'spelt.txt'))
+  assert [item.path for item in items] == [paths[0], paths[2]]
   (tmp_path / 'empty.txt').write_text('\n \n# only a comment\n')
   with pytest.raises(ValueError, match='--input_list: no paths in .*empty.txt'):
     beam_batch.list_inputs(None, str(tmp_path / 'empty.txt'))
@@ -162,6 +168,10 @@ def test_results_of_another_input_or_method_are_not_skipped_as_done(tmp_path):
   assert "weights: 'ckpt-1.index sha256:1' -> 'ckpt-1.index sha256:2'" in why
   assert beam_batch.foreign_results(recorded, item, 'classical', dict(
       asked, settings=dict(asked['settings'], weights=None))) is None
+  # The stereo formats in another order write the same files.
+  two = info_file.describe(media.OutputOptions(formats=('mpo', 'jps')))
+  assert beam_batch.foreign_results(dict(mine, request=two), item, 'classical', dict(
+      two, output_formats=['jps', 'mpo'])) is None
 
 
 def test_complete_means_the_info_and_every_file_it_lists(tmp_path):

@@ -1,5 +1,6 @@
 """Tests for mixstereo_tf.cli.media: layouts, disparity files, input expansion."""
 
+import logging
 import os
 
 import cv2
@@ -270,3 +271,22 @@ def test_output_options_formats_are_a_checked_tuple(tmp_path):
   outputs = {'left': left, 'right': right, 'disparity_left': np.ones((6, 8), np.float32)}
   written = media.write_image_outputs(outputs, str(tmp_path), 'a', 'sbs', 4.0, ('jps',), left)
   assert written['files'][-1] == 'a.jps' and os.path.isfile(tmp_path / 'a.jps')
+
+
+def test_a_folder_notes_its_subfolders_and_skips_earlier_results(tmp_path, caplog):
+  caplog.set_level(logging.INFO)
+  (tmp_path / 'sub').mkdir()
+  _write_png(tmp_path / 'sub' / 'deep.png', 10)
+  with pytest.raises(ValueError, match=r"in folder .*; 1 subfolder\(s\) not searched: give "
+                                       r"'.*\*\*/\*' to include them"):
+    list(media.iter_inputs(str(tmp_path)))
+  _write_png(tmp_path / 'a.png', 10)
+  _write_png(tmp_path / 'a_left.png', 20)
+  assert [i.name for i in media.iter_inputs(str(tmp_path))] == ['a', 'a_left']
+  assert '1 subfolder(s) not searched' in caplog.text
+  skip = {os.path.realpath(tmp_path / 'a_left.png')}
+  assert [i.name for i in media.iter_inputs(str(tmp_path), skip=skip)] == ['a']
+  assert [i.name for i in media.iter_inputs(str(tmp_path / 'a_left.png'), skip=skip)] == [
+      'a_left']  # Named by itself: taken.
+  with pytest.raises(ValueError, match='holds only results of earlier runs'):
+    list(media.iter_inputs(str(tmp_path / 'a_*.png'), skip=skip))

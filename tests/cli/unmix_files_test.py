@@ -119,6 +119,17 @@ def test_a_rerun_over_a_grown_archive_keeps_every_earlier_name(setup, tmp_path):
       'x_info.json', 'x_png_info.json']  # b's results were not made again as x_png_2.
 
 
+def test_results_written_inside_the_input_tree_are_no_inputs_of_a_rerun(setup, tmp_path):
+  (tmp_path / 'scans').mkdir()
+  _image(tmp_path / 'scans' / 'a.png')
+  pattern, out = str(tmp_path / 'scans' / '**' / '*'), tmp_path / 'scans' / 'out'
+  assert unmix_files.unmix_inputs(setup, pattern, str(out)).processed == 1
+  written = sorted(os.listdir(out))
+  report = unmix_files.unmix_inputs(setup, pattern, str(out))  # Was refused: "holds the input".
+  assert (report.processed, report.failures) == (1, [])
+  assert sorted(os.listdir(out)) == written
+
+
 class _Terminal(io.StringIO):
   """A stream that says it is a terminal, so progress is drawn on it."""
 
