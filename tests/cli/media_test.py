@@ -274,7 +274,7 @@ def test_output_options_formats_are_a_checked_tuple(tmp_path):
 
 
 def test_a_folder_notes_its_subfolders_and_skips_earlier_results(tmp_path, caplog):
-  caplog.set_level(logging.INFO)
+  caplog.set_level(logging.INFO, logger='absl')
   (tmp_path / 'sub').mkdir()
   _write_png(tmp_path / 'sub' / 'deep.png', 10)
   with pytest.raises(ValueError, match=r"in folder .*; 1 subfolder\(s\) not searched: give "
