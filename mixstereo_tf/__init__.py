@@ -75,7 +75,9 @@ def _image(image) -> np.ndarray:
   from mixstereo_tf.cli import media  # pylint: disable=g-import-not-at-top
   if isinstance(image, bytes) and (b'\0' in image or len(image) > 4096):
     raise ValueError(f'image= is {len(image)} bytes that name no file (a file\'s contents?); '
-                     'give its path, or an array (e.g. cv2.imdecode of the bytes).')
+                     'give its path, or an RGB array (e.g. np.asarray(PIL.Image.open('
+                     "io.BytesIO(data)).convert('RGB')); OpenCV decodes to BGR: reverse it "
+                     'with [..., ::-1]).')
   if isinstance(image, (str, bytes, os.PathLike)):
     path = os.fsdecode(image)
     if os.path.splitext(path)[1].lower() in media.VIDEO_EXTENSIONS:
@@ -83,17 +85,37 @@ def _image(image) -> np.ndarray:
                        f'mixstereo-unmix --input={path}).')
     return media.read_image(path)
   if hasattr(image, 'getexif') and hasattr(image, 'convert'):  # A PIL image: as a file.
-    from PIL import ImageOps  # pylint: disable=g-import-not-at-top
-    image = ImageOps.exif_transpose(image).convert('RGB')  # Palette, CMYK, ... to RGB.
+    image = _pil_rgb(image)
   array = np.asarray(image)
+  if array.ndim == 3 and array.shape[2] == 4:
+    array = array[..., :3]  # RGBA: alpha dropped, as image files' and PIL images' is.
   if array.dtype != np.uint8:
     raise ValueError(f'image= must be a uint8 array (0-255), got {array.dtype}; e.g. '
                      'np.round(x * 255).astype(np.uint8) for floats in [0, 1].')
   if array.ndim not in (2, 3) or min(array.shape[:2]) == 0 or (
       array.ndim == 3 and array.shape[2] not in (1, 3)):
-    raise ValueError(f'image= must be a [H, W, 3] RGB or [H, W] gray image, got shape '
-                     f'{array.shape}.')
+    raise ValueError(f'image= must be a [H, W, 3] RGB (or RGBA) or [H, W] gray image, got '
+                     f'shape {array.shape}.')
   return array
+
+
+def _pil_rgb(image) -> np.ndarray:
+  """A PIL image as uint8 RGB, turned upright by its EXIF orientation: 16-bit gray ('I;16',
+  or 'I' within 0..65535, as Pillow opens 16-bit PNGs) scaled to 8 bits as such a file
+  is; ValueError for float ('F') and other 32-bit images, which `convert` would clip."""
+  from mixstereo_tf.data import image_io  # pylint: disable=g-import-not-at-top
+  from PIL import ImageOps  # pylint: disable=g-import-not-at-top
+  image = ImageOps.exif_transpose(image)
+  if image.mode.startswith('I;16') or image.mode == 'I':
+    values = np.asarray(image)
+    if values.size and (values.min() < 0 or values.max() > 65535):
+      raise ValueError(f"image= is a 32-bit PIL image (mode 'I', values {values.min()} to "
+                       f'{values.max()}); give an 8- or 16-bit image.')
+    return np.repeat(image_io.eight_bits(values)[..., None], 3, axis=2)
+  if image.mode == 'F':
+    raise ValueError("image= is a floating-point PIL image (mode 'F'), whose range is "
+                     'unknown; give np.round(x * 255).astype(np.uint8) for values in [0, 1].')
+  return np.asarray(image.convert('RGB'))  # Palette, CMYK, ... to RGB.
 
 
 @functools.lru_cache(maxsize=4)
@@ -111,6 +133,9 @@ def _search(value: Union[None, str, Tuple[int, int]]) -> Union[None, str, Tuple[
   from mixstereo_tf.unmixing import disparity_range  # pylint: disable=g-import-not-at-top
   if value is None:
     return None
+  if not isinstance(value, str) and not hasattr(value, '__iter__'):
+    raise ValueError(f"disparity_range={value!r}: give (MIN, MAX) signed pixels, or text such "
+                     "as '-40,120' or 'auto'.")
   try:  # A pair reads as the CLI's MIN,MAX text, so both check and round alike.
     text = value if isinstance(value, str) else ','.join(str(v) for v in value)
     return disparity_range.parse(text)
@@ -135,8 +160,9 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
   `unmix` on many images costs the model loading once.
 
   Args:
-    image: a uint8 RGB [H, W, 3] or gray [H, W] array, a PIL image (as RGB, EXIF
-      orientation applied), or the path (str, bytes, PathLike) of an image file (read
+    image: a uint8 RGB [H, W, 3] (alpha of RGBA dropped) or gray [H, W] array (OpenCV's
+      cv2.imread / imdecode give BGR: pass `bgr[..., ::-1]`), a PIL image (as RGB, EXIF
+      orientation applied, 16-bit gray scaled to 8 bits), or the path (str, bytes, PathLike) of an image file (read
       like the CLI reads it: gray and 16-bit files become uint8 RGB, EXIF orientation
       applied); videos: the `mixstereo-unmix` tool.
     mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g. 'gray',
@@ -162,6 +188,9 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
       keyword to change.
   """
   from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
+  # Paths as text (a pathlib.Path would reach the JSON-able info).
+  checkpoint, saved_model, model = (os.fspath(v) if isinstance(v, os.PathLike) else v
+                                    for v in (checkpoint, saved_model, model))
   given = dict(method=method, checkpoint=checkpoint, saved_model=saved_model,
                mixture=mixture, restore_colour=restore_colour, swap_eyes=swap_eyes,
                max_network_pixels=max_network_pixels, pretrained=model,

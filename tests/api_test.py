@@ -2,6 +2,7 @@
 
 import dataclasses
 import inspect
+import json
 import subprocess
 import sys
 
@@ -16,6 +17,7 @@ from mixstereo_tf.cli import media
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import predictors
+from tests.unmixing import predictors_test
 
 
 @pytest.fixture(scope='module')
@@ -151,3 +153,34 @@ def test_importing_the_package_loads_no_tensorflow():
   result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                           timeout=60, check=True)
   assert result.stdout.strip() == '[]'
+
+
+def test_image_kinds_read_as_files_are_and_wrong_kinds_are_refused(tmp_path):
+  gray16 = np.arange(0, 65536, 257, dtype=np.uint16).reshape(16, 16)
+  PIL.Image.fromarray(gray16).save(tmp_path / 'g16.png')
+  from_file = mixstereo_tf._image(str(tmp_path / 'g16.png'))  # pylint: disable=protected-access
+  with PIL.Image.open(tmp_path / 'g16.png') as opened:
+    assert opened.mode in ('I;16', 'I')
+    from_pil = mixstereo_tf._image(opened)  # pylint: disable=protected-access
+  np.testing.assert_array_equal(from_pil, from_file)
+  assert from_pil[0, 1].tolist() == [1, 1, 1] and from_pil[-1, -1].tolist() == [255] * 3
+  with pytest.raises(ValueError, match=r"floating-point PIL image \(mode 'F'\)"):
+    mixstereo_tf._image(PIL.Image.fromarray(np.zeros((4, 4), np.float32)))  # pylint: disable=protected-access
+  rgba = np.random.default_rng(0).integers(0, 256, (6, 8, 4), dtype=np.uint8)
+  np.testing.assert_array_equal(mixstereo_tf._image(rgba), rgba[..., :3])  # pylint: disable=protected-access
+  with pytest.raises(ValueError, match=r'OpenCV decodes to BGR'):
+    mixstereo_tf.unmix(b'\x89PNG\r\n\x1a\n\0' * 10)
+  with pytest.raises(ValueError, match=r"disparity_range=5: give \(MIN, MAX\)"):
+    mixstereo_tf.unmix(rgba, disparity_range=5)
+  with pytest.raises(ValueError, match=r'mixing_weight= applies to the classical method and '
+                                       'the shipped models'):
+    mixstereo_tf.unmix(rgba, mixture='diplopia', checkpoint=tmp_path, mixing_weight=0.3)
+
+
+def test_a_path_object_of_a_checkpoint_reads_back_as_text_in_the_info(tmp_path):
+  path = tmp_path / 'run'
+  predictors_test.make_run_dir(str(path))
+  image = np.random.default_rng(1).integers(0, 256, (32, 64, 3), dtype=np.uint8)
+  result = mixstereo_tf.unmix(image, mixture='anaglyph', checkpoint=path,
+                              disparity_range=(0, 7))
+  assert json.loads(json.dumps(result.info))['checkpoint'] == str(path)

@@ -63,6 +63,11 @@ def _read_raw(path: str) -> np.ndarray:
   return array
 
 
+def eight_bits(array: np.ndarray) -> np.ndarray:
+  """16-bit samples as uint8: round(v / 257) (65535 -> 255, 257 k -> k)."""
+  return ((array.astype(np.uint32) + 128) // 257).astype(np.uint8)
+
+
 def read_image(path: str) -> np.ndarray:
   """Reads any 8/16-bit gray, gray+alpha, BGR or BGRA image as uint8 RGB `[H, W, 3]`.
 
@@ -73,7 +78,7 @@ def read_image(path: str) -> np.ndarray:
   """
   array = _read_raw(path)
   if array.dtype == np.uint16:
-    array = ((array.astype(np.uint32) + 128) // 257).astype(np.uint8)
+    array = eight_bits(array)
   elif array.dtype != np.uint8:
     raise ValueError(f'Unsupported image sample type {array.dtype} in {path}')
   if array.ndim == 2:

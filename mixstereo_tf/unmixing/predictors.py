@@ -201,6 +201,10 @@ def build_unmixer(config: PredictorConfig) -> Unmixer:
       and not families.of(config.mixture).weighted):
     raise ValueError(f'PredictorConfig.mixing_weight applies to double images; a '
                      f'{config.mixture!r} mixture has no mixing weight.')
+  if config.mixing_weight is not None and (config.checkpoint or config.saved_model):
+    raise ValueError('PredictorConfig.mixing_weight applies to the classical method and the '
+                     'shipped models; a network of PredictorConfig.checkpoint or '
+                     'PredictorConfig.saved_model was trained on 1/2 and takes none.')
   if config.swap_eyes not in eye_order.SWAP_EYES:
     raise ValueError(f'PredictorConfig.swap_eyes={config.swap_eyes!r}; give False, True or '
                      f'{eye_order.AUTO!r}.')
