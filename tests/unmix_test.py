@@ -85,7 +85,7 @@ def test_bad_input_is_named(tmp_path):
   media.write_image(str(tmp_path / 'gray.png'), gray)
   result = _cli(['--method=classical', '--mixture=anaglyph', f'--input={tmp_path}/gray.png'],
                 tmp_path)
-  assert result.returncode == 0 and "given as 'anaglyph' but looks like gray" in result.stderr
+  assert result.returncode == 0 and "given as 'anaglyph', but the detector reads it as 'gray'" in result.stderr
   result = _cli(['--method=classical', '--mixture=anaglyph', '--disparity_range=5,5',
                  f'--input={tmp_path}/gray.png'], tmp_path)
   assert result.returncode != 0

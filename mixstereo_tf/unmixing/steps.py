@@ -38,6 +38,7 @@ import tensorflow as tf
 from mixstereo_tf.classical import sgbm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.models import refiner
 from mixstereo_tf.unmixing import detection
 from mixstereo_tf.unmixing import disparity_range
@@ -50,8 +51,10 @@ AUTO = 'auto'
 # classical colour transfer); chosen on validation examples, neither training nor
 # evaluation data (experiments/results/pretrained_ablations.md).
 REFINED_VIEW_WEIGHT = 0.25
-# A named encoding the detector contradicts with at least this confidence is warned about.
+# A named encoding the detector contradicts with at least this confidence is warned about;
+# named glasses (family) it contradicts, at this confidence of the family.
 WARN_CONFIDENCE = 0.9
+FAMILY_WARN_CONFIDENCE = 0.75
 Range = Union[None, str, Tuple[int, int]]  # disparity_range.parse's values.
 # A method's own range planning: plan(uint8 image, encoding, hint) -> (min, max) pixels.
 Planner = Callable[[np.ndarray, str, Optional[hints.FrameHint]], Tuple[int, int]]
@@ -128,11 +131,23 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
                       found.also_fits, name)
   else:
     name = requested
-    if found.confidence >= WARN_CONFIDENCE and found.name != name and (
-        found.name is not None or families.of(name).detectable):
-      logging.warning('The image was given as %r but looks like %s (confidence %.2f).',
-                      name, found.name or 'no anaglyph', found.confidence)
+    if _contradicts(found, name):
+      logging.warning('The image was given as %r, but the detector %s (confidence %.2f).',
+                      name, f'reads it as {found.name!r}' if found.name else
+                      'finds no anaglyph in it', found.confidence)
   return families.allowed_name(name, allowed), info
+
+
+def _contradicts(found: detection.Detection, name: str) -> bool:
+  """Whether a detection is sure enough that the named encoding `name` is wrong: another
+  encoding at WARN_CONFIDENCE, or other glasses at FAMILY_WARN_CONFIDENCE (a family is read
+  more surely than the encoding within it)."""
+  if found.name == name or (found.name is None and not families.of(name).detectable):
+    return False
+  other_glasses = (found.name is not None and mixtures.get_mixture(found.name).family
+                   != mixtures.get_mixture(name).family)
+  return found.confidence >= WARN_CONFIDENCE or (
+      other_glasses and found.family_confidence >= FAMILY_WARN_CONFIDENCE)
 
 
 def within_image(requested: Tuple[int, int], width: int) -> Tuple[int, int]:

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.unmixing import detection
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import steps
 from tests.unmixing import detection_test
@@ -73,10 +74,27 @@ def test_a_wrong_explicit_mixture_warns_with_the_detected_one(monkeypatch):
   image, _ = _anaglyph('gray')
   name, _ = steps.resolve_mixture(image, 'anaglyph', mixtures.ANAGLYPH_NAMES)
   assert name == 'anaglyph'  # The user's choice is kept...
-  assert len(warnings) == 1 and "'anaglyph' but looks like gray" in warnings[0]  # ...warned.
+  assert len(warnings) == 1 and "'anaglyph', but the detector reads it as 'gray'" in warnings[0]
   warnings.clear()
   steps.resolve_mixture(image, 'gray', mixtures.ANAGLYPH_NAMES)
   assert not warnings
+
+
+def test_named_glasses_the_detector_contradicts_warn_below_the_encoding_threshold(
+    monkeypatch):
+  warnings = []
+  monkeypatch.setattr(logging, 'warning', lambda msg, *args: warnings.append(msg % args))
+  found = detection.Detection('anaglyph', 0.85, 'red_cyan channels', {},
+                              family_confidence=0.99)
+  monkeypatch.setattr(detection, 'detect', lambda image: found)
+  image = np.zeros((32, 32, 3), np.uint8)
+  steps.resolve_mixture(image, 'half_color', mixtures.ANAGLYPH_NAMES)  # Same glasses: kept.
+  assert not warnings
+  for named in ('green_magenta', 'diplopia'):
+    assert steps.resolve_mixture(image, named, mixtures.ANAGLYPH_NAMES + ('diplopia',))[0] == (
+        named)
+  assert len(warnings) == 2 and all("reads it as 'anaglyph' (confidence 0.85)" in w
+                                    for w in warnings)
 
 
 def test_a_named_double_image_says_its_confidence_is_that_it_is_no_anaglyph():
