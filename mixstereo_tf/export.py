@@ -25,6 +25,7 @@ from mixstereo_tf.artifacts import serving
 from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.unmixing import unmixer
 
 FLAGS = flags.FLAGS
 
@@ -79,6 +80,7 @@ def main(argv):
       logging.info('Wrote the %s %s model to %s.', entry.kind, entry.mixture, entry.folder)
       return
     model, run_info = _model_and_info()
+    unmixer.warn_if_untrained(run_info, FLAGS.checkpoint or FLAGS.pretrained)
     serving.export_saved_model(graphs.serving_function(model), model.variables, run_info,
                                FLAGS.export_dir)
   except ValueError as e:

@@ -147,3 +147,11 @@ def test_the_checkpoint_weights_were_exported(exported):
   assert len(loaded.model_variables) == len(model.variables)
   for saved, restored in zip(model.variables, loaded.model_variables):
     np.testing.assert_array_equal(saved.numpy(), restored.numpy())
+
+
+def test_exporting_a_half_trained_run_warns(tmp_path):
+  predictors_test.make_run_dir(str(tmp_path / 'run'), mode='stereo_only')
+  result = _run([sys.executable, '-m', 'mixstereo_tf.export', f'--checkpoint={tmp_path / "run"}',
+                 f'--export_dir={tmp_path / "saved"}'], cwd=REPO)
+  assert result.returncode == 0, result.stderr[-2000:]
+  assert 'was trained with mode stereo_only' in result.stderr

@@ -143,14 +143,19 @@ _UNTRAINED_PART = {
 }
 
 
+def warn_if_untrained(run_info: runs.RunInfo, source: str) -> None:
+  """Logs what a run trained with a mode that leaves a network untrained does to mixtures."""
+  if run_info.mode in _UNTRAINED_PART:
+    logging.warning('%s was trained with mode %s: %s.', source, run_info.mode,
+                    _UNTRAINED_PART[run_info.mode])
+
+
 def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: runs.RunInfo,
                   config: PredictorConfig = PredictorConfig()) -> Unmixer:
   """The 'model' Unmixer around a uint8 serving graph (`graphs.serving_function`) of a run."""
   trained = run_info.mixtures
   requested = check_mixture(config, trained)
-  if run_info.mode in _UNTRAINED_PART:
-    logging.warning('%s was trained with mode %s: %s.', config.checkpoint or config.saved_model,
-                    run_info.mode, _UNTRAINED_PART[run_info.mode])
+  warn_if_untrained(run_info, config.checkpoint or config.saved_model)
   levels = run_info.model_config.max_disparity
   restore = config.restore_colour
   named = [requested] if requested != steps.AUTO else list(trained)
