@@ -256,7 +256,8 @@ def dense_range(found: np.ndarray, reach: int, scale: float, width: int,
   when none is dense)."""
   low, high = -reach, reach
   counts = np.histogram(found, bins=np.arange(-reach, reach + 2))[0]
-  share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)
+  # The 5-px window sums, one per bin ('same' would pad fewer than 5 bins to 5).
+  share = np.convolve(counts, np.ones(5))[2:2 + counts.size] / max(1, found.size)
   dense = np.nonzero((share >= config.range_density) & (counts > 0))[0]
   if dense.size:
     low = dense.min() - reach - config.range_margin
@@ -293,6 +294,7 @@ def estimate_range(left, right,
   if scale > 1 and left.shape[0] < config.census_height:
     raise ValueError(f'a {h}x{w} image downsampled to MatcherConfig.range_width = '
                      f'{config.range_width} is {left.shape[0]} px high, less than '
-                     f'MatcherConfig.census_height = {config.census_height}.')
+                     f'MatcherConfig.census_height = {config.census_height}: too thin to '
+                     'estimate its disparity range; give it (PredictorConfig.disparity_range).')
   out = _full(left, right, -reach, reach, config)
   return dense_range(out['disparity_left'][out['consistent_left']], reach, scale, w, config)

@@ -106,7 +106,8 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
     found = detection.detect(image)
   except ValueError as e:  # Too small or thin to detect: a named mixture needs no check.
     if requested == AUTO and not fallback:
-      raise NoAnaglyphError(str(e)) from None
+      raise NoAnaglyphError(f'{e} The encoding cannot be detected on it: name its mixture '
+                            '(e.g. PredictorConfig.mixture=anaglyph).') from None
     if requested == AUTO:
       return fallback, {'detected': None, 'detection': str(e), 'read_as': fallback,
                         'undecided': True}

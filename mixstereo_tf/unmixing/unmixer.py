@@ -18,6 +18,9 @@ from mixstereo_tf.unmixing import steps
 
 Outputs = Dict[str, np.ndarray]
 
+# OpenCV's remap takes sides below SHRT_MAX (32767) px only.
+MAX_SIDE = 32767
+
 
 def as_rgb(image) -> np.ndarray:
   """A uint8 mixture as [H, W, 3]; gray [H, W] / [H, W, 1] is replicated to RGB and an
@@ -117,6 +120,10 @@ class Unmixer:
   takes_pair: bool = False
 
   def __call__(self, *images: np.ndarray, hint=None) -> Outputs:
+    for image in images:
+      if max(np.shape(image)[:2]) >= MAX_SIDE:
+        raise ValueError(f'A {image.shape[0]}x{image.shape[1]} image: sides of {MAX_SIDE} px '
+                         "or more are beyond OpenCV's image warps; unmix it in parts.")
     return self.fn(*images) if hint is None else self.fn(*images, hint=hint)
 
 

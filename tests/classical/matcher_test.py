@@ -184,6 +184,8 @@ def test_dense_range_keeps_the_dense_disparities_widened_and_scaled():
   assert matcher.dense_range(found, 32, 2.5, 500, config) == (2, 30)  # floor / ceil of 2.5x.
   assert matcher.dense_range(found, 32, 2.5, 20, config) == (2, 19)  # |d| <= W - 1.
   assert matcher.dense_range(np.array([]), 32, 1.0, 500, config) == (-32, 32)  # None dense.
+  # A copy a few px wide searches fewer than the 5 bins of the density window.
+  assert matcher.dense_range(np.array([0, 0, 1]), 1, 1.0, 4, config) == (-2, 3)
 
 
 def test_bad_ranges_and_configs_raise():

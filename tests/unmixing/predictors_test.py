@@ -241,3 +241,15 @@ def test_weights_identity_changes_with_the_weights_at_a_path(tmp_path):
   with pytest.raises(ValueError, match=r"PredictorConfig.saved_model='.*': cannot read "
                                        r'.*variables.index'):
     predictors.weights_identity(predictors.PredictorConfig(saved_model=str(tmp_path)))
+
+
+def test_sides_beyond_opencvs_warps_and_thin_ranges_are_named():
+  classical = predictors.build_unmixer(predictors.PredictorConfig('classical',
+                                                                mixture='anaglyph'))
+  with pytest.raises(ValueError, match=r"1x32767 image: sides of 32767 px or more are beyond "
+                                       "OpenCV's image warps"):
+    classical(np.zeros((1, 32767, 3), np.uint8))
+  thin = np.random.default_rng(0).integers(0, 256, (60, 6400, 3), dtype=np.uint8)
+  with pytest.raises(ValueError, match=r'too thin to estimate its disparity range; give it '
+                                       r'\(PredictorConfig.disparity_range\)'):
+    classical(thin)
