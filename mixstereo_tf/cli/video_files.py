@@ -159,7 +159,8 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
       shots=state['shots'], **({'shots_from_frame': state['done']} if state['done'] else {}),
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
       files=[os.path.basename(path) for path in outputs.values()],
-      **({'skipped_formats': skipped} if skipped else {}), **_odd_size_note(info)),
+      **({'skipped_formats': skipped} if skipped else {}),
+      **_notes(info, done['frames'], item.path)),
       request)
   return state['rendered']
 
@@ -207,10 +208,18 @@ def display_range(unmixer: predictors.Unmixer, opened: Dict[str, object]
   return float(low), float(max(high, low + 1))
 
 
-def _odd_size_note(info) -> Dict[str, str]:
-  """{'padding': why an output video is a row or column larger than the input}, if it is."""
-  if info.width % 2 == 0 and info.height % 2 == 0:
-    return {}
-  return {'padding': f'{info.width}x{info.height} frames: an output video whose width or '
-                     'height is odd gets one more column or row, copied from its edge (4:2:0 '
-                     'video needs even sizes); crop it to recover the input size'}
+def _notes(info, frames: int, path: str) -> Dict[str, str]:
+  """{'padding': why an output video is a row or column larger than the input}, if it is;
+  {'ended_early': ...} (also logged) when the video ended well before the frames its
+  container declares (a cut or damaged file: what decoded is written)."""
+  notes = {}
+  if info.width % 2 or info.height % 2:
+    notes['padding'] = (f'{info.width}x{info.height} frames: an output video whose width or '
+                        'height is odd gets one more column or row, copied from its edge '
+                        '(4:2:0 video needs even sizes); crop it to recover the input size')
+  if info.frame_count and frames < 0.95 * info.frame_count:
+    notes['ended_early'] = (f'{path} ended after {frames} of the {info.frame_count} frames '
+                            'its container declares (a cut or damaged file?); the decoded '
+                            'ones are written')
+    logging.warning('%s.', notes['ended_early'])
+  return notes

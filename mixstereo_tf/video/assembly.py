@@ -9,6 +9,7 @@ become stream metadata (`streams.STEREO_MODES`).
 import dataclasses
 import fractions
 import heapq
+import math
 from typing import Dict, Iterator, Optional, Sequence, Tuple
 
 from absl import logging
@@ -27,19 +28,32 @@ class Part:
 
 
 def _video_packets(parts: Sequence[Part], stream) -> Iterator[Tuple[Fraction, av.Packet]]:
-  """(decode time in seconds, packet) of every part in order, shifted by part.start."""
+  """(decode time in seconds, packet) of every part in order, shifted by part.start.
+
+  A part's first decode times fall before its start by the encoder's reordering delay,
+  which grows with the spacing of its frames; where that reaches back over the previous
+  part's last (a short last part of a variable-rate or cut video), they are moved just
+  after it (never past the packet's presentation time): muxers need them increasing.
+  """
+  last = None
   for part in parts:
     with av.open(part.path) as container:
       source = container.streams.video[0]
       for packet in container.demux(source):
         if packet.size == 0:
           continue  # The demuxer's end-of-stream marker.
-        shift = round(part.start / Fraction(packet.time_base))
+        base = Fraction(packet.time_base)
+        shift = round(part.start / base)
         packet.pts = None if packet.pts is None else packet.pts + shift
         packet.dts = None if packet.dts is None else packet.dts + shift
+        if packet.dts is not None and last is not None and packet.dts * base <= last:
+          after = math.floor(last / base) + 1
+          if packet.pts is None or after <= packet.pts:
+            packet.dts = after
         packet.stream = stream
         stamp = packet.dts if packet.dts is not None else packet.pts
-        yield stamp * Fraction(packet.time_base), packet
+        last = stamp * base
+        yield last, packet
 
 
 def _source_packets(container, streams: Dict[int, object]

@@ -9,6 +9,7 @@ import subprocess
 
 import av
 import cv2
+import imageio_ffmpeg
 import numpy as np
 from PIL import Image
 import pytest
@@ -342,6 +343,31 @@ def test_an_odd_sized_video_says_its_outputs_are_padded(tmp_path):
   assert info['padding'].startswith('47x33 frames')
   out_info, _ = streams_test.read_all(tmp_path / 'out' / 'odd_sbs_half.avi')
   assert (out_info.width, out_info.height) == (48, 34)
+
+
+def test_a_cut_video_is_written_as_far_as_it_decodes_and_says_so(tmp_path):
+  def unmix(image, **hint):
+    del hint
+    return {'left': image, 'right': image, 'info': {},
+            'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  whole = streams_test.make_video(tmp_path / 'whole.mp4',
+                                  [streams_test.pattern(i) for i in range(40)])
+  moved = str(tmp_path / 'moved.mp4')  # Index first (as for the web): a cut keeps it.
+  subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), '-v', 'error', '-i', whole, '-c', 'copy',
+                  '-movflags', 'faststart', moved], check=True)
+  data = open(moved, 'rb').read()
+  with open(tmp_path / 'cut.mp4', 'wb') as f:
+    f.write(data[:len(data) * 2 // 3])
+  report = unmix_files.unmix_inputs(predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0),
+                                    str(tmp_path / 'cut.mp4'), str(tmp_path / 'out'),
+                                    media.OutputOptions('sbs'))
+  assert report.failures == []
+  info = json.loads((tmp_path / 'out' / 'cut_info.json').read_text())
+  assert 0 < info['frames'] < 38 and f'ended after {info["frames"]} of the 40 frames' in (
+      info['ended_early'])
+  _, frames = streams_test.read_all(tmp_path / 'out' / 'cut_sbs.mp4')
+  assert len(frames) == info['frames']
 
 
 def test_an_input_too_large_for_memory_fails_alone(tmp_path):

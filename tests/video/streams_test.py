@@ -109,6 +109,27 @@ def test_parts_assembled_keep_rate_timestamps_and_audio(tmp_path, extension):
   assert audio_samples(source).shape[1] >= 20 * 4000  # 48 kHz for 20 frames at 12 fps.
 
 
+def test_a_short_last_part_with_wider_spaced_frames_assembles(tmp_path):
+  """Its encoder's decode times reach back over the previous part's (a cut or
+  variable-rate video's last segment): the muxer refused them ('returned 22')."""
+  source = make_video(tmp_path / 'in.mp4', [pattern(i) for i in range(20)])
+  info, frames = read_all(source)
+  parts = []
+  for first, times in ((0, [Fraction(i, 12) for i in range(10)]),
+                       (10, [Fraction(2 * i, 12) for i in range(3)])):
+    part = str(tmp_path / f'part{first}.mov')
+    with streams.VideoWriter(part, info.frame_rate, info.time_base,
+                              streams.encoder_for(source)) as writer:
+      for index, time in enumerate(times):
+        writer.write(frames[first + index].image, time)
+    parts.append(assembly.Part(part, frames[first].time))
+  output = str(tmp_path / 'out.mp4')
+  assembly.assemble(parts, output, info.frame_rate, info.time_base, audio_source=source)
+  _, out_frames = read_all(output)
+  assert [f.time for f in out_frames] == [Fraction(i, 12) for i in range(10)] + [
+      Fraction(10 + 2 * i, 12) for i in range(3)]
+
+
 def _with_subtitles(path, output, tags):
   """`path` remuxed into `output` with a subtitle stream (language 'deu', cues 'Hallo' at
   0-0.2 s and 'Welt' at 0.2-0.3 s; MP4: mov_text, Matroska: SubRip) by FFmpeg, and the
