@@ -188,6 +188,9 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
       keyword to change.
   """
   from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
+  if max_network_pixels is not ... and method != 'model':
+    raise ValueError(f"max_network_pixels= applies to method='model' (a network), not "
+                     f'method={method!r}.')
   # Paths as text (a pathlib.Path would reach the JSON-able info).
   checkpoint, saved_model, model = (os.fspath(v) if isinstance(v, os.PathLike) else v
                                     for v in (checkpoint, saved_model, model))

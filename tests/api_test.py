@@ -184,3 +184,9 @@ def test_a_path_object_of_a_checkpoint_reads_back_as_text_in_the_info(tmp_path):
   result = mixstereo_tf.unmix(image, mixture='anaglyph', checkpoint=path,
                               disparity_range=(0, 7))
   assert json.loads(json.dumps(result.info))['checkpoint'] == str(path)
+
+
+def test_max_network_pixels_for_a_method_without_a_network_is_refused():
+  with pytest.raises(ValueError, match=r"max_network_pixels= applies to method='model'"):
+    mixstereo_tf.unmix(np.zeros((8, 8, 3), np.uint8), method='classical', mixture='anaglyph',
+                       max_network_pixels=1000)

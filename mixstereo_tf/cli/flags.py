@@ -262,6 +262,9 @@ def predictor_config() -> predictors.PredictorConfig:
     search = disparity_range.parse(FLAGS.disparity_range)
   except ValueError as e:
     raise app.UsageError(f'--disparity_range: {e}') from None
+  if FLAGS['max_network_pixels'].present and FLAGS.method != 'model':
+    raise app.UsageError(f'--max_network_pixels applies to --method=model (a network), not '
+                         f'--method={FLAGS.method}.')
   return predictors.PredictorConfig(
       method=FLAGS.method, checkpoint=FLAGS.checkpoint, saved_model=FLAGS.saved_model,
       mixture=FLAGS.mixture, restore_colour=FLAGS.restore_colour, disparity_range=search,

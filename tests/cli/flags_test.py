@@ -115,3 +115,15 @@ def test_help_under_a_console_script_wrapper_shows_the_binarys_docstring(binary)
                           env=dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2'))
   first_line = docstring.strip().splitlines()[0]
   assert first_line in result.stdout + result.stderr
+
+
+def test_max_network_pixels_given_for_a_method_without_a_network_is_refused():
+  cli_flags.define_predictor()
+  with _parsing('max_network_pixels') as pixels:
+    pixels.parse('1000')
+    flags.FLAGS['method'].parse('classical')
+    try:
+      with pytest.raises(app.UsageError, match='--max_network_pixels applies to --method=model'):
+        cli_flags.predictor_config()
+    finally:
+      flags.FLAGS['method'].unparse()
