@@ -235,8 +235,10 @@ def detected() -> Family:
 def allowed_name(name: str, allowed: Sequence[str]) -> str:
   """`name`, or a ValueError when a predictor that unmixes `allowed` cannot unmix it."""
   if name not in allowed:
-    raise ValueError(f'The image is a {name!r} mixture; this predictor unmixes '
-                     f'{", ".join(allowed)}.')
+    raise ValueError(f'The image is read as mixture {name!r}; this predictor unmixes '
+                     f'{", ".join(allowed)}: choose one that unmixes {name!r} '
+                     '(PredictorConfig.pretrained, PredictorConfig.checkpoint or '
+                     'PredictorConfig.method) or name the mixture (PredictorConfig.mixture).')
   return name
 
 
