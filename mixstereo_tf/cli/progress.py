@@ -16,7 +16,8 @@ def _duration(seconds: float) -> str:
 
 
 def format_progress(done: int, total: Optional[int], seconds: float,
-                    frames: Optional[int] = None, label: str = '', bar_width: int = 10) -> str:
+                    frames: Optional[int] = None, label: str = '', bar_width: int = 10,
+                    resumed: int = 0) -> str:
   """One progress line, e.g. '[###.......] 3/10  1.2 frames/s  ETA 6 s'.
 
   Args:
@@ -27,6 +28,8 @@ def format_progress(done: int, total: Optional[int], seconds: float,
     frames: frames produced so far (default `done`); frames/s is frames / seconds.
     label: optional prefix, e.g. the video's file name.
     bar_width: characters between the brackets.
+    resumed: of `done`, those finished before `seconds` began (a resumed video): the ETA
+      extrapolates the time of the others.
   """
   frames = done if frames is None else frames
   parts = [label] if label else []
@@ -37,8 +40,8 @@ def format_progress(done: int, total: Optional[int], seconds: float,
     parts.append(f'{done} done')
   parts.append(f'{frames / seconds if seconds > 0 else 0.0:.1f} frames/s')
   if total:
-    # The ETA extrapolates the time per finished item; unknown before the first one.
-    left = max(total - done, 0) * seconds / done if done else None
+    # The ETA extrapolates the time per item finished since; unknown before the first one.
+    left = max(total - done, 0) * seconds / (done - resumed) if done > resumed else None
     parts.append('ETA ' + ('?' if left is None else _duration(left)))
   return '  '.join(parts)
 
@@ -54,8 +57,8 @@ class ProgressBar:
 
   def __init__(self, total: Optional[int], label: str = '', stream: Optional[TextIO] = None,
                clock: Callable[[], float] = time.perf_counter, redraw_seconds: float = 0.2,
-               log_seconds: float = 10.0):
-    self.total, self.label = total, label
+               log_seconds: float = 10.0, resumed: int = 0):
+    self.total, self.label, self._resumed = total, label, resumed
     self._stream = stream if stream is not None and stream.isatty() else None
     self._clock = clock
     self._start = clock()
@@ -71,7 +74,8 @@ class ProgressBar:
         self._shown_at is not None and not last and now - self._shown_at < self._interval):
       return
     self._shown_at, self._shown_done = now, done
-    line = format_progress(done, self.total, now - self._start, frames, self.label)
+    line = format_progress(done, self.total, now - self._start, frames, self.label,
+                           resumed=self._resumed)
     if self._stream is None:
       logging.info('%s', line)
       return

@@ -124,7 +124,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
 
   def on_start(info, done):
     state['bar'] = progress.ProgressBar(info.frame_count, os.path.basename(item.path),
-                                        progress_stream)
+                                        progress_stream, resumed=done)
     state['done'] = done
 
   def render(frame):

@@ -23,6 +23,8 @@ class _Terminal(io.StringIO):
     ((1, 100, 2.0), '[..........] 1/100  0.5 frames/s  ETA 3 min 18 s'),
     ((2, 4, 10.0, 50, 'clip.mp4'), 'clip.mp4  [#####.....] 2/4  5.0 frames/s  ETA 10 s'),
     ((37, None, 10.0), '37 done  3.7 frames/s'),
+    # A resumed video: 60 frames were done before; this run's 1 frame took 2 s.
+    ((61, 120, 2.0, 1, '', 10, 60), '[#####.....] 61/120  0.5 frames/s  ETA 1 min 58 s'),
 ])
 def test_format_progress(args, line):
   assert progress.format_progress(*args) == line
