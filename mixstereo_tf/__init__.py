@@ -118,6 +118,19 @@ def _pil_rgb(image) -> np.ndarray:
   return np.asarray(image.convert('RGB'))  # Palette, CMYK, ... to RGB.
 
 
+def _config(given: Dict[str, Any], search):
+  """The PredictorConfig of `unmix`'s keywords (`given`, `...`: not given; `search`: the
+  disparity_range keyword)."""
+  from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
+  if given['max_network_pixels'] is not ... and given['method'] != 'model':
+    raise ValueError(f"max_network_pixels= applies to method='model' (a network), not "
+                     f"method={given['method']!r}.")
+  # Paths as text (a pathlib.Path would reach the JSON-able info).
+  given = {name: os.fspath(value) if isinstance(value, os.PathLike) else value
+           for name, value in given.items() if value is not ...}
+  return predictors.PredictorConfig(disparity_range=_search(search), **given)
+
+
 @functools.lru_cache(maxsize=4)
 def _unmixer(config):
   """The Unmixer of a PredictorConfig, built once (building loads the model)."""
@@ -187,22 +200,12 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
       take (e.g. mixture='auto' on a photo that is no anaglyph); the message names the
       keyword to change.
   """
-  from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
-  if max_network_pixels is not ... and method != 'model':
-    raise ValueError(f"max_network_pixels= applies to method='model' (a network), not "
-                     f'method={method!r}.')
-  # Paths as text (a pathlib.Path would reach the JSON-able info).
-  checkpoint, saved_model, model = (os.fspath(v) if isinstance(v, os.PathLike) else v
-                                    for v in (checkpoint, saved_model, model))
   given = dict(method=method, checkpoint=checkpoint, saved_model=saved_model,
                mixture=mixture, restore_colour=restore_colour, swap_eyes=swap_eyes,
                max_network_pixels=max_network_pixels, pretrained=model,
                mixing_weight=mixing_weight)
   try:
-    config = predictors.PredictorConfig(
-        disparity_range=_search(disparity_range),
-        **{name: value for name, value in given.items() if value is not ...})
-    outputs = _unmixer(config)(_image(image))
+    outputs = _unmixer(_config(given, disparity_range))(_image(image))
   except ValueError as e:
     message = _keywords(str(e))
     if message == str(e):

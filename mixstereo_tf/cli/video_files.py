@@ -153,8 +153,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
   info_file.write_info(output_dir, item, dict(
       state['info'] or opened, frames=done['frames'], resumed_frames=done['resumed_frames'],
       frame_rate=str(info.frame_rate), rotation=info.rotation, turned_upright=info.turned,
-      display_range=[round(v, 3) for v in display],
-      temporal=temporal_config.enabled,
+      display_range=[round(v, 3) for v in display], temporal=temporal_config.enabled,
       scene_cuts=[state['done'] + index for index in shots.cuts],
       shots=state['shots'], **({'shots_from_frame': state['done']} if state['done'] else {}),
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),

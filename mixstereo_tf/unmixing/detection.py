@@ -132,15 +132,12 @@ class Detection:
       of the expected) and explained shares (encoding names).
     also_fits: the family's colour encoding when a smaller set (half-colour, optimized)
       was chosen: the colour encoding explains every image, so it fits as well.
-    family_confidence: in [0, 1]: of `name`'s family (the glasses) alone; `confidence`
-      also weighs the encoding within it.
   """
   name: Optional[str]
   confidence: float
   reason: str
   scores: Dict[str, float]
   also_fits: Optional[str] = None
-  family_confidence: float = 0.0
 
 
 def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
@@ -234,4 +231,4 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   return Detection(name, family_confidence * variant_confidence,
                    f'{family} channels displaced (score {families[family]:.3f}); '
                    f'{len(obs)} colour samples: {name} is the smallest encoding that '
-                   'explains them', scores, also_fits, family_confidence)
+                   'explains them', scores, also_fits)

@@ -84,8 +84,7 @@ def test_named_glasses_the_detector_contradicts_warn_below_the_encoding_threshol
     monkeypatch):
   warnings = []
   monkeypatch.setattr(logging, 'warning', lambda msg, *args: warnings.append(msg % args))
-  found = detection.Detection('anaglyph', 0.85, 'red_cyan channels', {},
-                              family_confidence=0.99)
+  found = detection.Detection('anaglyph', 0.87, 'red_cyan channels', {})
   monkeypatch.setattr(detection, 'detect', lambda image: found)
   image = np.zeros((32, 32, 3), np.uint8)
   steps.resolve_mixture(image, 'half_color', mixtures.ANAGLYPH_NAMES)  # Same glasses: kept.
@@ -93,8 +92,12 @@ def test_named_glasses_the_detector_contradicts_warn_below_the_encoding_threshol
   for named in ('green_magenta', 'diplopia'):
     assert steps.resolve_mixture(image, named, mixtures.ANAGLYPH_NAMES + ('diplopia',))[0] == (
         named)
-  assert len(warnings) == 2 and all("reads it as 'anaglyph' (confidence 0.85)" in w
+  assert len(warnings) == 2 and all("reads it as 'anaglyph' (confidence 0.87)" in w
                                     for w in warnings)
+  warnings.clear()
+  found = detection.Detection('green_magenta_half', 0.77, 'noise', {})  # A noise image's.
+  steps.resolve_mixture(image, 'anaglyph', mixtures.ANAGLYPH_NAMES)
+  assert not warnings
 
 
 def test_a_named_double_image_says_its_confidence_is_that_it_is_no_anaglyph():
