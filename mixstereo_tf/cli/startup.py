@@ -13,6 +13,7 @@ about: its results would not be the checkout's.
 """
 
 import ctypes
+import logging
 import os
 import sys
 import tempfile
@@ -75,5 +76,15 @@ def shadowing_warning(directory: str) -> str:
           f'{local}; reinstall it (pip install -e .) or set PYTHONPATH={directory}.\n')
 
 
+class _DropNotes(logging.Filter):
+  """Drops third-party start-up notes logged on the root logger that are no problem:
+  Apache Beam's 'apitools not found' (its Google Cloud clients, which a local run does not
+  use), printed even for --help."""
+
+  def filter(self, record: logging.LogRecord) -> bool:
+    return not str(record.msg).startswith('apitools not found')
+
+
 sys.stderr.write(shadowing_warning(os.getcwd()))
+logging.getLogger().addFilter(_DropNotes())
 _import_tensorflow_quietly()

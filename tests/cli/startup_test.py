@@ -50,3 +50,12 @@ def test_a_checkout_shadowed_by_another_copy_of_the_package_is_warned_about(tmp_
   assert str(tmp_path / 'mixstereo_tf') in startup.shadowing_warning(str(tmp_path))
   imported_root = os.path.dirname(os.path.dirname(os.path.dirname(startup.__file__)))
   assert startup.shadowing_warning(imported_root) == ''  # The imported tree itself.
+
+
+def test_beams_apitools_note_is_dropped_and_other_root_records_kept(caplog):
+  import logging  # pylint: disable=import-outside-toplevel
+  from mixstereo_tf.cli import startup  # pylint: disable=import-outside-toplevel,unused-import
+  caplog.set_level(logging.WARNING)
+  logging.warning('apitools not found, and bigquery client libraries are not available.')
+  logging.warning('a real warning')
+  assert [r.getMessage() for r in caplog.records] == ['a real warning']
