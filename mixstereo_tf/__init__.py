@@ -99,6 +99,19 @@ def _image(image) -> np.ndarray:
   return array
 
 
+def _stored_hint(image) -> Dict[str, Any]:
+  """{'hint': a FrameHint saying the colour was stored at half resolution} for a path or
+  PIL image of a 4:2:0 / 4:2:2 JPEG or a lossy WebP (`image_io.chroma_halved`), else {}."""
+  from mixstereo_tf.core import hints  # pylint: disable=g-import-not-at-top
+  from mixstereo_tf.data import image_io  # pylint: disable=g-import-not-at-top
+  if isinstance(image, (str, bytes, os.PathLike)):
+    halved = image_io.chroma_halved(os.fsdecode(image))
+  else:
+    filename = getattr(image, 'filename', '') if hasattr(image, 'getexif') else ''
+    halved = bool(filename) and image_io.chroma_halved(filename)
+  return {'hint': hints.FrameHint(chroma_halved=True)} if halved else {}
+
+
 def _pil_rgb(image) -> np.ndarray:
   """A PIL image as uint8 RGB, turned upright by its EXIF orientation: 16-bit gray ('I;16',
   or 'I' within 0..65535, as Pillow opens 16-bit PNGs) scaled to 8 bits as such a file
@@ -205,7 +218,8 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
                max_network_pixels=max_network_pixels, pretrained=model,
                mixing_weight=mixing_weight)
   try:
-    outputs = _unmixer(_config(given, disparity_range))(_image(image))
+    unmixer = _unmixer(_config(given, disparity_range))
+    outputs = unmixer(_image(image), **_stored_hint(image))
   except ValueError as e:
     message = _keywords(str(e))
     if message == str(e):

@@ -48,6 +48,8 @@ from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import video_files
+from mixstereo_tf.core import hints
+from mixstereo_tf.data import image_io
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import streams
 
@@ -108,7 +110,8 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   returns 1 (frame)."""
   image, orientation = media.read_upright(item.path)
   unmix_start = time.perf_counter()
-  outputs = unmixer(image)
+  halved = image_io.chroma_halved(item.path)  # A 4:2:0 JPEG: matched without the luma's detail.
+  outputs = unmixer(image, hint=hints.FrameHint(chroma_halved=True)) if halved else unmixer(image)
   report.unmix_seconds += time.perf_counter() - unmix_start
   icc_profile = media.icc_profile_of(item.path)
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,

@@ -18,6 +18,7 @@ from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
+from mixstereo_tf.core import hints
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import steps
 from mixstereo_tf.video import frame_pipeline
@@ -125,14 +126,14 @@ def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: 
   def on_start(info, done):
     state['bar'] = progress.ProgressBar(info.frame_count, os.path.basename(item.path),
                                         progress_stream, resumed=done)
-    state['done'] = done
+    state['done'], state['chroma_halved'] = done, info.chroma_halved
 
   def render(frame):
     unmix_start = time.perf_counter()
     index = state['done'] + shots.frames  # This run's frames begun before this one.
     # A video writes the views and the left disparity: the right one is not read.
     pending = pipeline.submit(frame, cut=index % video_config.segment_frames == 0,
-                              unread='disparity_right')
+                              unread='disparity_right', chroma_halved=state['chroma_halved'])
     report.unmix_seconds += time.perf_counter() - unmix_start
     return _drawn_when_done(pending, state, layout, display, drawn, shots.started_shot())
 
@@ -178,14 +179,15 @@ def opening(unmixer: predictors.Unmixer, path: str) -> Dict[str, object]:
   Raises:
     ValueError: no frame of those scanned shows an anaglyph, naming the video.
   """
-  _, frames = streams.open_video(path)
+  info, frames = streams.open_video(path)
+  stored = {'hint': hints.FrameHint(chroma_halved=True)} if info.chroma_halved else {}
   last = None
   try:
     for index, frame in enumerate(frames):
       if index % SCAN_STRIDE and unmixer.mixture == steps.AUTO:
         continue
       try:
-        return unmixer(frame.image).get('info', {})
+        return unmixer(frame.image, **stored).get('info', {})
       except steps.NoAnaglyphError as e:
         if index + SCAN_STRIDE >= SCAN_FRAMES:
           raise ValueError(f'No frame of the first {SCAN_FRAMES} of {path} looks like an '

@@ -49,6 +49,10 @@ class FrameHint:
       `classical.diplopia.unmix_diplopia`; a refiner passes it to its base stage): the
       video loop takes them as the next frame's prior and starts that frame
       (`video.frame_pipeline`). None: nobody is told early.
+    chroma_halved: the image was stored with its colour at half the width (4:2:0 or 4:2:2
+      JPEG, lossy WebP, most video): its finest detail is the stored luminance, the same in
+      every channel, which matches at disparity 0; an anaglyph is then matched without it
+      (`unmixing.chroma`).
   """
   mixture: Optional[str] = None
   may_be: Optional[str] = None
@@ -63,3 +67,4 @@ class FrameHint:
   mixing_weight: Union[None, float, str] = None
   unread: Optional[str] = None
   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None
+  chroma_halved: bool = False

@@ -12,6 +12,7 @@ from typing import Dict, Optional, Tuple
 import cv2
 import numpy as np
 from PIL import Image
+from PIL import JpegImagePlugin
 
 from mixstereo_tf.data import records
 
@@ -89,6 +90,35 @@ def read_image(path: str) -> np.ndarray:
   if channels in (3, 4):  # BGR (+ alpha): drop alpha, reorder to RGB.
     return np.ascontiguousarray(array[:, :, 2::-1])
   raise ValueError(f'Unsupported channel count {channels} in {path}')
+
+
+def chroma_halved(path: str) -> bool:
+  """Whether an image file stores its colour at half the width or less: a YCbCr JPEG with
+  4:2:0 or 4:2:2 sampling (Pillow's, OpenCV's, phones' and browsers' default), or a lossy
+  WebP (always 4:2:0). False for other files and for files that do not open."""
+  try:
+    with Image.open(path) as image:
+      if image.format == 'JPEG':
+        return JpegImagePlugin.get_sampling(image) in (1, 2)
+  except (OSError, ValueError, SyntaxError):
+    return False
+  return _lossy_webp(path)
+
+
+def _lossy_webp(path: str) -> bool:
+  """Whether a RIFF/WEBP file's image chunk is lossy VP8 (not lossless VP8L)."""
+  with open(path, 'rb') as f:
+    head = f.read(12)
+    if head[:4] != b'RIFF' or head[8:12] != b'WEBP':
+      return False
+    while True:
+      chunk = f.read(8)
+      if len(chunk) < 8:
+        return False
+      if chunk[:4] in (b'VP8 ', b'VP8L'):
+        return chunk[:4] == b'VP8 '
+      size = int.from_bytes(chunk[4:], 'little')
+      f.seek(size + (size & 1), os.SEEK_CUR)
 
 
 def find_image(path: str) -> str:

@@ -40,6 +40,7 @@ from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.models import refiner
+from mixstereo_tf.unmixing import chroma
 from mixstereo_tf.unmixing import detection
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import eye_order
@@ -334,14 +335,21 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)
   if swapped:
     image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)
+  matched = image
+  if hint.chroma_halved and families.of(name).restores_views:
+    matched = chroma.colour_resolution_copy(image)
   search = hint.disparity_range
   if search is None:
-    search = estimate_range(image, name, requested_range, default_range(name), hint, plan)
-  outputs = solve(image, name, search, hint)
+    search = estimate_range(matched, name, requested_range, default_range(name), hint, plan)
+  outputs = solve(matched, name, search, hint)
+  if matched is not image:
+    outputs = chroma.stored_views(outputs, image, name)
   if swapped:
     outputs = eye_order.unmirror(outputs)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),
               prior=hint.prior is not None, **eyes, **outputs.get('info', {}))
+  if matched is not image:
+    info['matched_at_colour_resolution'] = True  # Stored with half-resolution colour.
   info['seconds'] = round(time.perf_counter() - start, 3)
   outputs['info'] = info
   return outputs

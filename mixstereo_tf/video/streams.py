@@ -105,6 +105,8 @@ class VideoInfo:
       unknown (anamorphic footage: e.g. 4/3 for 1440x1080 shown at 16:9).
     colour: the first frame's (primaries, transfer) tags, FFmpeg's AVColorPrimaries /
       AVColorTransferCharacteristic numbers (2: unspecified): what its RGB values mean.
+    chroma_halved: the stream stores colour at half the width or height (4:2:0, 4:2:2,
+      nv12: most video), as `hints.FrameHint.chroma_halved` says.
   """
   width: int
   height: int
@@ -116,6 +118,7 @@ class VideoInfo:
   turned: int = 0
   aspect: Optional[Fraction] = None
   colour: Tuple[int, int] = (2, 2)
+  chroma_halved: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -194,7 +197,9 @@ def open_video(path: str, skip: int = 0,
                    0 if turns else rotation, len(container.streams.audio),
                    turned=(rotation % 360 + 179) % 360 - 179 if turns else 0,  # (-180, 180].
                    aspect=aspect if aspect and aspect != 1 else None,
-                   colour=(int(first.color_primaries), int(first.color_trc)))
+                   colour=(int(first.color_primaries), int(first.color_trc)),
+                   chroma_halved=any(c.width < first.width or c.height < first.height
+                                     for c in first.format.components))
   return info, _frames(container, itertools.chain([first], decoded), rate, skip, turns)
 
 

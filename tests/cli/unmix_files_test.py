@@ -23,8 +23,10 @@ from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import colormap
+from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.data import image_io
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import unmixer
 from mixstereo_tf.video import jobs
@@ -345,6 +347,25 @@ def test_an_odd_sized_video_says_its_outputs_are_padded(tmp_path):
   assert (out_info.width, out_info.height) == (48, 34)
 
 
+def test_half_resolution_colour_of_a_jpeg_or_video_reaches_the_unmixer(tmp_path):
+  halved = []
+
+  def unmix(image, hint=None):
+    halved.append(hint is not None and hint.chroma_halved)
+    return {'left': image, 'right': image, 'info': {},
+            'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  unmixer = predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+  image = Image.fromarray(np.random.default_rng(0).integers(0, 256, (40, 50, 3), np.uint8))
+  image.save(tmp_path / 'web.jpg', quality=90)
+  image.save(tmp_path / 'full.jpg', quality=90, subsampling=0)
+  image.save(tmp_path / 'plain.png')
+  streams_test.make_video(tmp_path / 'clip.mp4', [streams_test.pattern(i) for i in range(2)])
+  for name in ('web.jpg', 'full.jpg', 'plain.png', 'clip.mp4'):
+    unmix_files.unmix_inputs(unmixer, str(tmp_path / name), str(tmp_path / 'out'))
+  assert halved == [True, False, False, True, True, True]  # The video: opening frame, 2 frames.
+
+
 def test_a_cut_video_is_written_as_far_as_it_decodes_and_says_so(tmp_path):
   def unmix(image, **hint):
     del hint
@@ -565,7 +586,9 @@ def test_inputs_sharing_a_stem_keep_their_own_outputs(setup, tmp_path):
           'left.png', 'right.png', 'disparity.png', 'disparity16.png', 'disparity.npy',
           'info.json'))
   for ext in ('png', 'jpg'):
-    expected = setup(media.read_image(str(folder / f'a.{ext}')))['disparity_left']
+    path = str(folder / f'a.{ext}')  # The JPEG is 4:2:0 (OpenCV's default).
+    hint = hints.FrameHint(chroma_halved=image_io.chroma_halved(path))
+    expected = setup(media.read_image(path), hint=hint)['disparity_left']
     np.testing.assert_allclose(np.load(out / f'a_{ext}_disparity.npy'), expected, atol=1e-5)
 
 

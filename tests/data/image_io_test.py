@@ -5,6 +5,7 @@ import zlib
 
 import cv2
 import numpy as np
+from PIL import Image
 import pytest
 
 from mixstereo_tf.data import image_io
@@ -268,3 +269,17 @@ def test_a_missing_or_folder_path_says_where_it_was_looked_for(tmp_path, monkeyp
     image_io.read_image('/no/such.png')
   with pytest.raises(ValueError, match='is a folder, not an image file'):
     image_io.read_image(str(tmp_path))
+
+
+def test_chroma_halved_names_files_stored_with_half_resolution_colour(tmp_path):
+  image = Image.fromarray(np.random.default_rng(0).integers(0, 256, (16, 24, 3), np.uint8))
+  saved = {'420.jpg': dict(quality=90), '422.jpg': dict(subsampling=1),
+           '444.jpg': dict(subsampling=0), 'lossy.webp': dict(quality=80),
+           'lossless.webp': dict(lossless=True), 'plain.png': {}}
+  for name, options in saved.items():
+    image.save(tmp_path / name, **options)
+  (tmp_path / 'broken.jpg').write_bytes(b'\xff\xd8 not a jpeg')
+  assert {name: image_io.chroma_halved(str(tmp_path / name))
+          for name in list(saved) + ['broken.jpg']} == {
+              '420.jpg': True, '422.jpg': True, '444.jpg': False, 'lossy.webp': True,
+              'lossless.webp': False, 'plain.png': False, 'broken.jpg': False}

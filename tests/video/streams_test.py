@@ -292,3 +292,16 @@ def test_stereo_modes_add_x264_frame_packing_only():
   assert dict(streams.encoder_for('a.mkv', 'left_right').options)['x264-params'].endswith(
       'frame-packing=3')
   assert streams.encoder_for('a.avi', 'left_right') == streams.encoder_for('a.avi')
+
+
+def test_video_info_says_whether_colour_is_stored_at_half_resolution(tmp_path):
+  source = make_video(tmp_path / 'in.mp4', [pattern(i) for i in range(2)])  # yuv420p.
+  assert read_all(source)[0].chroma_halved
+  full = str(tmp_path / 'rgb.mov')
+  with av.open(full, 'w') as out:
+    stream = out.add_stream('png', rate=12)
+    stream.width, stream.height, stream.pix_fmt = 96, 64, 'rgb24'
+    for index in range(2):
+      out.mux(stream.encode(av.VideoFrame.from_ndarray(pattern(index), format='rgb24')))
+    out.mux(stream.encode(None))
+  assert not read_all(full)[0].chroma_halved
