@@ -16,7 +16,7 @@ pixel x matches the right pixel x - d_L, the right pixel x matches the left x + 
 
 import dataclasses
 import math
-from typing import Optional, Sequence, Tuple, Union
+from typing import Dict, Optional, Sequence, Tuple, Union
 
 import cv2
 import numpy as np
@@ -144,3 +144,19 @@ def from_network(outputs: dict, p: Plan, height: int, width: int) -> dict:
   out['disparity_right'] = _shift_columns(out['disparity_right'], -p.shift) - p.shift
   out['right'] = _shift_columns(out['right'], -p.shift)
   return out
+
+
+# A given range is warned about when at least this share of the disparities sits at one of
+# its limits: the scene reaches past it.
+LIMIT_SHARE = 0.1
+
+
+def at_limits(disparity: np.ndarray, search: Range) -> Dict[str, float]:
+  """{'low' / 'high': share of the finite disparities [H, W] (pixels) within 0.5 px of that
+  limit of `search`} for the limits at least LIMIT_SHARE of them reach."""
+  finite = disparity[np.isfinite(disparity)]
+  if not finite.size:
+    return {}
+  shares = {'low': float(np.mean(finite <= search[0] + 0.5)),
+            'high': float(np.mean(finite >= search[1] - 0.5))}
+  return {side: share for side, share in shares.items() if share >= LIMIT_SHARE}

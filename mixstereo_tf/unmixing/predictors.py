@@ -199,8 +199,8 @@ def build_unmixer(config: PredictorConfig) -> Unmixer:
     raise ValueError("PredictorConfig.restore_colour applies to method 'model' only.")
   if (config.mixing_weight is not None and config.mixture not in (None, steps.AUTO)
       and not families.of(config.mixture).weighted):
-    raise ValueError(f'PredictorConfig.mixing_weight applies to double images; a '
-                     f'{config.mixture!r} mixture has no mixing weight.')
+    raise ValueError(f'PredictorConfig.mixing_weight applies to double images; mixture '
+                     f'{config.mixture!r} has no mixing weight.')
   if config.mixing_weight is not None and (config.checkpoint or config.saved_model):
     raise ValueError('PredictorConfig.mixing_weight applies to the classical method and the '
                      'shipped models; a network of PredictorConfig.checkpoint or '

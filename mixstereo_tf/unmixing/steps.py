@@ -123,7 +123,8 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
                                     f'{why}', **({} if only else {'undecided': True}))
     if found.name is None:
       raise NoAnaglyphError(f'This image does not look like an anaglyph ({found.reason}); '
-                            'name its mixture (e.g. PredictorConfig.mixture=diplopia).')
+                            'if it is a double image, name it (PredictorConfig.mixture='
+                            'diplopia); a single photo or a side-by-side pair is no mixture.')
     name = found.name
     if found.also_fits:
       info['also_fits'] = found.also_fits
@@ -306,6 +307,14 @@ def _eye_order(image: np.ndarray, name: str, swap_eyes,
   return swapped, info
 
 
+def _warn_at_limits(disparity: np.ndarray, search: Tuple[int, int]) -> None:
+  """Warns when a given range cuts the scene off: many disparities at one of its limits."""
+  for side, share in disparity_range.at_limits(disparity, search).items():
+    logging.warning('%.0f%% of the disparities sit at the %s limit of the range given, %s: '
+                    'the scene reaches past it; widen it (PredictorConfig.disparity_range) '
+                    'or let it be estimated.', 100 * share, side, list(search))
+
+
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
         requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
         solve: Callable[..., Dict[str, object]],
@@ -330,7 +339,7 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
                                  hint.mixing_weight is not None, hint.fallback_mixture)
     if hint.mixing_weight is not None and not families.of(name).weighted:
       info['mixing_weight_unused'] = hint.mixing_weight
-      logging.warning('The mixing weight %s is not used: a %s mixture has none (double '
+      logging.warning('The mixing weight %s is not used: mixture %r has none (double '
                       'images do).', hint.mixing_weight, name)
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)
   if swapped:
@@ -344,6 +353,8 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   outputs = solve(matched, name, search, hint)
   if matched is not image:
     outputs = chroma.stored_views(outputs, image, name)
+  if isinstance(requested_range, tuple) and hint.disparity_range is None:
+    _warn_at_limits(outputs['disparity_left'], search)  # Before the eyes are turned back.
   if swapped:
     outputs = eye_order.unmirror(outputs)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),

@@ -460,7 +460,7 @@ def test_an_input_that_is_no_anaglyph_names_the_flag(tmp_path):
   assert report.processed == 0 and len(report.failures) == 1
   reason = report.failures[0][1]
   assert reason.startswith('ValueError: This image does not look like an anaglyph')
-  assert '(e.g. --mixture=diplopia)' in reason and 'PredictorConfig' not in reason
+  assert 'name it (--mixture=diplopia)' in reason and 'PredictorConfig' not in reason
 
 
 @pytest.mark.parametrize('temporal_on', [True, False])

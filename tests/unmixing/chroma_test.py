@@ -49,3 +49,4 @@ def test_a_4_2_0_jpeg_is_matched_without_the_luminance_detail_that_pulls_towards
   assert out['info']['matched_at_colour_resolution']
   # The views keep the stored image's own channel: the left eye's red.
   np.testing.assert_array_equal(out['left'][..., 0], stored[..., 0])
+

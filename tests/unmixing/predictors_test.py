@@ -132,7 +132,7 @@ def test_build_unmixer_checks_its_arguments(tmp_path):
     build(method='classical', mixture='anaglyph', restore_colour=True)
   with pytest.raises(ValueError, match='not to the shipped models'):
     build(restore_colour=False)  # The default: a shipped model, which always restores.
-  with pytest.raises(ValueError, match="mixing_weight applies to double images; a 'gray'"):
+  with pytest.raises(ValueError, match="mixing_weight applies to double images; mixture 'gray'"):
     build(method='classical', mixture='gray', mixing_weight=0.3)
   assert build(method='classical', mixture='diplopia', mixing_weight=0.3).mixture == 'diplopia'
   with pytest.raises(ValueError, match='Unknown PredictorConfig.method'):

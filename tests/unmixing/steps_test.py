@@ -8,6 +8,7 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import detection
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import steps
+from tests.unmixing import chroma_test
 from tests.unmixing import detection_test
 
 
@@ -38,7 +39,7 @@ def test_auto_on_a_half_colour_anaglyph_records_and_warns_that_colour_fits_too(m
 def test_auto_refuses_a_plain_photo_with_a_clear_message():
   left, _, _ = detection_test._pair()  # pylint: disable=protected-access
   with pytest.raises(steps.NoAnaglyphError,
-                     match='does not look like an anaglyph.*name its mixture'):
+                     match='does not look like an anaglyph.*if it is a double image, name it'):
     steps.resolve_mixture(left, 'auto', mixtures.ANAGLYPH_NAMES)
 
 
@@ -154,3 +155,13 @@ def test_a_requested_range_beyond_the_image_is_clipped_and_said(caplog):
   assert 'searching [-39, 39]' in caplog.text
   with pytest.raises(ValueError, match=r'\[100, 200\] holds no disparity of an image 40 px'):
     steps.estimate_range(image, 'anaglyph', (100, 200), (0, 9))
+
+
+def test_a_given_range_the_scene_reaches_past_is_warned_about(monkeypatch):
+  warnings = []
+  monkeypatch.setattr(logging, 'warning', lambda msg, *args: warnings.append(msg % args))
+  _, lossless = chroma_test._jpeg_anaglyph()  # pylint: disable=protected-access
+  for search in ((-4, 16), (0, 3)):
+    predictors.build_unmixer(predictors.PredictorConfig(
+        'classical', mixture='anaglyph', disparity_range=search))(lossless)
+  assert len(warnings) == 1 and 'at the high limit of the range given, [0, 3]' in warnings[0]
