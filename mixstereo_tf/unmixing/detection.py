@@ -38,7 +38,7 @@ apart.
 """
 
 import dataclasses
-from typing import Dict, Optional
+from typing import Dict, Optional, Tuple
 
 import numpy as np
 
@@ -179,8 +179,38 @@ def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int,
                               config.ghost_collinearity)
 
 
+# A margin row or column is uniform when no channel varies along it by more than this share
+# of full scale (JPEG noise on a flat bar stays within it).
+MARGIN_TOLERANCE = 0.05
+
+
+def content_box(image: np.ndarray) -> Tuple[int, int, int, int]:
+  """(top, bottom, left, right) of `image` [H, W, 3] without its uniform margins: the rows
+  and columns at its edges along which no channel varies by more than MARGIN_TOLERANCE of
+  full scale (letterbox or pillarbox bars, a white frame). Their neutral colour fits every
+  colour set, so a colour anaglyph inside them read as half-colour. The whole image when
+  fewer than 16 rows or columns would remain."""
+  values = np.asarray(image, np.float32)
+  scale = 1.0 if values.max(initial=0.0) <= 1.0 else 255.0
+
+  def span(axis: int) -> Tuple[int, int]:
+    varied = (np.ptp(values, axis=axis).max(axis=-1) > MARGIN_TOLERANCE * scale).nonzero()[0]
+    if varied.size == 0 or varied[-1] + 1 - varied[0] < 16:
+      return 0, values.shape[1 - axis]
+    return int(varied[0]), int(varied[-1]) + 1
+
+  top, bottom = span(1)
+  values = values[top:bottom]  # Columns within the rows kept: bars and a frame together.
+  left, right = span(0)
+  return top, bottom, left, right
+
+
 def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
-  """The anaglyph encoding of an [H, W, 3] RGB image (uint8, or float in [0, 1])."""
+  """The anaglyph encoding of an [H, W, 3] RGB image (uint8, or float in [0, 1]); uniform
+  margins (letterbox bars, a frame, a border) are left out (`content_box`)."""
+  if np.ndim(image) == 3 and np.size(image):  # Else `downsampled` says what is wrong.
+    top, bottom, left, right = content_box(image)
+    image = image[top:bottom, left:right]
   small = channel_matching.downsampled(image, config.width)
   if min(small.shape[:2]) < 16:
     raise ValueError(f'detect needs an image of at least 16x16 px after downsampling to '

@@ -204,3 +204,16 @@ def test_a_dark_frame_is_too_dark_to_tell_and_a_dim_one_is_read():
   dark = detection.detect(np.round(mixture * 0.06).astype(np.uint8))
   assert dark.name is None and 'too dark' in dark.reason
   assert detection.detect(np.round(mixture * 0.2).astype(np.uint8)).name == 'anaglyph'
+
+
+def test_uniform_margins_are_left_out_of_detection():
+  left, right, _ = _pair()
+  image = _ours('anaglyph', left, right)
+  framed = np.full((image.shape[0] + 60, image.shape[1] + 40, 3), 255, np.uint8)
+  framed[30:-30, 20:-20] = image
+  framed[:30] = 0  # A black bar above, a white frame elsewhere, JPEG-like noise on both.
+  framed[:30] += np.random.default_rng(0).integers(0, 6, framed[:30].shape, np.uint8)
+  assert detection.content_box(framed) == (30, 30 + image.shape[0], 20, 20 + image.shape[1])
+  assert detection.detect(framed).name == detection.detect(image).name == 'anaglyph'
+  flat = np.full((40, 50, 3), 90, np.uint8)
+  assert detection.content_box(flat) == (0, 40, 0, 50)  # Nothing varies: all of it.
