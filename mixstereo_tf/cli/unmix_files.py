@@ -157,8 +157,10 @@ class _NamingInput(std_logging.Filter):
     self.path = path
 
   def filter(self, record: std_logging.LogRecord) -> bool:
-    if record.levelno >= std_logging.WARNING and not str(record.msg).startswith(self.path):
-      record.msg = f'{self.path}: {record.msg}'
+    # The formatted message: a record whose arguments name the path is not named twice.
+    message = record.getMessage()
+    if record.levelno >= std_logging.WARNING and not message.startswith(self.path):
+      record.msg, record.args = f'{self.path}: {message}', ()
     return True
 
 

@@ -710,6 +710,8 @@ def test_warnings_while_an_input_runs_name_it(caplog):
   with caplog.at_level('WARNING'):
     with unmix_files.naming_input('scans/a.jpg'):
       logging.warning('Detected %s, the smallest encoding', 'half_color')
+      logging.warning('%s: --output_format=mpo not written', 'scans/a.jpg')  # Named once.
     logging.warning('after it')
   assert [r.getMessage() for r in caplog.records] == [
-      'scans/a.jpg: Detected half_color, the smallest encoding', 'after it']
+      'scans/a.jpg: Detected half_color, the smallest encoding',
+      'scans/a.jpg: --output_format=mpo not written', 'after it']
