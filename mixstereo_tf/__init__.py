@@ -188,9 +188,9 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
   Args:
     image: a uint8 RGB [H, W, 3] (alpha of RGBA dropped) or gray [H, W] array (OpenCV's
       cv2.imread / imdecode give BGR: pass `bgr[..., ::-1]`), a PIL image (as RGB, EXIF
-      orientation applied, 16-bit gray scaled to 8 bits), or the path (str, bytes, PathLike) of an image file (read
-      like the CLI reads it: gray and 16-bit files become uint8 RGB, EXIF orientation
-      applied); videos: the `mixstereo-unmix` tool.
+      orientation applied, 16-bit gray scaled to 8 bits), or the path (str, bytes,
+      PathLike) of an image file (read like the CLI reads it: gray and 16-bit files become
+      uint8 RGB, EXIF orientation applied); videos: the `mixstereo-unmix` tool.
     mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g. 'gray',
       'diplopia'); 'auto' detects an anaglyph's encoding; None: the model's own.
     method: 'model' (a network), 'classical' (training-free) or 'sgbm' (OpenCV's, a peer).

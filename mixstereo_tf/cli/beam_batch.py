@@ -52,8 +52,8 @@ DEFAULT_RUNNER = 'FnApiRunner'
 def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
                     ) -> List[media.MediaItem]:
   """The items of a text file holding one input path per line (blank lines and lines
-  starting with '#' ignored, a file listed twice in any spelling taken once), on any file system Beam reads
-  (`.gz` and other compressed lists are decompressed), named by `media.output_names` (with
+  starting with '#' ignored, a file listed twice in any spelling taken once), on any file
+  system Beam reads (`.gz` and other compressed lists are decompressed), named by `media.output_names` (with
   `earlier`, the names an earlier run gave).
 
   Raises:

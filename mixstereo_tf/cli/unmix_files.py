@@ -109,8 +109,8 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
   image, orientation = media.read_upright(item.path)
-  unmix_start = time.perf_counter()
   halved = image_io.chroma_halved(item.path)  # A 4:2:0 JPEG: matched without the luma's detail.
+  unmix_start = time.perf_counter()
   outputs = unmixer(image, hint=hints.FrameHint(chroma_halved=True)) if halved else unmixer(image)
   report.unmix_seconds += time.perf_counter() - unmix_start
   icc_profile = media.icc_profile_of(item.path)

@@ -18,14 +18,12 @@ class Interrupted(Exception):
   """SIGINT / SIGTERM stopped the loop; the newest checkpoint holds its last step.
 
   Attributes:
-    signal_name: 'SIGINT' or 'SIGTERM'.
-    exit_code: the shell's code for that signal (128 + its number).
+    exit_code: the shell's code for the signal (128 + its number).
   """
 
   def __init__(self, signal_name: str, step: int, checkpoint: str):
     super().__init__(f'Stopped by {signal_name} at step {step}; checkpoint {checkpoint} '
                      '(the same command resumes from it).')
-    self.signal_name = signal_name
     self.exit_code = 128 + signal.Signals[signal_name].value
 
 

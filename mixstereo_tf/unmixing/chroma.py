@@ -10,7 +10,7 @@ median disparity fell from 40.9 to 22.2 px (truth 38.7) and bad-3 rose from 11.5
 33.5%. Matching a copy reduced to the colour's resolution and enlarged back gives a median
 of 39.1 px and bad-3 20.9% there (the classical method: 19.6 -> 36.4 px, 44.1 -> 25.8%);
 on the lossless anaglyph the same copy costs 2-3 points of bad-3, so it is used only for
-files known to be stored so (`media.chroma_halved`, `hints.FrameHint.chroma_halved`). The
+files known to be stored so (`image_io.chroma_halved`, `hints.FrameHint.chroma_halved`). The
 views are then restored from the stored image and those disparities by the classical
 restoration (the copy's own views as a prior were worse there: 24.66 / 25.54 dB against
 24.75 / 26.45; the solve on the stored image gave 24.50 / 26.12).

@@ -344,14 +344,13 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)
   if swapped:
     image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)
-  matched = image
-  if hint.chroma_halved and families.of(name).restores_views:
-    matched = chroma.colour_resolution_copy(image)
+  halved = hint.chroma_halved and families.of(name).restores_views
+  matched = chroma.colour_resolution_copy(image) if halved else image
   search = hint.disparity_range
   if search is None:
     search = estimate_range(matched, name, requested_range, default_range(name), hint, plan)
   outputs = solve(matched, name, search, hint)
-  if matched is not image:
+  if halved:
     outputs = chroma.stored_views(outputs, image, name)
   if isinstance(requested_range, tuple) and hint.disparity_range is None:
     _warn_at_limits(outputs['disparity_left'], search)  # Before the eyes are turned back.
@@ -359,7 +358,7 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
     outputs = eye_order.unmirror(outputs)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),
               prior=hint.prior is not None, **eyes, **outputs.get('info', {}))
-  if matched is not image:
+  if halved:
     info['matched_at_colour_resolution'] = True  # Stored with half-resolution colour.
   info['seconds'] = round(time.perf_counter() - start, 3)
   outputs['info'] = info
