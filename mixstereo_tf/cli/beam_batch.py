@@ -53,8 +53,8 @@ def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
                     ) -> List[media.MediaItem]:
   """The items of a text file holding one input path per line (blank lines and lines
   starting with '#' ignored, a file listed twice in any spelling taken once), on any file
-  system Beam reads (`.gz` and other compressed lists are decompressed), named by `media.output_names` (with
-  `earlier`, the names an earlier run gave).
+  system Beam reads (`.gz` and other compressed lists are decompressed), named by
+  `media.output_names` (with `earlier`, the names an earlier run gave).
 
   Raises:
     ValueError: the list cannot be read, is empty, or names a non-local path (workers
