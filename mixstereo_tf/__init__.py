@@ -109,7 +109,7 @@ def _stored_hint(image) -> Dict[str, Any]:
   else:
     filename = getattr(image, 'filename', '') if hasattr(image, 'getexif') else ''
     halved = bool(filename) and image_io.chroma_halved(filename)
-  return {'hint': hints.FrameHint(chroma_halved=True)} if halved else {}
+  return hints.stored(halved)
 
 
 def _pil_rgb(image) -> np.ndarray:

@@ -41,8 +41,8 @@ def unmix_anaglyph(mixture, mixture_name: str,
                    disparity_range: Optional[Tuple[int, int]] = None,
                    config: AnaglyphConfig = AnaglyphConfig(),
                    prior: Optional[np.ndarray] = None,
-                   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None
-                   ) -> Dict[str, object]:
+                   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None,
+                   views_from=None) -> Dict[str, object]:
   """Separates an anaglyph into two views and disparities.
 
   Args:
@@ -54,6 +54,8 @@ def unmix_anaglyph(mixture, mixture_name: str,
       NaN: no prior there, `search_windows.around_prior`).
     on_disparity: called with the disparities and 'consistent_left' once they are
       matched, before the views are restored (`hints.FrameHint.on_disparity`).
+    views_from: the image the views are restored from, as `mixture` (the stored image of
+      a colour-resolution copy, `hints.FrameHint.stored_image`); None: `mixture`.
 
   Returns:
     'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
@@ -75,6 +77,8 @@ def unmix_anaglyph(mixture, mixture_name: str,
   if on_disparity is not None:
     on_disparity({key: matched[key] for key in ('disparity_left', 'disparity_right',
                                                  'consistent_left')})
+  if views_from is not None:
+    image = image_range.as_unit_float(views_from, 'views_from')
   restored = views.restore_views(image, mixture_name, matched['disparity_left'],
                                  matched['disparity_right'], config=config.restore)
   return {'left': image_range.unit_to_u8(restored['left']),

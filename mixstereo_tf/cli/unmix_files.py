@@ -109,9 +109,9 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
   image, orientation = media.read_upright(item.path)
-  halved = image_io.chroma_halved(item.path)  # A 4:2:0 JPEG: matched without the luma's detail.
+  stored = hints.stored(image_io.chroma_halved(item.path))  # A 4:2:0 JPEG (unmixing/chroma).
   unmix_start = time.perf_counter()
-  outputs = unmixer(image, hint=hints.FrameHint(chroma_halved=True)) if halved else unmixer(image)
+  outputs = unmixer(image, **stored)
   report.unmix_seconds += time.perf_counter() - unmix_start
   icc_profile = media.icc_profile_of(item.path)
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,

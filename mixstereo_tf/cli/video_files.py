@@ -180,7 +180,7 @@ def opening(unmixer: predictors.Unmixer, path: str) -> Dict[str, object]:
     ValueError: no frame of those scanned shows an anaglyph, naming the video.
   """
   info, frames = streams.open_video(path)
-  stored = {'hint': hints.FrameHint(chroma_halved=True)} if info.chroma_halved else {}
+  stored = hints.stored(info.chroma_halved)
   last = None
   try:
     for index, frame in enumerate(frames):

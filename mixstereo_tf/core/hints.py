@@ -53,6 +53,9 @@ class FrameHint:
       JPEG, lossy WebP, most video): its finest detail is the stored luminance, the same in
       every channel, which matches at disparity 0; an anaglyph is then matched without it
       (`unmixing.chroma`).
+    stored_image: uint8 [H, W, 3], the image as stored, where the stage is given its
+      colour-resolution copy to match (`steps.run` sets it for chroma_halved anaglyphs):
+      the views are restored from it (`views_image`); None: from the image matched.
   """
   mixture: Optional[str] = None
   may_be: Optional[str] = None
@@ -68,3 +71,15 @@ class FrameHint:
   unread: Optional[str] = None
   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None
   chroma_halved: bool = False
+  stored_image: Optional[np.ndarray] = None
+
+
+def views_image(image: np.ndarray, hint: Optional[FrameHint]) -> np.ndarray:
+  """The image a stage restores its views from: the hint's stored_image, else `image`."""
+  return image if hint is None or hint.stored_image is None else hint.stored_image
+
+
+def stored(chroma_halved: bool) -> Dict[str, FrameHint]:
+  """The keywords an unmixer is called with for an image stored as `chroma_halved` says:
+  {'hint': FrameHint(chroma_halved=True)}, or {} (the image as it is)."""
+  return {'hint': FrameHint(chroma_halved=True)} if chroma_halved else {}

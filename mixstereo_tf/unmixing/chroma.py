@@ -11,18 +11,13 @@ median disparity fell from 40.9 to 22.2 px (truth 38.7) and bad-3 rose from 11.5
 of 39.1 px and bad-3 20.9% there (the classical method: 19.6 -> 36.4 px, 44.1 -> 25.8%);
 on the lossless anaglyph the same copy costs 2-3 points of bad-3, so it is used only for
 files known to be stored so (`image_io.chroma_halved`, `hints.FrameHint.chroma_halved`). The
-views are then restored from the stored image and those disparities by the classical
-restoration (the copy's own views as a prior were worse there: 24.66 / 25.54 dB against
-24.75 / 26.45; the solve on the stored image gave 24.50 / 26.12).
+stage then restores its views from the stored image (`hints.FrameHint.stored_image`) with
+those disparities (the copy's own views as a prior were worse there: 24.66 / 25.54 dB
+against 24.75 / 26.45; the solve on the stored image gave 24.50 / 26.12).
 """
-
-from typing import Dict
 
 import cv2
 import numpy as np
-
-from mixstereo_tf.core import image_range
-from mixstereo_tf.unmixing import families
 
 
 def colour_resolution_copy(image: np.ndarray) -> np.ndarray:
@@ -35,13 +30,3 @@ def colour_resolution_copy(image: np.ndarray) -> np.ndarray:
                      interpolation=cv2.INTER_AREA)
   return cv2.resize(small, (width, height), interpolation=cv2.INTER_LINEAR)
 
-
-def stored_views(outputs: Dict[str, object], image: np.ndarray, name: str
-                 ) -> Dict[str, object]:
-  """`outputs` of a solve on `colour_resolution_copy(image)` with both views restored from
-  the stored uint8 `image` and their disparities (the classical restoration)."""
-  unit = image_range.u8_to_unit
-  restored = families.of(name).restore(
-      unit(image), name, outputs['disparity_left'], outputs['disparity_right'])
-  return dict(outputs, left=image_range.unit_to_u8(restored['left']),
-              right=image_range.unit_to_u8(restored['right']))

@@ -129,12 +129,13 @@ class Anaglyph(Family):
     return matcher.estimate_range(left_eye, right_eye, self.matching(hint))
 
   def classical(self, image, name, search=None, hint=None):
-    """`anaglyph.unmix_anaglyph` with the hint's matcher options, prior and
-    on_disparity."""
+    """`anaglyph.unmix_anaglyph` with the hint's matcher options, prior, on_disparity and
+    stored_image."""
     config = anaglyph.AnaglyphConfig(matching=self.matching(hint))
     hint = hint or hints.FrameHint()
     return anaglyph.unmix_anaglyph(image, name, search, config=config, prior=hint.prior,
-                                   on_disparity=hint.on_disparity)
+                                   on_disparity=hint.on_disparity,
+                                   views_from=hint.stored_image)
 
   def right_eye(self, name):
     """`MixtureSpec.eye_channels`' right eye."""

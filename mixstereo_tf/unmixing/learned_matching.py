@@ -173,7 +173,8 @@ def learned_unmix(descriptors: Descriptors, image: np.ndarray, name: str,
     return {key: out[key] for key in _KEYS}
   mixture01 = image_range.u8_to_unit(image)
   matched = match(descriptors, mixture01, name, *search, config, family.matching(hint))
-  restored = family.restore(mixture01, name, matched['disparity_left'],
+  views_from = image_range.u8_to_unit(hints.views_image(image, hint))
+  restored = family.restore(views_from, name, matched['disparity_left'],
                             matched['disparity_right'])
   return {'left': image_range.unit_to_u8(restored['left']),  # As _KEYS.
           'right': image_range.unit_to_u8(restored['right']),

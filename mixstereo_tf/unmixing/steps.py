@@ -191,8 +191,10 @@ def estimate_range(image: np.ndarray, name: str, requested: Range,
 
 def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.ndarray,
                 name: str, search: Tuple[int, int], levels: int,
-                max_pixels: Optional[int], restore: bool) -> Dict[str, object]:
-  """The network around a disparity range, then the restoration (module docstring)."""
+                max_pixels: Optional[int], restore: bool,
+                views_from: Optional[np.ndarray] = None) -> Dict[str, object]:
+  """The network around a disparity range, then the restoration (module docstring) from
+  `views_from` (the stored image of a colour-resolution copy; None: `image`)."""
   family = families.of(name)
   height, width = image.shape[:2]
   chosen = disparity_range.plan(search, levels, height, width, max_pixels,
@@ -205,8 +207,9 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
        'disparity_right': raw['disparity_right'].numpy()}, chosen, height, width)
   if restore and family.restores_views:
     restored = family.restore(
-        image_range.u8_to_unit(image), name, outputs['disparity_left'],
-        outputs['disparity_right'], image_range.u8_to_unit(outputs['left']),
+        image_range.u8_to_unit(image if views_from is None else views_from), name,
+        outputs['disparity_left'], outputs['disparity_right'],
+        image_range.u8_to_unit(outputs['left']),
         image_range.u8_to_unit(outputs['right']))
     outputs.update({k: image_range.unit_to_u8(restored[k]) for k in ('left', 'right')})
   outputs['info'] = {'shift': chosen.shift, 'scale': round(chosen.scale, 4)}
@@ -230,7 +233,7 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   is that restoration's left-right check of the refined disparities. The hint's
   on_disparity is the base stage's: a video's next frame searches around the base's
   disparities and starts while these are refined (measured on temporal.py's clips,
-  docs/DESIGN.md)."""
+  docs/DESIGN.md). The views come from the hint's stored_image where it has one."""
   base = (base_stage or classical_unmix)(image, name, search, hint)
   family = families.of(name)
   unread = hint and hint.unread
@@ -245,7 +248,7 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   if 'info' in base:  # The base's record: a double image's mixing weight.
     outputs['info'] = base['info']
   if family.restores_views:
-    mixture01 = image_range.u8_to_unit(image)
+    mixture01 = image_range.u8_to_unit(hints.views_image(image, hint))
     disparities = outputs['disparity_left'], outputs['disparity_right']
     transfer = family.restore(mixture01, name, *disparities)
     weight = REFINED_VIEW_WEIGHT
@@ -281,10 +284,11 @@ def sgbm_unmix(image: np.ndarray, name: str, search: Tuple[int, int],
   """The 'sgbm' method's step 3 (`steps.run`'s `solve`): SGBM's left disparity and its
   right one from the mirrored, swapped pair (`sgbm.match_anaglyph`) over `search`, then
   both views restored from the encoding's matrices (`Family.restore`, as the classical
-  method's); a video hint's prior is not used."""
-  del hint
+  method's, from the hint's stored_image where it has one); a video hint's prior is not
+  used."""
   d_left, d_right = sgbm.match_anaglyph(image, name, *search)
-  restored = families.of(name).restore(image_range.u8_to_unit(image), name, d_left, d_right)
+  restored = families.of(name).restore(image_range.u8_to_unit(hints.views_image(image, hint)),
+                                       name, d_left, d_right)
   return {'left': image_range.unit_to_u8(restored['left']),
           'right': image_range.unit_to_u8(restored['right']),
           'disparity_left': d_left, 'disparity_right': d_right,
@@ -349,9 +353,8 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   search = hint.disparity_range
   if search is None:
     search = estimate_range(matched, name, requested_range, default_range(name), hint, plan)
-  outputs = solve(matched, name, search, hint)
-  if halved:
-    outputs = chroma.stored_views(outputs, image, name)
+  outputs = solve(matched, name, search,
+                  dataclasses.replace(hint, stored_image=image) if halved else hint)
   if isinstance(requested_range, tuple) and hint.disparity_range is None:
     _warn_at_limits(outputs['disparity_left'], search)  # Before the eyes are turned back.
   if swapped:

@@ -176,10 +176,9 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
   source = ({'checkpoint': config.checkpoint} if config.checkpoint else
             {'saved_model': config.saved_model} if config.saved_model else {})
 
-  def solve(image, name, search, hint):
-    del hint  # The network takes no prior.
+  def solve(image, name, search, hint):  # The network takes no prior.
     out = steps.model_unmix(graph, image, name, search, levels, config.max_network_pixels,
-                            bool(restore))
+                            bool(restore), hint and hint.stored_image)
     out['info'] = dict(out.get('info', {}), **source)  # Which trained network ran.
     return out
 

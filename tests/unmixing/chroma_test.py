@@ -50,3 +50,26 @@ def test_a_4_2_0_jpeg_is_matched_without_the_luminance_detail_that_pulls_towards
   # The views keep the stored image's own channel: the left eye's red.
   np.testing.assert_array_equal(out['left'][..., 0], stored[..., 0])
 
+
+
+def test_the_views_are_restored_once_and_from_the_stored_image(monkeypatch):
+  """The stage matches the copy and restores from the stored image itself: no second
+  restoration replaces its views (classical method and the shipped default)."""
+  from mixstereo_tf.restoration import views  # pylint: disable=g-import-not-at-top
+  stored, _ = _jpeg_anaglyph()
+  restored_from = []
+  restore_views = views.restore_views
+
+  def counting(mixture, *args, **kwargs):
+    restored_from.append(np.asarray(mixture))
+    return restore_views(mixture, *args, **kwargs)
+
+  monkeypatch.setattr(views, 'restore_views', counting)
+  for method in ('classical', 'model'):
+    restored_from.clear()
+    unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+        method, mixture='anaglyph', disparity_range=(-4, 16)))
+    out = unmixer(stored, hint=hints.FrameHint(chroma_halved=True))
+    assert len(restored_from) == 1, method
+    np.testing.assert_allclose(restored_from[0] * 255, stored, atol=0.01)
+    np.testing.assert_array_equal(out['left'][..., 0], stored[..., 0])
