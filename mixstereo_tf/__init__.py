@@ -133,7 +133,9 @@ def _pil_rgb(image) -> np.ndarray:
 
 def _config(given: Dict[str, Any], search):
   """The PredictorConfig of `unmix`'s keywords (`given`, `...`: not given; `search`: the
-  disparity_range keyword)."""
+  disparity_range keyword); TensorFlow imported quietly first."""
+  from mixstereo_tf.core import quiet_import  # pylint: disable=g-import-not-at-top
+  quiet_import.import_tensorflow()
   from mixstereo_tf.unmixing import predictors  # pylint: disable=g-import-not-at-top
   if given['max_network_pixels'] is not ... and given['method'] != 'model':
     raise ValueError(f"max_network_pixels= applies to method='model' (a network), not "
@@ -183,7 +185,8 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
   and default to PredictorConfig's values (`max_network_pixels=...` stands for its value),
   except `mixture`, which detects the encoding unless told.
   The unmixer of each set of keywords is built once and kept (the four newest), so calling
-  `unmix` on many images costs the model loading once.
+  `unmix` on many images costs the model loading once. The first call imports TensorFlow
+  without its start-up lines, as the tools do (`core.quiet_import`).
 
   Args:
     image: a uint8 RGB [H, W, 3] (alpha of RGBA dropped) or gray [H, W] array (OpenCV's

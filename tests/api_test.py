@@ -3,6 +3,7 @@
 import dataclasses
 import inspect
 import json
+import os
 import subprocess
 import sys
 
@@ -153,6 +154,17 @@ def test_importing_the_package_loads_no_tensorflow():
   result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                           timeout=60, check=True)
   assert result.stdout.strip() == '[]'
+
+
+def test_the_first_call_prints_no_tensorflow_start_up_lines():
+  code = ('import numpy as np, mixstereo_tf\n'
+          'image = np.random.default_rng(0).integers(0, 256, (40, 64, 3), dtype=np.uint8)\n'
+          'mixstereo_tf.unmix(image, mixture="anaglyph", method="classical")\n'
+          'import tensorflow as tf; tf.constant(1.0) + 1.0\n')  # An op: no cuInit error.
+  env = {k: v for k, v in os.environ.items() if k != 'TF_CPP_MIN_LOG_LEVEL'}
+  result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          timeout=300, check=True, env=env)
+  assert result.stderr == ''  # Was: oneDNN and CUDA-driver notes, a cuInit error.
 
 
 def test_image_kinds_read_as_files_are_and_wrong_kinds_are_refused(tmp_path):

@@ -30,15 +30,15 @@ def test_a_cli_run_prints_no_cuda_or_startup_lines_but_keeps_its_own_log(tmp_pat
 
 
 def test_cuda_registration_errors_are_hidden_other_errors_are_not():
-  from mixstereo_tf.cli import startup  # pylint: disable=g-import-not-at-top
-  assert startup._is_noise('E0000 00:00:1731.5 77 cuda_fft.cc:485] Unable to register cuFFT '
+  from mixstereo_tf.core import quiet_import  # pylint: disable=g-import-not-at-top
+  assert quiet_import.is_noise('E0000 00:00:1731.5 77 cuda_fft.cc:485] Unable to register cuFFT '
                            'factory: Attempting to register factory for plugin cuFFT when one '
                            'has already been registered')
-  assert startup._is_noise('W0000 00:00:1731.5 77 py_utils.cc:38] TF-TRT Warning: Could not '
+  assert quiet_import.is_noise('W0000 00:00:1731.5 77 py_utils.cc:38] TF-TRT Warning: Could not '
                            'find TensorRT')
-  assert not startup._is_noise('E0000 00:00:1731.5 77 gpu_device.cc:2342] Cannot dlopen some '
+  assert not quiet_import.is_noise('E0000 00:00:1731.5 77 gpu_device.cc:2342] Cannot dlopen some '
                                'GPU libraries.')
-  assert startup._is_noise('I0000 00:00:1731.5 77 cpu_feature_guard.cc:210] This TensorFlow '
+  assert quiet_import.is_noise('I0000 00:00:1731.5 77 cpu_feature_guard.cc:210] This TensorFlow '
                            'binary is optimized')
 
 
