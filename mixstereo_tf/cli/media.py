@@ -26,11 +26,16 @@ LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
 STEREO_MODES = {'sbs': 'left_right', 'sbs_half': 'left_right', 'tb': 'top_bottom'}
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.jfif', '.bmp', '.ppm', '.pgm', '.pnm',
                     '.tif', '.tiff', '.webp', '.gif')
-VIDEO_EXTENSIONS = ('.mp4', '.m4v', '.avi', '.mov', '.mkv', '.webm')
+VIDEO_EXTENSIONS = ('.mp4', '.m4v', '.avi', '.mov', '.mkv', '.webm', '.ts', '.m2ts', '.mts',
+                    '.mpg', '.mpeg', '.wmv', '.flv')
 # Video inputs whose results go in another container: WebM holds only VP8 / VP9 / AV1,
 # and the outputs are H.264 (`streams.ENCODERS`), so Matroska, WebM's parent format; an
-# .m4v (Apple's name for MP4) gives .mp4 files.
-OUTPUT_CONTAINERS = {'.webm': '.mkv', '.m4v': '.mp4'}
+# .m4v (Apple's name for MP4) gives .mp4 files. MPEG transport streams (broadcasts,
+# camcorders' AVCHD .mts / .m2ts), MPEG program streams, WMV and FLV carry no stereo
+# layout tag and audio (MP2, AC-3, WMA) that MP4 may refuse: Matroska takes both.
+OUTPUT_CONTAINERS = {'.webm': '.mkv', '.m4v': '.mp4', '.ts': '.mkv', '.m2ts': '.mkv',
+                     '.mts': '.mkv', '.mpg': '.mkv', '.mpeg': '.mkv', '.wmv': '.mkv',
+                     '.flv': '.mkv'}
 
 
 def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
@@ -249,7 +254,7 @@ def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None,
   """Expands an input specification into items, without reading them.
 
   Args:
-    spec: an image path, a video path (.mp4 .avi .mov .mkv), a folder (its images and
+    spec: an image path, a video path (`VIDEO_EXTENSIONS`), a folder (its images and
       videos, sorted by name; other files and subfolders ignored, with a note) or a glob
       pattern (matching images and videos, sorted; `**` matches any depth of folders).
       Items are named by `output_names` (with `earlier`, the names an earlier run gave).

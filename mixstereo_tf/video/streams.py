@@ -21,6 +21,7 @@ import itertools
 import os
 from typing import Dict, Iterator, Optional, Tuple
 
+from absl import logging
 import av
 import numpy as np
 
@@ -133,14 +134,24 @@ class Frame:
 def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFrame],
             rate: Fraction, skip: int, quarter_turns: int = 0) -> Iterator[Frame]:
   """Frames of `decoded`, turned `quarter_turns` x 90 degrees counter-clockwise; those
-  before `skip` are not converted to RGB.
+  before `skip` are not converted to RGB. Frames of another size than the first (a stream
+  whose resolution changes: a broadcast, joined clips) are scaled to the first's, as
+  FFmpeg's own tools do, with one warning naming where the size changed: every output
+  keeps one size.
 
   Times come from the frames' pts (when missing: the previous time + 1 / rate) and are
   made strictly increasing, as every encoder needs. Closes the container at the end.
   """
-  previous = None
+  previous = size = None
+  resized = set()  # The other sizes met, each warned about once.
   try:
     for index, frame in enumerate(decoded):
+      size = size or (frame.width, frame.height)
+      if (frame.width, frame.height) != size and (frame.width, frame.height) not in resized:
+        resized.add((frame.width, frame.height))
+        logging.warning('%s: frames from %d on are %dx%d, not %dx%d as the first: scaled to '
+                        '%dx%d (the outputs keep the first frame\'s size).', container.name,
+                        index, frame.width, frame.height, *size, *size)
       if frame.pts is not None and frame.time_base:
         time = frame.pts * Fraction(frame.time_base)
       else:
@@ -148,7 +159,8 @@ def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFr
       if previous is not None and time <= previous:
         time = previous + 1 / rate
       previous = time
-      image = frame.to_ndarray(format='rgb24') if index >= skip else None
+      image = (frame.to_ndarray(format='rgb24', width=size[0], height=size[1])
+               if index >= skip else None)
       if image is not None and quarter_turns:
         image = np.ascontiguousarray(np.rot90(image, quarter_turns))
       yield Frame(image, time, index)

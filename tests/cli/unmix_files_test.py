@@ -565,6 +565,18 @@ def test_m4v_videos_and_jfif_images_are_inputs(tmp_path):
   assert len(frames) == 6 and (tmp_path / 'out' / 'photo_left.png').exists()
 
 
+def test_a_transport_stream_is_a_video_input_unmixed_into_matroska_with_its_audio(tmp_path):
+  """Broadcast and camcorder (AVCHD .mts) files: an MPEG transport stream was read as an
+  image ('Cannot decode image file'); its MP2 audio goes in Matroska."""
+  _anaglyph_clip(tmp_path / 'clip.ts', 'gray', frames=6)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='gray', disparity_range=(0, 8)))
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path), str(tmp_path / 'out'))
+  assert (report.processed, report.frames, report.failures) == (1, 6, [])
+  info, frames = streams_test.read_all(tmp_path / 'out' / 'clip_left.mkv')
+  assert len(frames) == 6 and info.audio_streams == 1
+
+
 def test_a_video_without_any_anaglyph_names_itself(tmp_path):
   source = _anaglyph_clip(tmp_path / 'dark.mp4', 'gray', frames=6, black=set(range(6)))
   unmixer = predictors.build_unmixer(predictors.PredictorConfig('classical', mixture='auto'))

@@ -16,7 +16,7 @@ Fraction = fractions.Fraction
 # Lossless audio where the container takes it, AAC in MP4 (its decoded samples compare
 # exactly too when the packets are copied).
 AUDIO = {'.mp4': 'aac', '.mov': 'pcm_s16le', '.mkv': 'flac', '.avi': 'pcm_s16le',
-         '.webm': 'libopus'}
+         '.webm': 'libopus', '.ts': 'mp2'}
 
 
 def pattern(index, height=64, width=96):
@@ -305,3 +305,36 @@ def test_video_info_says_whether_colour_is_stored_at_half_resolution(tmp_path):
       out.mux(stream.encode(av.VideoFrame.from_ndarray(pattern(index), format='rgb24')))
     out.mux(stream.encode(None))
   assert not read_all(full)[0].chroma_halved
+
+
+def _transport_stream(path, frames, first_index):
+  """MPEG-TS bytes of `frames` (uint8 RGB, one size), their pts from `first_index`."""
+  with av.open(str(path), 'w', format='mpegts') as out:
+    video = out.add_stream('libx264', rate=12, options={'crf': '12'})
+    video.height, video.width = frames[0].shape[:2]
+    video.pix_fmt = 'yuv420p'
+    for index, image in enumerate(frames, first_index):
+      frame = av.VideoFrame.from_ndarray(image, format='rgb24')
+      frame.pts = index
+      out.mux(video.encode(frame))
+    out.mux(video.encode(None))
+  return path.read_bytes()
+
+
+def test_a_stream_whose_size_changes_is_read_at_the_first_frames_size(tmp_path, caplog):
+  """Joined broadcast clips: frames 4-7 are half the size of frames 0-3; they arrive
+  scaled to the first size (an encoder takes one size), with one warning naming frame 4."""
+  caplog.set_level('WARNING', logger='absl')
+  big = [pattern(i) for i in range(4)]
+  small = [np.full((32, 48, 3), (30 * i, 200, 90), np.uint8) for i in range(4, 8)]
+  joined = tmp_path / 'joined.ts'
+  joined.write_bytes(_transport_stream(tmp_path / 'a.ts', big, 0) +
+                     _transport_stream(tmp_path / 'b.ts', small, 4))
+  info, frames = read_all(joined)
+  assert (info.width, info.height) == (96, 64) and len(frames) == 8
+  assert all(f.image.shape == (64, 96, 3) for f in frames)
+  assert all(b.time > a.time for a, b in zip(frames, frames[1:]))
+  for frame, image in zip(frames[4:], small):  # Each one's own colour, at the first size.
+    np.testing.assert_allclose(frame.image.mean(axis=(0, 1)), image[0, 0], atol=4)
+  warnings = [r.getMessage() for r in caplog.records if 'scaled to' in r.getMessage()]
+  assert len(warnings) == 1 and 'frames from 4 on are 48x32, not 96x64' in warnings[0]
