@@ -212,7 +212,8 @@ def display_range(unmixer: predictors.Unmixer, opened: Dict[str, object]
 def _notes(info, frames: int, path: str) -> Dict[str, str]:
   """{'padding': why an output video is a row or column larger than the input}, if it is;
   {'ended_early': ...} (also logged) when the video ended well before the frames its
-  container declares (a cut or damaged file: what decoded is written)."""
+  container declares (a cut or damaged file: what decoded is written); {'bit_depth': ...}
+  (also logged) for samples of more than 8 bits, which are unmixed and written at 8."""
   notes = {}
   if info.width % 2 or info.height % 2:
     notes['padding'] = (f'{info.width}x{info.height} frames: an output video whose width or '
@@ -223,4 +224,8 @@ def _notes(info, frames: int, path: str) -> Dict[str, str]:
                             'its container declares (a cut or damaged file?); the decoded '
                             'ones are written')
     logging.warning('%s.', notes['ended_early'])
+  if info.bits > 8:
+    notes['bit_depth'] = (f'{path} stores {info.bits}-bit samples: it was read, unmixed '
+                          'and written at 8 bits')
+    logging.warning('%s.', notes['bit_depth'])
   return notes

@@ -108,6 +108,8 @@ class VideoInfo:
       AVColorTransferCharacteristic numbers (2: unspecified): what its RGB values mean.
     chroma_halved: the stream stores colour at half the width or height (4:2:0, 4:2:2,
       nv12: most video), as `hints.FrameHint.chroma_halved` says.
+    bits: the stream's bits per sample (10: HDR and many phones' HEVC); frames are
+      delivered and written at 8 bits.
   """
   width: int
   height: int
@@ -120,6 +122,7 @@ class VideoInfo:
   aspect: Optional[Fraction] = None
   colour: Tuple[int, int] = (2, 2)
   chroma_halved: bool = False
+  bits: int = 8
 
 
 @dataclasses.dataclass(frozen=True)
@@ -211,7 +214,8 @@ def open_video(path: str, skip: int = 0,
                    aspect=aspect if aspect and aspect != 1 else None,
                    colour=(int(first.color_primaries), int(first.color_trc)),
                    chroma_halved=any(c.width < first.width or c.height < first.height
-                                     for c in first.format.components))
+                                     for c in first.format.components),
+                   bits=max(c.bits for c in first.format.components))
   return info, _frames(container, itertools.chain([first], decoded), rate, skip, turns)
 
 

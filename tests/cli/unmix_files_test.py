@@ -1,6 +1,7 @@
 """Tests for unmixing files: images, folders, globs and videos (mixstereo_tf.cli.unmix_files)."""
 
 import dataclasses
+import fractions
 import io
 import json
 import os
@@ -30,6 +31,7 @@ from mixstereo_tf.data import image_io
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import unmixer
 from mixstereo_tf.video import jobs
+from mixstereo_tf.video import streams
 from mixstereo_tf.video import temporal
 from tests.unmixing import predictors_test
 from tests.video import streams_test
@@ -389,6 +391,16 @@ def test_a_cut_video_is_written_as_far_as_it_decodes_and_says_so(tmp_path):
       info['ended_early'])
   _, frames = streams_test.read_all(tmp_path / 'out' / 'cut_sbs.mp4')
   assert len(frames) == info['frames']
+
+
+def test_a_10_bit_video_says_it_was_unmixed_at_8_bits():
+  info = streams.VideoInfo(96, 64, fractions.Fraction(12), fractions.Fraction(1, 12), 12, 0, 0,
+                           bits=10)
+  notes = video_files._notes(info, 12, 'hdr.mkv')  # pylint: disable=protected-access
+  assert notes == {'bit_depth': 'hdr.mkv stores 10-bit samples: it was read, unmixed and '
+                                'written at 8 bits'}
+  eight = dataclasses.replace(info, bits=8)
+  assert video_files._notes(eight, 12, 'x.mkv') == {}  # pylint: disable=protected-access
 
 
 def test_an_input_too_large_for_memory_fails_alone(tmp_path):

@@ -307,6 +307,21 @@ def test_video_info_says_whether_colour_is_stored_at_half_resolution(tmp_path):
   assert not read_all(full)[0].chroma_halved
 
 
+def test_video_info_gives_the_bits_per_sample(tmp_path):
+  assert read_all(make_video(tmp_path / 'in.mp4', [pattern(0)]))[0].bits == 8
+  deep = str(tmp_path / 'ten.mkv')
+  with av.open(deep, 'w') as out:
+    stream = out.add_stream('libx264', rate=12)
+    stream.width, stream.height, stream.pix_fmt = 96, 64, 'yuv420p10le'
+    for index in range(2):
+      frame = av.VideoFrame.from_ndarray(pattern(index), format='rgb24')
+      frame.pts = index
+      out.mux(stream.encode(frame))
+    out.mux(stream.encode(None))
+  info, frames = read_all(deep)
+  assert info.bits == 10 and frames[0].image.dtype == np.uint8
+
+
 def _transport_stream(path, frames, first_index):
   """MPEG-TS bytes of `frames` (uint8 RGB, one size), their pts from `first_index`."""
   with av.open(str(path), 'w', format='mpegts') as out:
