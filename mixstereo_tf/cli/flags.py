@@ -103,7 +103,9 @@ def define_output_options() -> None:
 def output_options(config: Optional[predictors.PredictorConfig] = None
                    ) -> media.OutputOptions:
   """`media.OutputOptions` from the flags of `define_output_options`; the settings recorded
-  by video manifests and info files: `config`'s fields and `predictors.weights_identity`."""
+  by video manifests and info files: `config`'s fields, the shipped model it loads named
+  (`predictors.with_weights_named`), and `predictors.weights_identity`."""
+  config = config and predictors.with_weights_named(config)
   settings = None if config is None else dict(
       dataclasses.asdict(config), weights=predictors.weights_identity(config))
   return media.OutputOptions(

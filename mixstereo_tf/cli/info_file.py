@@ -15,6 +15,7 @@ import os
 from typing import Dict, FrozenSet, List, Optional
 
 from mixstereo_tf.cli import media
+from mixstereo_tf.unmixing import predictors
 
 
 def describe(options: media.OutputOptions) -> Dict[str, object]:
@@ -42,9 +43,25 @@ def differences(recorded: Optional[object], current: Dict[str, object]) -> List[
   (written before the field was recorded, e.g. `weights`) is not compared."""
   if not isinstance(recorded, dict):
     return []
-  old, new = _flat(recorded), _flat(current)
+  new = _flat(current)
+  old = _default_named(_flat(recorded), new)
   return [f'{key}: {old.get(key)!r} -> {new.get(key)!r}'
           for key in sorted(old) if old[key] != new.get(key)]
+
+
+def _default_named(old: Dict[str, object], new: Dict[str, object]) -> Dict[str, object]:
+  """A recorded request for the shipped default that does not name it (written before runs
+  named the model they load, `predictors.with_weights_named`) read as naming the model
+  `new` names, where that is the same default: upgrading does not make every earlier
+  result a difference."""
+  if old.get('method') != 'model' or any(old.get(key) for key in
+                                         ('pretrained', 'checkpoint', 'saved_model')):
+    return old
+  config = predictors.PredictorConfig('model', mixture=old.get('mixture'))
+  named = predictors.with_weights_named(config).pretrained
+  if named is None or named != new.get('pretrained'):
+    return old
+  return dict(old, pretrained=named, weights=new.get('weights'))
 
 
 def input_stamp(path: str) -> Dict[str, int]:

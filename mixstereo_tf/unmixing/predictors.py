@@ -11,6 +11,7 @@ tool uses (unmix, evaluate, benchmarks) from a `PredictorConfig`, by method:
 """
 
 import contextlib
+import dataclasses
 import hashlib
 import os
 from typing import Callable, Dict, Optional
@@ -100,6 +101,20 @@ def weights_identity(config: PredictorConfig) -> Optional[str]:
     except OSError as e:
       raise ValueError(f'cannot read {path}: {e.strerror or e}') from None
   return f'{os.path.basename(path)} sha256:{digest}'
+
+
+def with_weights_named(config: PredictorConfig) -> PredictorConfig:
+  """`config` with the shipped model it loads named in `pretrained` where it names no
+  weights (method 'model' without checkpoint, SavedModel or name): the settings a run
+  records, so that a rerun spelling out the default asks the same (`info_file`, video
+  manifests); `config` itself where no shipped model fits (building the predictor says
+  why)."""
+  if config.method != 'model' or config.pretrained or config.checkpoint or config.saved_model:
+    return config
+  try:
+    return dataclasses.replace(config, pretrained=pretrained.choose(None, config.mixture).name)
+  except ValueError:
+    return config
 
 
 @_register('model')

@@ -168,6 +168,18 @@ def test_results_of_another_input_or_method_are_not_skipped_as_done(tmp_path):
   assert "weights: 'ckpt-1.index sha256:1' -> 'ckpt-1.index sha256:2'" in why
   assert beam_batch.foreign_results(recorded, item, 'classical', dict(
       asked, settings=dict(asked['settings'], weights=None))) is None
+  # The shipped default recorded unnamed (before runs named it) is the default named now,
+  # not another model.
+  def shipped(pretrained, weights):
+    return info_file.describe(media.OutputOptions(settings={
+        'method': 'model', 'mixture': 'auto', 'pretrained': pretrained, 'checkpoint': None,
+        'saved_model': None, 'weights': weights}))
+  unnamed = dict(mine, request=shipped(None, None))
+  default = shipped('anaglyph_matching', 'weights.npz sha256:1')
+  assert beam_batch.foreign_results(unnamed, item, 'classical', default) is None
+  why = beam_batch.foreign_results(unnamed, item, 'classical',
+                                   shipped('anaglyph', 'weights.npz sha256:2'))
+  assert "pretrained: None -> 'anaglyph'" in why
   # The stereo formats in another order write the same files.
   two = info_file.describe(media.OutputOptions(formats=('mpo', 'jps')))
   assert beam_batch.foreign_results(dict(mine, request=two), item, 'classical', dict(

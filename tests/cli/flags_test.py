@@ -67,6 +67,11 @@ def test_output_format_is_repeatable_and_reaches_output_options():
     settings = cli_flags.output_options(predictors.PredictorConfig(pretrained='anaglyph')).settings
     assert settings['pretrained'] == 'anaglyph'  # The config's fields and its weights'.
     assert settings['weights'].startswith('weights.npz sha256:')
+    default = cli_flags.output_options(predictors.PredictorConfig(mixture='auto')).settings
+    spelt = predictors.PredictorConfig(mixture='auto', pretrained='anaglyph_matching')
+    assert default == cli_flags.output_options(spelt).settings  # A rerun asks the same.
+    classical = predictors.PredictorConfig('classical', mixture='auto')
+    assert cli_flags.output_options(classical).settings['pretrained'] is None
     with pytest.raises(flags.IllegalFlagValueError, match='wiggle'):
       output_format.parse('gif')
     error = flag_errors.usage_error(ValueError("OutputOptions.formats: 'jps' twice"))
