@@ -137,7 +137,7 @@ def _stale_files(path: str, name: str, files: List[str]) -> List[str]:
 def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
                request: Optional[Dict] = None) -> str:
   """Writes `<name>_info.json` beside an input's results: what was done to which file (its
-  size and modification time, `input_stamp`; the mixture used and detected, with its
+  absolute path: a rerun from another folder reads it alike; its size and modification time, `input_stamp`; the mixture used and detected, with its
   confidence, the disparity range searched, the network's shift and scale, the method,
   the seconds spent), the files written and what was asked (`describe`). Files an earlier
   run's info listed for this name and this run did not write (another layout, a
@@ -148,6 +148,6 @@ def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
     if os.path.isfile(os.path.join(output_dir, stale)):
       os.remove(os.path.join(output_dir, stale))
   with open(path, 'w', encoding='utf-8') as f:
-    json.dump(dict(info, input=item.path, **input_stamp(item.path),
+    json.dump(dict(info, input=os.path.abspath(item.path), **input_stamp(item.path),
                    **({'request': request} if request else {})), f, indent=2, sort_keys=True)
   return path

@@ -124,6 +124,26 @@ def test_a_rerun_over_a_grown_archive_keeps_every_earlier_name(setup, tmp_path):
       'x_info.json', 'x_png_info.json']  # b's results were not made again as x_png_2.
 
 
+def test_a_rerun_from_another_folder_knows_the_earlier_inputs(setup, tmp_path, monkeypatch):
+  """The info recorded the input's path as typed, read back against the rerun's own folder:
+  another folder's photo.png overwrote the first one's results, and the same file run from
+  the parent folder was redone as photo_2."""
+  out = tmp_path / 'out'
+  for folder, seed in (('a', 1), ('b', 2)):
+    (tmp_path / folder).mkdir()
+    _image(tmp_path / folder / 'photo.png', seed=seed)
+  monkeypatch.chdir(tmp_path / 'a')
+  unmix_files.unmix_inputs(setup, 'photo.png', str(out))
+  first = (out / 'photo_left.png').read_bytes()
+  monkeypatch.chdir(tmp_path / 'b')
+  unmix_files.unmix_inputs(setup, 'photo.png', str(out))
+  assert (out / 'photo_left.png').read_bytes() == first  # b's photo is photo_2.
+  monkeypatch.chdir(tmp_path)
+  unmix_files.unmix_inputs(setup, os.path.join('a', 'photo.png'), str(out))
+  assert sorted(f for f in os.listdir(out) if f.endswith('_info.json')) == [
+      'photo_2_info.json', 'photo_info.json']
+
+
 def test_results_written_inside_the_input_tree_are_no_inputs_of_a_rerun(setup, tmp_path):
   (tmp_path / 'scans').mkdir()
   _image(tmp_path / 'scans' / 'a.png')
