@@ -8,6 +8,7 @@ import collections
 import dataclasses
 import glob
 import os
+import tempfile
 from typing import Collection, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 from absl import logging
@@ -311,7 +312,8 @@ def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:
   `pic.png`'s left view): refused, naming both.
 
   Raises:
-    ValueError: `output_dir` is an existing file, cannot be created, or holds such an input.
+    ValueError: `output_dir` is an existing file, cannot be created or written into, or
+      holds such an input.
   """
   if os.path.exists(output_dir) and not os.path.isdir(output_dir):
     raise ValueError(f'The output folder --output_dir={output_dir} is an existing file, '
@@ -331,6 +333,12 @@ def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:
   except OSError as e:  # Read-only, a file on the way, '' ...
     raise ValueError(f'Cannot create the output folder --output_dir={output_dir!r}: '
                      f'{e.strerror or e}.') from None
+  try:  # Before any input is unmixed: a folder nothing can be written into fails now.
+    with tempfile.TemporaryFile(dir=output_dir):
+      pass
+  except OSError as e:
+    raise ValueError(f'Cannot write into the output folder --output_dir={output_dir!r}: '
+                     f'{e.strerror or e}.') from None
 
 
 # EXIF orientation (tag 0x0112) -> the stored pixels as viewers show them (the TIFF / EXIF
@@ -341,14 +349,17 @@ _ORIENTATIONS = {2: lambda a: a[:, ::-1], 3: lambda a: a[::-1, ::-1], 4: lambda 
 
 
 def icc_profile_of(path: str) -> Optional[bytes]:
-  """The ICC colour profile an image file embeds (a phone's Display P3, Adobe RGB), or None
-  (none: sRGB, as viewers assume; or a file Pillow cannot read). The views keep the
-  input's pixel values, so they are in its colour space and carry its profile."""
+  """The RGB ICC colour profile an image file embeds (a phone's Display P3, Adobe RGB), or
+  None (none: sRGB, as viewers assume; a file Pillow cannot read; a profile of another
+  colour space, gray or CMYK, which RGB outputs cannot carry: PNG forbids it, colour
+  managers refuse it). The views keep the input's pixel values, so they are in its colour
+  space and carry its profile."""
   try:
     with Image.open(path) as image:
-      return image.info.get('icc_profile') or None
+      profile = image.info.get('icc_profile') or None
   except (OSError, ValueError, SyntaxError):
     return None
+  return profile if profile and profile[16:20] == b'RGB ' else None
 
 
 def exif_orientation(path: str) -> int:

@@ -174,6 +174,17 @@ def test_prepare_output_dir_names_an_existing_file(tmp_path):
     media.prepare_output_dir([], '')
 
 
+def test_prepare_output_dir_names_a_folder_nothing_can_be_written_into(tmp_path, monkeypatch):
+  """A read-only or immutable folder failed only when each input's first file was
+  written, after its unmixing, with no reason ('Cannot write image file')."""
+  def refused(*args, **kwargs):
+    raise OSError(30, 'Read-only file system')
+  monkeypatch.setattr(media.tempfile, 'TemporaryFile', refused)
+  with pytest.raises(ValueError, match="Cannot write into the output folder "
+                                       "--output_dir='.*out': Read-only file system"):
+    media.prepare_output_dir([], str(tmp_path / 'out'))
+
+
 @pytest.mark.parametrize('orientation', range(1, 9))
 def test_read_upright_applies_the_exif_orientation_as_opencv_does(tmp_path, orientation):
   """OpenCV's colour reader applies EXIF orientation itself: an independent reference."""
@@ -290,3 +301,17 @@ def test_a_folder_notes_its_subfolders_and_skips_earlier_results(tmp_path, caplo
       'a_left']  # Named by itself: taken.
   with pytest.raises(ValueError, match='holds only results of earlier runs'):
     list(media.iter_inputs(str(tmp_path / 'a_*.png'), skip=skip))
+
+
+def test_only_rgb_colour_profiles_are_kept_for_the_rgb_outputs(tmp_path):
+  """A gray (or CMYK) profile describes channels the RGB outputs do not have: it was
+  embedded in them (libpng: 'Gray color space not permitted on RGB PNG')."""
+  from PIL import ImageCms  # pylint: disable=import-outside-toplevel
+  rgb = ImageCms.ImageCmsProfile(ImageCms.createProfile('sRGB')).tobytes()
+  assert rgb[16:20] == b'RGB '
+  gray = rgb[:16] + b'GRAY' + rgb[20:]  # The header's colour space field.
+  image = np.full((8, 8), 128, np.uint8)
+  for name, profile, kept in (('rgb.png', rgb, rgb), ('gray.png', gray, None),
+                              ('none.png', None, None)):
+    Image.fromarray(image).save(tmp_path / name, icc_profile=profile)
+    assert media.icc_profile_of(str(tmp_path / name)) == kept, name
