@@ -55,8 +55,15 @@ def _read_raw(path: str) -> np.ndarray:
   orientation is left to the caller (`cli/media.py`)."""
   _check_file(path)
   # IMREAD_UNCHANGED keeps 16-bit depth and ignores EXIF rotation (which would break the
-  # stereo geometry); palette PNGs are still expanded to BGR by the decoder.
-  array = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+  # stereo geometry); palette PNGs are still expanded to BGR by the decoder. OpenCV's own
+  # log is silenced meanwhile: its "can't read data" ERROR for a file Pillow then reads
+  # (such a TIFF) looked like a failure.
+  level = cv2.utils.logging.getLogLevel()
+  cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+  try:
+    array = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+  finally:
+    cv2.utils.logging.setLogLevel(level)
   if array is None:
     array = _read_with_pillow(path)
   if array is None:

@@ -283,3 +283,14 @@ def test_chroma_halved_names_files_stored_with_half_resolution_colour(tmp_path):
           for name in list(saved) + ['broken.jpg']} == {
               '420.jpg': True, '422.jpg': True, '444.jpg': False, 'lossy.webp': True,
               'lossless.webp': False, 'plain.png': False, 'broken.jpg': False}
+
+
+def test_a_tiff_opencv_cannot_read_is_read_without_opencvs_error_lines(tmp_path, capfd):
+  """OpenCV fails on TIFFs whose orientation tag transposes (5-8) and printed an ERROR
+  block although Pillow then read the file right."""
+  stored = np.zeros((4, 6, 3), np.uint8)
+  stored[0, :, 0] = 255  # The stored top row, red.
+  Image.fromarray(stored).save(tmp_path / 'turned.tif', tiffinfo={274: 6})
+  image = image_io.read_image(str(tmp_path / 'turned.tif'))
+  assert image.shape == (6, 4, 3) and image[:, -1, 0].min() == 255  # Turned: right column.
+  assert capfd.readouterr().err == ''
