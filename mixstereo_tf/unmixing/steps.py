@@ -233,7 +233,8 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   is that restoration's left-right check of the refined disparities. The hint's
   on_disparity is the base stage's: a video's next frame searches around the base's
   disparities and starts while these are refined (measured on temporal.py's clips,
-  docs/DESIGN.md). The views come from the hint's stored_image where it has one."""
+  docs/DESIGN.md). The views come from the hint's stored_image where it has one; a gray
+  image (every channel equal) gets gray views, the refined views' channel mean."""
   base = (base_stage or classical_unmix)(image, name, search, hint)
   family = families.of(name)
   unread = hint and hint.unread
@@ -242,7 +243,9 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   refined = tiling.apply(network(skipped), refiner.network_input(
       image, base['left'], base['right'], base['disparity_left'],
       base['disparity_right']), multiple)
-  outputs = {key: image_range.signed_to_u8(refined[key]) for key in ('left', 'right')}
+  gray = bool(np.all(image == image[..., :1]))  # Gray input, gray views: the net tints them.
+  outputs = {key: image_range.signed_to_u8(np.repeat(refined[key].mean(-1, keepdims=True), 3, -1)
+                                           if gray else refined[key]) for key in ('left', 'right')}
   for key in ('disparity_left', 'disparity_right'):
     outputs[key] = refined[key][..., 0] if key != skipped else base[key]
   if 'info' in base:  # The base's record: a double image's mixing weight.

@@ -154,6 +154,20 @@ def test_the_diplopia_refiner_reports_the_mixing_weight_of_its_base():
   assert out['info']['mixing_weight'] == 0.3
 
 
+def test_a_gray_double_image_gets_gray_views_from_the_default_refiner(scenes):
+  """The refiner predicts each channel: a gray double image's views came out tinted
+  (a user's: mean |R - G| + |G - B| 3.2 levels, up to 21), classical's stay gray."""
+  scene = scenes[0]
+  gray = {k: np.repeat(scene[k].mean(-1, keepdims=True).astype(np.uint8), 3, -1)
+          for k in ('left', 'right')}
+  image = ((gray['left'].astype(np.uint16) + gray['right']) // 2).astype(np.uint8)
+  out = predictors.build_unmixer(predictors.PredictorConfig(
+      'model', mixture='diplopia', disparity_range=(1, 48)))(image)
+  assert out['info']['pretrained'] == DIPLOPIA_DEFAULT
+  for key in ('left', 'right'):
+    np.testing.assert_array_equal(out[key], np.repeat(out[key][..., :1], 3, -1))
+
+
 def _views_psnr(out, scene):
   return np.mean([10 * np.log10(255.0 ** 2 / np.mean(
       (out[k].astype(float) - scene[k].astype(float)) ** 2)) for k in ('left', 'right')])
