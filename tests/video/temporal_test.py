@@ -1,5 +1,7 @@
 """Tests for temporal consistency: scene cuts, per-shot decisions, the prior (temporal)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -62,6 +64,31 @@ def test_cut_found_exactly_at_the_planted_cut(two_shots):
   alone = temporal.VideoState(temporal.TemporalConfig(enabled=False))
   alone.begin(two_shots[0])
   assert not alone.started_shot()  # Every frame decided alone: no shot to list.
+
+
+def test_a_cut_between_scenes_of_similar_colours_is_found_by_the_thumbnails():
+  """Histogram distance 0.2 (between the soft and the hard threshold) both ways: the
+  layout turned from columns to rows is a cut (thumbnail correlation 0), the columns
+  moved (a pan) are not; a user's clip cut at 0.28 and was one shot."""
+  def split(black_share, rows=False):
+    image = np.full((40, 80, 3), 255, np.uint8)
+    if rows:
+      image[:round(40 * black_share)] = 0
+    else:
+      image[:, :round(80 * black_share)] = 0
+    return image
+  columns, turned, panned = split(0.5), split(0.3, rows=True), split(0.3)
+  config = temporal.TemporalConfig()
+  for other in (turned, panned):
+    distance = temporal.histogram_distance(temporal.colour_histograms(columns),
+                                           temporal.colour_histograms(other))
+    assert distance == pytest.approx(0.2)
+  signatures = [temporal.signature(image, config) for image in (columns, turned, panned)]
+  assert temporal.is_cut(signatures[0], signatures[1], config)
+  assert not temporal.is_cut(signatures[0], signatures[2], config)
+  assert temporal.find_cuts([columns, columns, turned, turned]) == [2]
+  assert not temporal.is_cut(signatures[0], signatures[1], dataclasses.replace(
+      config, soft_cut_threshold=0.3))  # Histograms alone, as before.
 
 
 def test_histogram_distance_known_answers():
