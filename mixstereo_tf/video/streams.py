@@ -18,7 +18,9 @@ imageio-ffmpeg's ffmpeg binary when that package is installed (else it is logged
 import dataclasses
 import fractions
 import itertools
+import math
 import os
+import struct
 from typing import Dict, Iterator, Optional, Tuple
 
 from absl import logging
@@ -171,6 +173,20 @@ def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFr
     container.close()
 
 
+def _display_rotation(frame: av.VideoFrame) -> int:
+  """Degrees counter-clockwise a player turns `frame`: its display matrix's angle (as
+  FFmpeg's av_display_rotation_get, 16.16 fixed point), rounded; 0 without one. PyAV's
+  `rotation` truncates it (a 30-degree file's 29.9996 read 29, and each pass through the
+  tool lost a degree)."""
+  for data in getattr(frame, 'side_data', ()):
+    if getattr(data.type, 'name', '') == 'DISPLAYMATRIX' and len(bytes(data)) == 36:
+      matrix = [value / 65536.0 for value in struct.unpack('<9i', bytes(data))]
+      scales = math.hypot(matrix[0], matrix[3]), math.hypot(matrix[1], matrix[4])
+      if min(scales) > 0:
+        return round(-math.degrees(math.atan2(matrix[1] / scales[1], matrix[0] / scales[0])))
+  return round(getattr(frame, 'rotation', 0) or 0)
+
+
 def open_video(path: str, skip: int = 0,
                upright: bool = True) -> Tuple[VideoInfo, Iterator[Frame]]:
   """Opens a video: its VideoInfo and an iterator over its frames (`Frame`).
@@ -201,9 +217,9 @@ def open_video(path: str, skip: int = 0,
     reason = 'no video stream' if isinstance(e, IndexError) else 'no decodable frame'
     raise ValueError(f'Cannot read video file {path}: {reason}') from None
   rate = Fraction(stream.average_rate or stream.guessed_rate or DEFAULT_FRAME_RATE)
-  # FFmpeg >= 7 attaches the stream's display matrix to every decoded frame (PyAV >= 15
-  # reads its angle); older muxers wrote a 'rotate' tag.
-  rotation = round(getattr(first, 'rotation', 0)) or int(float(stream.metadata.get('rotate', 0)))
+  # FFmpeg >= 7 attaches the stream's display matrix to every decoded frame; older muxers
+  # wrote a 'rotate' tag.
+  rotation = _display_rotation(first) or int(float(stream.metadata.get('rotate', 0)))
   turns = rotation // 90 % 4 if upright and rotation % 90 == 0 else 0
   size = (first.height, first.width) if turns % 2 else (first.width, first.height)
   aspect = stream.sample_aspect_ratio or stream.codec_context.sample_aspect_ratio

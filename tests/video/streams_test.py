@@ -233,6 +233,21 @@ def test_exact_ntsc_rate_odd_size_and_rotation(tmp_path):
   assert out_frames[2].image[33].min() > 220 and out_frames[2].image[:, 47].min() > 220
 
 
+def test_a_rotation_of_no_quarter_turn_is_read_and_kept_to_the_degree(tmp_path):
+  """A 30-degree display matrix (29.9996 in 16.16 fixed point) read 29 through PyAV's
+  truncating `rotation`, and each pass through the tool lost a degree."""
+  source = make_video(tmp_path / 'in.mp4', [pattern(i) for i in range(2)], rotation=30)
+  info, frames = read_all(source)
+  assert info.rotation == 30 and info.turned == 0  # Not a quarter turn: passed on.
+  part = str(tmp_path / 'part.mp4')
+  with streams.VideoWriter(part, info.frame_rate, info.time_base) as writer:
+    for frame in frames:
+      writer.write(frame.image, frame.time)
+  assembly.assemble([assembly.Part(part)], str(tmp_path / 'out.mp4'), info.frame_rate,
+                    info.time_base, rotation=info.rotation)
+  assert read_all(tmp_path / 'out.mp4')[0].rotation == 30
+
+
 @pytest.mark.parametrize('degrees', [90, -90, 180])
 def test_frames_come_upright_as_ffmpeg_shows_them(tmp_path, degrees):
   """A display matrix of quarter turns (a phone filming in portrait): the frames arrive as
