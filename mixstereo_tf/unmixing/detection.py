@@ -182,6 +182,10 @@ def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int,
 # A margin row or column is uniform when no channel varies along it by more than this share
 # of full scale (JPEG noise on a flat bar stays within it).
 MARGIN_TOLERANCE = 0.05
+# Within the margins, the rows and columns at the edges with fewer than COLOUR_SHARE of
+# their pixels coloured (channels spread by more than MARGIN_TOLERANCE of full scale) are
+# left out too: gray surroundings with text (a screenshot of a page or a viewer).
+COLOUR_SHARE = 0.05
 
 
 def content_box(image: np.ndarray) -> Tuple[int, int, int, int]:
@@ -189,7 +193,8 @@ def content_box(image: np.ndarray) -> Tuple[int, int, int, int]:
   and columns at its edges along which no channel varies by more than MARGIN_TOLERANCE of
   full scale (letterbox or pillarbox bars, a white frame). Their neutral colour fits every
   colour set, so a colour anaglyph inside them read as half-colour. The whole image when
-  fewer than 16 rows or columns would remain."""
+  fewer than 16 rows or columns would remain. Then the gray surroundings (`COLOUR_SHARE`):
+  a colour anaglyph in a screenshot of a page read as half-colour."""
   values = np.asarray(image, np.float32)
   scale = 1.0 if values.max(initial=0.0) <= 1.0 else 255.0
 
@@ -202,7 +207,19 @@ def content_box(image: np.ndarray) -> Tuple[int, int, int, int]:
   top, bottom = span(1)
   values = values[top:bottom]  # Columns within the rows kept: bars and a frame together.
   left, right = span(0)
-  return top, bottom, left, right
+  coloured = np.ptp(values[:, left:right], axis=-1) > MARGIN_TOLERANCE * scale
+  rows = _coloured_span(coloured.mean(axis=1))
+  columns = _coloured_span(coloured[rows[0]:rows[1]].mean(axis=0))
+  return top + rows[0], top + rows[1], left + columns[0], left + columns[1]
+
+
+def _coloured_span(shares: np.ndarray) -> Tuple[int, int]:
+  """[first, last + 1) of the lines whose coloured share exceeds COLOUR_SHARE; all of
+  them where fewer than 16 would remain (a gray image, a gray anaglyph of flat areas)."""
+  kept = (shares > COLOUR_SHARE).nonzero()[0]
+  if kept.size == 0 or kept[-1] + 1 - kept[0] < 16:
+    return 0, shares.size
+  return int(kept[0]), int(kept[-1]) + 1
 
 
 def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
