@@ -40,6 +40,7 @@ from typing import Dict, Iterator, List, Optional, TextIO, Tuple
 
 from absl import logging
 import cv2
+from PIL import Image
 import tensorflow as tf
 
 from mixstereo_tf.cli import flag_errors
@@ -99,7 +100,7 @@ def reason(error: Exception) -> str:
 # large for memory), NumPy / numba allocations too large (MemoryError) and file-system
 # errors while reading or writing.
 INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError,
-                MemoryError)
+                MemoryError, Image.DecompressionBombError)  # The last: a huge or forged size.
 
 
 def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,

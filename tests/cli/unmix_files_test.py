@@ -7,6 +7,7 @@ import json
 import os
 import shutil
 import subprocess
+import zlib
 
 import av
 import cv2
@@ -595,6 +596,28 @@ def test_m4v_videos_and_jfif_images_are_inputs(tmp_path):
   assert (report.processed, report.frames, report.failures) == (2, 7, [])
   _, frames = streams_test.read_all(tmp_path / 'out' / 'clip_left.mp4')
   assert len(frames) == 6 and (tmp_path / 'out' / 'photo_left.png').exists()
+
+
+def _claimed_png(path, width, height):
+  """A PNG whose header claims width x height gray pixels, with one row of data."""
+  def chunk(kind, data):
+    return (len(data).to_bytes(4, 'big') + kind + data +
+            (zlib.crc32(kind + data) & 0xffffffff).to_bytes(4, 'big'))
+  header = width.to_bytes(4, 'big') + height.to_bytes(4, 'big') + bytes([8, 0, 0, 0, 0])
+  path.write_bytes(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', header) +
+                   chunk(b'IDAT', zlib.compress(b'\x00' * (width + 1))) + chunk(b'IEND', b''))
+
+
+def test_an_image_too_large_for_pillow_fails_alone(setup, tmp_path):
+  """Pillow's decompression-bomb error is no ValueError or OSError: one forged or huge
+  scan ended the whole run (a batch: no summary, no dead letters)."""
+  (tmp_path / 'in').mkdir()
+  _image(tmp_path / 'in' / 'ok.png')
+  _claimed_png(tmp_path / 'in' / 'huge.png', 19000, 19000)
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'in'), str(tmp_path / 'out'))
+  assert report.processed == 1 and (tmp_path / 'out' / 'ok_left.png').exists()
+  assert len(report.failures) == 1 and 'huge.png' in report.failures[0][0]
+  assert 'exceeds limit' in report.failures[0][1]
 
 
 def test_a_transport_stream_is_a_video_input_unmixed_into_matroska_with_its_audio(tmp_path):
