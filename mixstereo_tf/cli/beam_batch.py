@@ -126,8 +126,8 @@ def foreign_results(info: Dict[str, object], item: media.MediaItem, method: str,
   `request` (`info_file.describe`; another input, another method or other options: a
   re-run with other flags), or None: they are, and are skipped."""
   written_for = info.get('input')
-  if isinstance(written_for, str) and os.path.abspath(written_for) != os.path.abspath(
-      item.path):
+  if isinstance(written_for, str) and os.path.realpath(written_for) != os.path.realpath(
+      item.path):  # The real files: a folder reached by another path (a link) is the same.
     return (f'the output folder holds results named {item.name} of another input, '
             f'{written_for}; use another --output_dir')
   if info.get('method') not in (None, method):
@@ -141,15 +141,21 @@ def foreign_results(info: Dict[str, object], item: media.MediaItem, method: str,
   return None
 
 
+def _text(path: str) -> str:
+  """A path as UTF-8 text for the CSV files: the bytes of a name that is no UTF-8 (held as
+  surrogates, which Beam's coder and a UTF-8 file refuse) as \\xNN escapes."""
+  return os.fsencode(path).decode('utf-8', 'backslashreplace')
+
+
 def summary_row(item: media.MediaItem, status: str, info: Dict[str, object],
                 seconds: float, error: str = '') -> Dict[str, object]:
   """One `SUMMARY_FIELDS` row from an input's info (`{}` when it failed)."""
   search = info.get('disparity_range')
-  return {'input': item.path, 'name': item.name, 'status': status,
+  return {'input': _text(item.path), 'name': _text(item.name), 'status': status,
           'mixture': info.get('mixture') or '', 'detected': info.get('detected') or '',
           'confidence': info.get('confidence', ''),
           'disparity_range': ','.join(str(v) for v in search) if search else '',
-          'seconds': round(seconds, 3), 'error': error}
+          'seconds': round(seconds, 3), 'error': _text(error)}
 
 
 class _UnmixFn(beam.DoFn):
@@ -168,16 +174,17 @@ class _UnmixFn(beam.DoFn):
     self._unmixer = predictors.build_unmixer(self._config)
     os.makedirs(self._output_dir, exist_ok=True)
 
-  def process(self, element: Tuple[int, str, bool, str]) -> Iterator[object]:
-    index, item = element[0], media.MediaItem(*element[1:])
+  def process(self, element: Tuple[int, bytes, bool, bytes]) -> Iterator[object]:
+    index, item = element[0], media.MediaItem(os.fsdecode(element[1]), element[2],
+                                              os.fsdecode(element[3]))
     info = completed_info(self._output_dir, item.name)
+    other = info and foreign_results(info, item, self._unmixer.method, self._request)
+    if other:  # Before the change test: a changed input is not redone with other flags.
+      yield from _failed(index, item, other, 0.0)
+      return
     if info and info_file.changed(info, item.path):
       logging.info('%s changed since its results were written: done again.', item.path)
       info = None
-    other = info and foreign_results(info, item, self._unmixer.method, self._request)
-    if other:
-      yield from _failed(index, item, other, 0.0)
-      return
     if info is not None:
       beam.metrics.Metrics.counter('mixstereo', 'skipped').inc()
       yield index, summary_row(item, 'skipped', info, 0.0)
@@ -199,7 +206,8 @@ def _failed(index: int, item: media.MediaItem, why: str, seconds: float) -> Iter
   summary row."""
   logging.error('failed %s: %s (to the dead-letter list)', item.path, why)
   beam.metrics.Metrics.counter('mixstereo', 'failed').inc()
-  yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': item.path, 'error': why}))
+  yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': _text(item.path),
+                                                 'error': _text(why)}))
   yield index, summary_row(item, 'failed', {}, seconds, why)
 
 
@@ -218,8 +226,10 @@ def build(pipeline: beam.Pipeline, items: Sequence[media.MediaItem],
           options: media.OutputOptions) -> None:
   """Adds the unmixing of `items` into `output_dir` and the two CSV files to `pipeline`."""
   results = (pipeline
-             | 'Inputs' >> beam.Create([(index, item.path, item.is_video, item.name)
-                                         for index, item in enumerate(items)])
+             # Paths as bytes: Beam's text coder refuses names that are no UTF-8.
+             | 'Inputs' >> beam.Create([(index, os.fsencode(item.path), item.is_video,
+                                         os.fsencode(item.name))
+                                        for index, item in enumerate(items)])
              | 'Spread' >> beam.Reshuffle()
              | 'Unmix' >> beam.ParDo(_UnmixFn(config, output_dir, options)).with_outputs(
                  _DEAD, main='rows'))

@@ -9,7 +9,7 @@ import dataclasses
 import glob
 import os
 import tempfile
-from typing import Collection, Dict, Iterator, List, Optional, Sequence, Tuple, Union
+from typing import Collection, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
 
 from absl import logging
 import cv2
@@ -56,7 +56,7 @@ def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
   disparity = np.nan_to_num(disparity, nan=0.0, posinf=65535.0 / 256.0, neginf=0.0)
   stored = np.clip(np.round(disparity * 256.0), 0, 65535)
   stored = np.where(valid, np.maximum(stored, 1), 0).astype(np.uint16)
-  if not cv2.imwrite(path, stored):
+  if not image_io.write_with_opencv(path, stored):
     raise ValueError(f'Cannot write PNG file: {path}')
 
 
@@ -69,7 +69,7 @@ def write_image(path: str, image: np.ndarray, icc_profile: Optional[bytes] = Non
           path, icc_profile=icc_profile)
     except (OSError, ValueError, KeyError) as e:
       raise ValueError(f'Cannot write image file: {path} ({e})') from None
-  elif not cv2.imwrite(path, np.ascontiguousarray(image[:, :, ::-1])):
+  elif not image_io.write_with_opencv(path, np.ascontiguousarray(image[:, :, ::-1])):
     raise ValueError(f'Cannot write image file: {path}')
 
 
@@ -270,8 +270,8 @@ def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None,
   elif os.path.isfile(spec):
     paths = [spec]
   elif glob.has_magic(spec):
-    paths = sorted(p for p in glob.glob(spec, recursive=True) if os.path.isfile(p)
-                   and _extension(p) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)
+    paths = _once(p for p in glob.glob(spec, recursive=True) if os.path.isfile(p)
+                  and _extension(p) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)
     if not paths:
       raise ValueError(f'No images or videos match the pattern {spec}')
   else:
@@ -284,6 +284,20 @@ def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None,
     raise ValueError(f'{spec} holds only results of earlier runs, no input.')
   for path, name in zip(kept, output_names(kept, earlier)):
     yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS, name)
+
+
+def _once(paths: Iterable[str]) -> List[str]:
+  """`paths` sorted, each real file once, under its shortest path: `**` follows links to
+  folders, and a link to a parent made every file an input dozens of times (renaming the
+  real files' results), with a note."""
+  paths = sorted(paths, key=lambda path: (path.count(os.sep), path))
+  unique = {}
+  for path in paths:
+    unique.setdefault(os.path.realpath(path), path)
+  if len(unique) < len(paths):
+    logging.info('%d path(s) reach files already listed (through links): each file is one '
+                 'input.', len(paths) - len(unique))
+  return sorted(unique.values())
 
 
 def _folder_media(folder: str) -> List[str]:

@@ -212,8 +212,10 @@ def _write_viewer(result: StereoResult, stem: str) -> List[str]:
   if result.mixture is None:
     raise ValueError(f'{stem}: the viewer page needs the input image (StereoResult.mixture).')
   path = stem + '_viewer.html'
+  # A file name that is no UTF-8 (surrogates) is shown with replacement characters.
+  title = os.fsencode(os.path.basename(stem)).decode('utf-8', 'replace')
   page = viewer_page.render(
-      title=os.path.basename(stem), left=result.left,
+      title=title, left=result.left,
       right=result.right, mixture=result.mixture, disparity=result.disparity_colour,
       anaglyph=reencode('dubois', result.left, result.right),
       between=between_views(result.left, result.right, result.disparity),

@@ -48,6 +48,32 @@ def _read_with_pillow(path: str) -> Optional[np.ndarray]:
   return np.ascontiguousarray(array)
 
 
+def _utf8(path: str) -> bool:
+  """Whether OpenCV may be given `path`: a name that is no UTF-8 (Latin-1 from an old share,
+  held as surrogates) crashed cv2.imread and cv2.imwrite with a segmentation fault; such
+  files are read and written as bytes."""
+  try:
+    path.encode('utf-8')
+  except UnicodeEncodeError:
+    return False
+  return True
+
+
+def write_with_opencv(path: str, array: np.ndarray) -> bool:
+  """cv2.imwrite(path, array) (BGR; the format from the extension), also for names that are
+  no UTF-8 (`_utf8`); whether it was written."""
+  if _utf8(path):
+    return cv2.imwrite(path, array)
+  encoded, data = cv2.imencode(os.path.splitext(path)[1] or '.png', array)
+  if not encoded:
+    return False
+  try:
+    data.tofile(path)
+  except OSError:
+    return False
+  return True
+
+
 def _read_raw(path: str) -> np.ndarray:
   """cv2.imread(IMREAD_UNCHANGED), else Pillow, with a ValueError naming a missing or
   unreadable file. Both decoders apply a TIFF's orientation tag themselves (OpenCV 5.0
@@ -61,7 +87,8 @@ def _read_raw(path: str) -> np.ndarray:
   level = cv2.utils.logging.getLogLevel()
   cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
   try:
-    array = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+    array = cv2.imread(path, cv2.IMREAD_UNCHANGED) if _utf8(path) else cv2.imdecode(
+        np.fromfile(path, np.uint8), cv2.IMREAD_UNCHANGED)
   finally:
     cv2.utils.logging.setLogLevel(level)
   if array is None:

@@ -259,3 +259,39 @@ def test_beams_record_of_a_ctrl_c_is_dropped_and_others_kept():
                                                  message, (), None)
   assert not keep(record("KeyboardInterrupt [while running 'Unmix/ParDo(_UnmixFn)']"))
   assert keep(record("ValueError [while running 'Unmix/ParDo(_UnmixFn)']"))
+
+
+def test_a_name_that_is_no_utf8_is_unmixed_and_listed_and_a_changed_input_keeps_its_flags(
+    tmp_path):
+  """A Latin-1 file name (an old share): Beam's text coder refused it and no input was
+  done. An input changed since its results, asked for with other flags, was redone with
+  those flags beside the others' results; it is refused like them."""
+  folder = _folder(tmp_path / 'in')
+  os.remove(folder / 'broken.png')
+  latin = os.path.join(str(folder), os.fsdecode(b'caf\xe9.png'))
+  os.rename(folder / 'b.png', latin)
+  items = beam_batch.list_inputs(str(folder), None)
+  out = tmp_path / 'out'
+  assert beam_batch.run(items, CONFIG, str(out), OPTIONS) == {
+      'done': 3, 'skipped': 0, 'failed': 0}
+  rows = _csv(out / beam_batch.SUMMARY)
+  assert sorted(row['name'] for row in rows) == ['a_jpg', 'a_png', 'caf\\xe9']
+  assert os.path.exists(os.path.join(str(out), os.fsdecode(b'caf\xe9_info.json')))
+  os.utime(latin, ns=(1, 1))  # Changed since: redone with the same flags only.
+  sbs = media.OutputOptions('separate')
+  counts = beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(out), sbs)
+  assert counts == {'done': 0, 'skipped': 0, 'failed': 3}
+  assert not any(name.endswith('_left.png') for name in os.listdir(out))
+  assert beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(out),
+                        OPTIONS) == {'done': 1, 'skipped': 2, 'failed': 0}
+
+
+def test_results_reached_through_a_linked_folder_are_the_same_inputs(tmp_path):
+  folder = _folder(tmp_path / 'real')
+  os.remove(folder / 'broken.png')
+  os.symlink(folder, tmp_path / 'alias')
+  out = str(tmp_path / 'out')
+  assert beam_batch.run(beam_batch.list_inputs(str(tmp_path / 'alias'), None), CONFIG, out,
+                        OPTIONS)['done'] == 3
+  assert beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, out,
+                        OPTIONS) == {'done': 0, 'skipped': 3, 'failed': 0}

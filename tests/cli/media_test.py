@@ -315,3 +315,15 @@ def test_only_rgb_colour_profiles_are_kept_for_the_rgb_outputs(tmp_path):
                               ('none.png', None, None)):
     Image.fromarray(image).save(tmp_path / name, icc_profile=profile)
     assert media.icc_profile_of(str(tmp_path / name)) == kept, name
+
+
+def test_a_link_to_a_parent_folder_lists_each_file_once(tmp_path):
+  """`**` follows links: one to a parent folder made each file dozens of inputs and gave
+  the real ones other names (scan_png_10)."""
+  (tmp_path / 'scans' / 'box').mkdir(parents=True)
+  for name in ('a.png', 'b.png'):
+    (tmp_path / 'scans' / 'box' / name).write_bytes(b'x')
+  os.symlink('..', tmp_path / 'scans' / 'box' / 'up')
+  items = list(media.iter_inputs(str(tmp_path / 'scans' / '**' / '*')))
+  assert [(os.path.relpath(i.path, tmp_path), i.name) for i in items] == [
+      (os.path.join('scans', 'box', 'a.png'), 'a'), (os.path.join('scans', 'box', 'b.png'), 'b')]

@@ -1,5 +1,6 @@
 """Tests for mixstereo_tf.data.image_io on tiny files written into tmp_path."""
 
+import os
 import struct
 import zlib
 
@@ -294,3 +295,11 @@ def test_a_tiff_opencv_cannot_read_is_read_without_opencvs_error_lines(tmp_path,
   image = image_io.read_image(str(tmp_path / 'turned.tif'))
   assert image.shape == (6, 4, 3) and image[:, -1, 0].min() == 255  # Turned: right column.
   assert capfd.readouterr().err == ''
+
+
+def test_a_file_name_that_is_no_utf8_is_read_and_written(tmp_path):
+  """OpenCV crashed (a segmentation fault, the whole run lost) on such names."""
+  path = os.path.join(str(tmp_path), os.fsdecode(b'caf\xe9.png'))
+  image = np.arange(4 * 6 * 3, dtype=np.uint8).reshape(4, 6, 3)
+  assert image_io.write_with_opencv(path, image[..., ::-1])
+  np.testing.assert_array_equal(image_io.read_image(path), image)
