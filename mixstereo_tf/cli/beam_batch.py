@@ -182,9 +182,11 @@ class _UnmixFn(beam.DoFn):
     if other:  # Before the change test: a changed input is not redone with other flags.
       yield from _failed(index, item, other, 0.0)
       return
+    earlier = ''
     if info and info_file.changed(info, item.path):
       logging.info('%s changed since its results were written: done again.', item.path)
-      info = None
+      info, earlier = None, (f'; the results of its earlier version remain '
+                             f'({item.name}_info.json and the files it lists)')
     if info is not None:
       beam.metrics.Metrics.counter('mixstereo', 'skipped').inc()
       yield index, summary_row(item, 'skipped', info, 0.0)
@@ -194,7 +196,8 @@ class _UnmixFn(beam.DoFn):
       unmix_files.unmix_item(self._unmixer, item, self._output_dir, self._options,
                              unmix_files.UnmixReport())
     except unmix_files.INPUT_ERRORS as e:
-      yield from _failed(index, item, unmix_files.reason(e), time.perf_counter() - start)
+      yield from _failed(index, item, unmix_files.reason(e) + earlier,
+                         time.perf_counter() - start)
       return
     beam.metrics.Metrics.counter('mixstereo', 'done').inc()
     yield index, summary_row(item, 'done', completed_info(self._output_dir, item.name) or {},

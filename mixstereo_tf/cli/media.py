@@ -341,7 +341,9 @@ def prepare_output_dir(items: Sequence[MediaItem], output_dir: str) -> None:
         raise ValueError(
             f'--output_dir={output_dir} holds the input {item.path}, which the outputs of '
             f'{other.path} (named {other.name}_*) could overwrite before it is read; write '
-            'the results to another folder.')
+            'the results to another folder (or, if it is a result of a run stopped before '
+            f'its end, remove {os.path.join(output_dir, other.name)}_* not listed by an '
+            'info file).')
   try:
     os.makedirs(output_dir, exist_ok=True)
   except OSError as e:  # Read-only, a file on the way, '' ...

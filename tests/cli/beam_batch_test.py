@@ -295,3 +295,15 @@ def test_results_reached_through_a_linked_folder_are_the_same_inputs(tmp_path):
                         OPTIONS)['done'] == 3
   assert beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, out,
                         OPTIONS) == {'done': 0, 'skipped': 3, 'failed': 0}
+
+
+def test_an_input_replaced_by_a_failing_file_says_its_earlier_results_remain(tmp_path):
+  folder = _folder(tmp_path / 'in')
+  os.remove(folder / 'broken.png')
+  out = tmp_path / 'out'
+  beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(out), OPTIONS)
+  (folder / 'b.png').write_bytes(b'\x89PNG\r\n\x1a\n replaced by a broken file')
+  counts = beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(out), OPTIONS)
+  assert counts == {'done': 0, 'skipped': 2, 'failed': 1}
+  dead = _csv(out / beam_batch.DEAD_LETTERS)
+  assert 'the results of its earlier version remain (b_info.json' in dead[0]['error']
