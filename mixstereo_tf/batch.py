@@ -27,6 +27,7 @@ from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
+from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
 
 try:
@@ -77,6 +78,8 @@ def main(argv):
   try:
     counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
   except (KeyboardInterrupt, RuntimeError) as e:  # Beam re-raises Ctrl-C as RuntimeError.
+    if 'OutputFull' in str(e) or isinstance(e, unmix_files.OutputFull):
+      sys.exit(f'error: {str(e).split("OutputFull: ", 1)[-1]}')
     if not isinstance(e, KeyboardInterrupt) and 'KeyboardInterrupt' not in str(e):
       raise
     logging.error('Interrupted: the inputs finished so far are kept; run the same command '

@@ -49,6 +49,8 @@ def main(argv):
         progress_stream=sys.stderr)
   except ValueError as e:
     raise flag_errors.usage_error(e) from None
+  except unmix_files.OutputFull as e:
+    sys.exit(f'error: {e}')
   except KeyboardInterrupt:
     logging.error('Interrupted: finished inputs are kept, and a video continues from its '
                   'last finished segment when the same command is run again.')

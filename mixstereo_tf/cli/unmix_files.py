@@ -35,6 +35,7 @@ there.
 import contextlib
 import dataclasses
 import logging as std_logging
+import shutil
 import time
 from typing import Dict, Iterator, List, Optional, TextIO, Tuple
 
@@ -101,6 +102,28 @@ def reason(error: Exception) -> str:
 # errors while reading or writing.
 INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError,
                 MemoryError, Image.DecompressionBombError)  # The last: a huge or forged size.
+
+
+class OutputFull(RuntimeError):
+  """The output folder's disk is full: no later input could be written either."""
+
+
+# Free bytes under which a failed input is taken for a full output disk, not its own fault.
+OUTPUT_RESERVE = 1 << 20
+
+
+def check_output_room(output_dir: str) -> None:
+  """Raises OutputFull, naming `output_dir`, when its file system has under OUTPUT_RESERVE
+  bytes free; called when an input failed (a full disk made every later input fail as a
+  bad one, and the batch's summary was then not written)."""
+  try:
+    free = shutil.disk_usage(output_dir).free
+  except OSError:
+    return
+  if free < OUTPUT_RESERVE:
+    raise OutputFull(f'the output folder {output_dir} is on a full disk ({free} bytes free); '
+                     'the finished inputs are kept: free some space and run the same command '
+                     'to continue')
 
 
 def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
@@ -207,6 +230,7 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
       with naming_input(item.path):
         frames = unmix_item(unmixer, item, output_dir, options, report, progress_stream)
     except INPUT_ERRORS as e:
+      check_output_room(output_dir)
       if bar:
         bar.clear()
       logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, reason(e))

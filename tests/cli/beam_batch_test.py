@@ -307,3 +307,17 @@ def test_an_input_replaced_by_a_failing_file_says_its_earlier_results_remain(tmp
   assert counts == {'done': 0, 'skipped': 2, 'failed': 1}
   dead = _csv(out / beam_batch.DEAD_LETTERS)
   assert 'the results of its earlier version remain (b_info.json' in dead[0]['error']
+
+
+def test_a_full_output_disk_ends_the_job(tmp_path, monkeypatch):
+  folder = _folder(tmp_path / 'in')
+  os.remove(folder / 'broken.png')
+  usage = unmix_files.shutil.disk_usage(tmp_path)
+
+  def full(*args, **kwargs):
+    raise OSError('4800 requested and 3040 written')
+  monkeypatch.setattr(media, 'write_image_outputs', full)
+  monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage._replace(free=0))
+  with pytest.raises((unmix_files.OutputFull, RuntimeError), match='on a full disk'):
+    beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(tmp_path / 'out'),
+                   OPTIONS)

@@ -782,3 +782,21 @@ def test_warnings_while_an_input_runs_name_it(caplog):
   assert [r.getMessage() for r in caplog.records] == [
       'scans/a.jpg: Detected half_color, the smallest encoding',
       'scans/a.jpg: --output_format=mpo not written', 'after it']
+
+
+def test_a_full_output_disk_ends_the_run_instead_of_failing_every_input(setup, tmp_path,
+                                                                        monkeypatch):
+  """Writes failing on a full disk were recorded as bad inputs, one after the other."""
+  for name in ('a.png', 'b.png'):
+    _image(tmp_path / name)
+  usage = shutil.disk_usage(tmp_path)
+
+  def full(*args, **kwargs):
+    raise OSError('4800 requested and 3040 written')  # NumPy's tofile on a full disk.
+  monkeypatch.setattr(media, 'write_image_outputs', full)
+  monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage._replace(free=4096))
+  with pytest.raises(unmix_files.OutputFull, match='is on a full disk .4096 bytes free'):
+    unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
+  monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage)  # Room: per input.
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
+  assert len(report.failures) == 2 and 'requested' in report.failures[0][1]
