@@ -137,17 +137,19 @@ def _stale_files(path: str, name: str, files: List[str]) -> List[str]:
 def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
                request: Optional[Dict] = None) -> str:
   """Writes `<name>_info.json` beside an input's results: what was done to which file (its
-  absolute path: a rerun from another folder reads it alike; its size and modification time, `input_stamp`; the mixture used and detected, with its
-  confidence, the disparity range searched, the network's shift and scale, the method,
-  the seconds spent), the files written and what was asked (`describe`). Files an earlier
-  run's info listed for this name and this run did not write (another layout, a
-  `disparity16` not written now) are removed first, so that the folder holds one run's
-  results and its info describes all of them."""
+  absolute path: a rerun from another folder reads it alike; its size and modification
+  time, `input_stamp`; the mixture used and detected, with its confidence, the disparity
+  range searched, the network's shift and scale, the method, the seconds spent), the files
+  written and what was asked (`describe`). Files an earlier run's info listed for this name
+  and this run did not write (another layout, a `disparity16` not written now) are removed
+  first, so that the folder holds one run's results and its info describes all of them.
+  The file is replaced at once (two runs into one folder left a corrupt one)."""
   path = os.path.join(output_dir, item.name + INFO_SUFFIX)
   for stale in _stale_files(path, item.name, list(info.get('files', []))):
     if os.path.isfile(os.path.join(output_dir, stale)):
       os.remove(os.path.join(output_dir, stale))
-  with open(path, 'w', encoding='utf-8') as f:
+  with open(path + '.tmp', 'w', encoding='utf-8') as f:  # Replaced at once: never half written.
     json.dump(dict(info, input=os.path.abspath(item.path), **input_stamp(item.path),
                    **({'request': request} if request else {})), f, indent=2, sort_keys=True)
+  os.replace(path + '.tmp', path)
   return path
