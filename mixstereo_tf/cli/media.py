@@ -270,8 +270,9 @@ def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None,
   elif os.path.isfile(spec):
     paths = [spec]
   elif glob.has_magic(spec):
-    paths = _once(p for p in glob.glob(spec, recursive=True) if os.path.isfile(p)
-                  and _extension(p) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)
+    paths = _matching(spec)
+    if not paths and '[' in spec:  # 'Box [1998]/**/*': brackets of a folder's name.
+      paths = _matching(spec.replace('[', '[[]'))
     if not paths:
       raise ValueError(f'No images or videos match the pattern {spec}')
   else:
@@ -284,6 +285,12 @@ def iter_inputs(spec: str, earlier: Optional[Dict[str, str]] = None,
     raise ValueError(f'{spec} holds only results of earlier runs, no input.')
   for path, name in zip(kept, output_names(kept, earlier)):
     yield MediaItem(path, _extension(path) in VIDEO_EXTENSIONS, name)
+
+
+def _matching(pattern: str) -> List[str]:
+  """The images and videos `pattern` matches (`**`: any depth), each file once (`_once`)."""
+  return _once(p for p in glob.glob(pattern, recursive=True) if os.path.isfile(p)
+               and _extension(p) in IMAGE_EXTENSIONS + VIDEO_EXTENSIONS)
 
 
 def _once(paths: Iterable[str]) -> List[str]:

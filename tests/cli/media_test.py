@@ -327,3 +327,13 @@ def test_a_link_to_a_parent_folder_lists_each_file_once(tmp_path):
   items = list(media.iter_inputs(str(tmp_path / 'scans' / '**' / '*')))
   assert [(os.path.relpath(i.path, tmp_path), i.name) for i in items] == [
       (os.path.join('scans', 'box', 'a.png'), 'a'), (os.path.join('scans', 'box', 'b.png'), 'b')]
+
+
+def test_brackets_in_a_folder_name_are_the_name_where_the_pattern_matches_nothing(tmp_path):
+  (tmp_path / 'Box [1998]').mkdir()
+  (tmp_path / 'Box [1998]' / 'a.png').write_bytes(b'x')
+  items = list(media.iter_inputs(str(tmp_path / 'Box [1998]' / '*.png')))
+  assert [item.name for item in items] == ['a']
+  (tmp_path / 'Box 1').mkdir()
+  (tmp_path / 'Box 1' / 'b.png').write_bytes(b'x')  # A set that matches: glob's meaning.
+  assert [i.name for i in media.iter_inputs(str(tmp_path / 'Box [1]' / '*.png'))] == ['b']
