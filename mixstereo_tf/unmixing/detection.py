@@ -198,28 +198,23 @@ def content_box(image: np.ndarray) -> Tuple[int, int, int, int]:
   values = np.asarray(image, np.float32)
   scale = 1.0 if values.max(initial=0.0) <= 1.0 else 255.0
 
-  def span(axis: int) -> Tuple[int, int]:
-    varied = (np.ptp(values, axis=axis).max(axis=-1) > MARGIN_TOLERANCE * scale).nonzero()[0]
-    if varied.size == 0 or varied[-1] + 1 - varied[0] < 16:
-      return 0, values.shape[1 - axis]
-    return int(varied[0]), int(varied[-1]) + 1
-
-  top, bottom = span(1)
+  tolerance = MARGIN_TOLERANCE * scale
+  top, bottom = _span(np.ptp(values, axis=1).max(axis=-1) > tolerance)
   values = values[top:bottom]  # Columns within the rows kept: bars and a frame together.
-  left, right = span(0)
-  coloured = np.ptp(values[:, left:right], axis=-1) > MARGIN_TOLERANCE * scale
-  rows = _coloured_span(coloured.mean(axis=1))
-  columns = _coloured_span(coloured[rows[0]:rows[1]].mean(axis=0))
+  left, right = _span(np.ptp(values, axis=0).max(axis=-1) > tolerance)
+  coloured = np.ptp(values[:, left:right], axis=-1) > tolerance
+  rows = _span(coloured.mean(axis=1) > COLOUR_SHARE)
+  columns = _span(coloured[rows[0]:rows[1]].mean(axis=0) > COLOUR_SHARE)
   return top + rows[0], top + rows[1], left + columns[0], left + columns[1]
 
 
-def _coloured_span(shares: np.ndarray) -> Tuple[int, int]:
-  """[first, last + 1) of the lines whose coloured share exceeds COLOUR_SHARE; all of
-  them where fewer than 16 would remain (a gray image, a gray anaglyph of flat areas)."""
-  kept = (shares > COLOUR_SHARE).nonzero()[0]
-  if kept.size == 0 or kept[-1] + 1 - kept[0] < 16:
-    return 0, shares.size
-  return int(kept[0]), int(kept[-1]) + 1
+def _span(kept: np.ndarray) -> Tuple[int, int]:
+  """[first, last + 1) of the lines `kept` (bool) marks; all of them where fewer than 16
+  would remain (a flat image, a gray anaglyph of flat areas)."""
+  index = kept.nonzero()[0]
+  if index.size == 0 or index[-1] + 1 - index[0] < 16:
+    return 0, kept.size
+  return int(index[0]), int(index[-1]) + 1
 
 
 def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
