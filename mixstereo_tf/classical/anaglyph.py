@@ -42,7 +42,7 @@ def unmix_anaglyph(mixture, mixture_name: str,
                    config: AnaglyphConfig = AnaglyphConfig(),
                    prior: Optional[np.ndarray] = None,
                    on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None,
-                   views_from=None) -> Dict[str, object]:
+                   views_from: Optional[np.ndarray] = None) -> Dict[str, object]:
   """Separates an anaglyph into two views and disparities.
 
   Args:

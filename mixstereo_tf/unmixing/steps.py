@@ -191,10 +191,11 @@ def estimate_range(image: np.ndarray, name: str, requested: Range,
 
 def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.ndarray,
                 name: str, search: Tuple[int, int], levels: int,
-                max_pixels: Optional[int], restore: bool,
-                views_from: Optional[np.ndarray] = None) -> Dict[str, object]:
+                max_pixels: Optional[int], restore: bool, views_from: np.ndarray
+                ) -> Dict[str, object]:
   """The network around a disparity range, then the restoration (module docstring) from
-  `views_from` (the stored image of a colour-resolution copy; None: `image`)."""
+  `views_from` (`hints.views_image`: `image`, or the stored image of its colour-resolution
+  copy)."""
   family = families.of(name)
   height, width = image.shape[:2]
   chosen = disparity_range.plan(search, levels, height, width, max_pixels,
@@ -207,7 +208,7 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
        'disparity_right': raw['disparity_right'].numpy()}, chosen, height, width)
   if restore and family.restores_views:
     restored = family.restore(
-        image_range.u8_to_unit(image if views_from is None else views_from), name,
+        image_range.u8_to_unit(views_from), name,
         outputs['disparity_left'], outputs['disparity_right'],
         image_range.u8_to_unit(outputs['left']),
         image_range.u8_to_unit(outputs['right']))

@@ -13,6 +13,7 @@ import tensorflow as tf
 
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.core import hints
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import steps
 
@@ -178,7 +179,7 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
 
   def solve(image, name, search, hint):  # The network takes no prior.
     out = steps.model_unmix(graph, image, name, search, levels, config.max_network_pixels,
-                            bool(restore), hint and hint.stored_image)
+                            bool(restore), hints.views_image(image, hint))
     out['info'] = dict(out.get('info', {}), **source)  # Which trained network ran.
     return out
 
