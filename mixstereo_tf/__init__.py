@@ -28,6 +28,11 @@ __version__ = '0.1.0'
 # caller imported TensorFlow first or set the variable (an explicit setting wins).
 os.environ.setdefault('TF_ENABLE_ONEDNN_OPTS', '1')
 
+# Log lines naming a file whose name is not UTF-8 are written with \xNN escapes, so that a
+# strict UTF-8 sink (an absl log file, pytest-xdist) takes them (`core/printable.py`).
+from mixstereo_tf.core import printable as _printable  # pylint: disable=g-import-not-at-top
+_printable.install()
+
 # PredictorConfig fields whose `unmix` keyword has another name.
 _KEYWORDS = {'pretrained': 'model'}
 

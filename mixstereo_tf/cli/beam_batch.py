@@ -34,6 +34,7 @@ from apache_beam.options.pipeline_options import StandardOptions
 from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.core import printable
 from mixstereo_tf.unmixing import predictors
 
 SUMMARY = 'batch_summary.csv'
@@ -144,7 +145,7 @@ def foreign_results(info: Dict[str, object], item: media.MediaItem, method: str,
 def _text(path: str) -> str:
   """A path as UTF-8 text for the CSV files: the bytes of a name that is no UTF-8 (held as
   surrogates, which Beam's coder and a UTF-8 file refuse) as \\xNN escapes."""
-  return os.fsencode(path).decode('utf-8', 'backslashreplace')
+  return printable.printable(path)
 
 
 def summary_row(item: media.MediaItem, status: str, info: Dict[str, object],

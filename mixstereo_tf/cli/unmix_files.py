@@ -51,6 +51,7 @@ from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import hints
+from mixstereo_tf.core import printable
 from mixstereo_tf.data import image_io
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import streams
@@ -178,7 +179,7 @@ class _NamingInput(std_logging.Filter):
 
   def __init__(self, path: str):
     super().__init__()
-    self.path = path
+    self.path = printable.printable(path)  # Added after core.printable's filter.
 
   def filter(self, record: std_logging.LogRecord) -> bool:
     # The formatted message: a record whose arguments name the path is not named twice.

@@ -782,6 +782,12 @@ def test_warnings_while_an_input_runs_name_it(caplog):
   assert [r.getMessage() for r in caplog.records] == [
       'scans/a.jpg: Detected half_color, the smallest encoding',
       'scans/a.jpg: --output_format=mpo not written', 'after it']
+  caplog.clear()
+  latin = os.fsdecode(b'scans/caf\xe9.jpg')  # A Latin-1 name: printed as \\xNN.
+  with caplog.at_level('WARNING'):
+    with unmix_files.naming_input(latin):
+      logging.warning('%s: clipped', latin)
+  assert [r.getMessage() for r in caplog.records] == ['scans/caf\\xe9.jpg: clipped']
 
 
 def test_a_full_output_disk_ends_the_run_instead_of_failing_every_input(setup, tmp_path,
