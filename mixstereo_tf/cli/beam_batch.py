@@ -197,7 +197,7 @@ class _UnmixFn(beam.DoFn):
       unmix_files.unmix_item(self._unmixer, item, self._output_dir, self._options,
                              unmix_files.UnmixReport())
     except unmix_files.INPUT_ERRORS as e:
-      unmix_files.check_output_room(self._output_dir)  # OutputFull ends the job.
+      unmix_files.check_output_room(self._output_dir, e)  # OutputFull ends the job.
       yield from _failed(index, item, unmix_files.reason(e) + earlier,
                          time.perf_counter() - start)
       return

@@ -34,7 +34,9 @@ there.
 
 import contextlib
 import dataclasses
+import errno
 import logging as std_logging
+import os
 import shutil
 import time
 from typing import Dict, Iterator, List, Optional, TextIO, Tuple
@@ -106,25 +108,52 @@ INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, O
 
 
 class OutputFull(RuntimeError):
-  """The output folder's disk is full: no later input could be written either."""
+  """The output folder's disk is full or takes no more files: no later input could be
+  written either."""
 
 
 # Free bytes under which a failed input is taken for a full output disk, not its own fault.
 OUTPUT_RESERVE = 1 << 20
 
+# Write errors that every later input would meet too: a full disk, an exhausted quota, a
+# file system (re)mounted read-only.
+_STOPPING_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS)
 
-def check_output_room(output_dir: str) -> None:
+
+def _stopping_error(error: Optional[BaseException]) -> str:
+  """The reason ('Disk quota exceeded', ...) when `error` or one it was raised from is one
+  of `_STOPPING_ERRNOS`, by its errno or, from FFmpeg or OpenCV, by its text; else ''."""
+  seen = set()
+  while error is not None and id(error) not in seen:
+    seen.add(id(error))
+    if isinstance(error, OSError) and error.errno in _STOPPING_ERRNOS:
+      return os.strerror(error.errno)
+    for code in _STOPPING_ERRNOS:
+      if os.strerror(code) in str(error):
+        return os.strerror(code)
+    error = error.__cause__ or error.__context__
+  return ''
+
+
+def check_output_room(output_dir: str, error: Optional[BaseException] = None) -> None:
   """Raises OutputFull, naming `output_dir`, when its file system has under OUTPUT_RESERVE
-  bytes free; called when an input failed (a full disk made every later input fail as a
-  bad one, and the batch's summary was then not written)."""
+  bytes free, or when `error` (the input's) is a write error every later input would meet
+  (`_STOPPING_ERRNOS`); called when an input failed (a full disk made every later input fail
+  as a bad one, and the batch's summary was then not written)."""
+  keep = ('the finished inputs are kept: free some space and run the same command to '
+          'continue')
+  stopping = _stopping_error(error)
+  if stopping:
+    raise OutputFull(f'writing the results failed with "{stopping}" (the output folder '
+                     f'{output_dir} or its disk), as it would for every later input; '
+                     + keep.replace('free some space', 'fix it'))
   try:
     free = shutil.disk_usage(output_dir).free
   except OSError:
     return
   if free < OUTPUT_RESERVE:
     raise OutputFull(f'the output folder {output_dir} is on a full disk ({free} bytes free); '
-                     'the finished inputs are kept: free some space and run the same command '
-                     'to continue')
+                     + keep)
 
 
 def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
@@ -231,7 +260,7 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
       with naming_input(item.path):
         frames = unmix_item(unmixer, item, output_dir, options, report, progress_stream)
     except INPUT_ERRORS as e:
-      check_output_room(output_dir)
+      check_output_room(output_dir, e)
       if bar:
         bar.clear()
       logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, reason(e))

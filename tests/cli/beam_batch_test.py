@@ -2,6 +2,7 @@
 
 import csv
 import dataclasses
+import errno
 import gzip
 import json
 import logging as std_logging
@@ -323,5 +324,17 @@ def test_a_full_output_disk_ends_the_job(tmp_path, monkeypatch):
   monkeypatch.setattr(media, 'write_image_outputs', full)
   monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage._replace(free=0))
   with pytest.raises((unmix_files.OutputFull, RuntimeError), match='on a full disk'):
+    beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(tmp_path / 'out'),
+                   OPTIONS)
+
+
+def test_a_read_only_output_ends_the_job_with_room_left(tmp_path, monkeypatch):
+  folder = _folder(tmp_path / 'in')
+  os.remove(folder / 'broken.png')
+
+  def read_only(*args, **kwargs):
+    raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+  monkeypatch.setattr(media, 'write_image_outputs', read_only)
+  with pytest.raises((unmix_files.OutputFull, RuntimeError), match='Read-only file system'):
     beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(tmp_path / 'out'),
                    OPTIONS)

@@ -1,6 +1,7 @@
 """Tests for unmixing files: images, folders, globs and videos (mixstereo_tf.cli.unmix_files)."""
 
 import dataclasses
+import errno
 import fractions
 import io
 import json
@@ -806,3 +807,37 @@ def test_a_full_output_disk_ends_the_run_instead_of_failing_every_input(setup, t
   monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage)  # Room: per input.
   report = unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
   assert len(report.failures) == 2 and 'requested' in report.failures[0][1]
+
+
+@pytest.mark.parametrize('error', [
+    OSError(errno.EDQUOT, os.strerror(errno.EDQUOT), 'out/a_left.png'),
+    OSError(errno.EROFS, os.strerror(errno.EROFS)),
+    av.error.OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), 'out/clip.mkv'),  # PyAV's.
+    ValueError('out/a_left.png: ' + os.strerror(errno.EDQUOT)),  # By its text.
+])
+def test_a_quota_or_read_only_output_ends_the_run_with_room_left(setup, tmp_path,
+                                                                 monkeypatch, error):
+  """Write errors that every later input meets, with more than a MiB free (a quota, a
+  disk remounted read-only), were recorded as bad inputs one after the other, each
+  after its unmixing."""
+  for name in ('a.png', 'b.png'):
+    _image(tmp_path / name)
+  calls = []
+
+  def refused(*args, **kwargs):
+    calls.append(args)
+    raise error
+  monkeypatch.setattr(media, 'write_image_outputs', refused)
+  with pytest.raises(unmix_files.OutputFull, match=os.strerror(getattr(error, 'errno', None) or errno.EDQUOT)):
+    unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
+  assert len(calls) == 1
+
+
+def test_other_write_errors_stay_the_inputs_own(setup, tmp_path, monkeypatch):
+  _image(tmp_path / 'a.png')
+
+  def too_large(*args, **kwargs):
+    raise OSError(errno.EFBIG, os.strerror(errno.EFBIG))  # One file over a FAT32 limit.
+  monkeypatch.setattr(media, 'write_image_outputs', too_large)
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
+  assert len(report.failures) == 1 and 'too large' in report.failures[0][1]
