@@ -77,6 +77,7 @@ def _image(image) -> np.ndarray:
   reads it, a PIL image as RGB turned upright by its EXIF orientation (as a file would
   be); ValueError naming `image=` for videos, bytes that are no path, and arrays that
   are not uint8 images."""
+  from mixstereo_tf.cli import input_images  # pylint: disable=g-import-not-at-top
   from mixstereo_tf.cli import media  # pylint: disable=g-import-not-at-top
   if isinstance(image, bytes) and (b'\0' in image or len(image) > 4096):
     raise ValueError(f'image= is {len(image)} bytes that name no file (a file\'s contents?); '
@@ -88,7 +89,7 @@ def _image(image) -> np.ndarray:
     if os.path.splitext(path)[1].lower() in media.VIDEO_EXTENSIONS:
       raise ValueError(f'image={path} is a video; unmix() takes one image (videos: '
                        f'mixstereo-unmix --input={path}).')
-    return media.read_image(path)
+    return input_images.read_image(path)
   if hasattr(image, 'getexif') and hasattr(image, 'convert'):  # A PIL image: as a file.
     image = _pil_rgb(image)
   array = np.asarray(image)

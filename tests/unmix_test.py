@@ -15,6 +15,7 @@ from mixstereo_tf import models
 from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.artifacts import serving
+from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import media
 from mixstereo_tf.core import colormap
 from mixstereo_tf.core import mixtures
@@ -58,10 +59,10 @@ def test_unmix_binary_on_a_saved_model(model, tmp_path):
   assert 'error: 1 of 2 input(s) failed' in result.stderr
   assert sorted(os.listdir(out)) == ['a_disparity.npy', 'a_disparity.png',
                                      'a_disparity16.png', 'a_info.json', 'a_sbs.png']
-  left_half = media.read_image(str(out / 'a_sbs.png'))[:, :41]
-  mixture = media.read_image(str(folder / 'a.png'))
+  left_half = input_images.read_image(str(out / 'a_sbs.png'))[:, :41]
+  mixture = input_images.read_image(str(folder / 'a.png'))
   np.testing.assert_array_equal(left_half[..., 0], mixture[..., 0])  # Colour restored.
-  colour = media.read_image(str(out / 'a_disparity.png'))
+  colour = input_images.read_image(str(out / 'a_disparity.png'))
   np.testing.assert_array_equal(
       colour, colormap.colorize(np.load(out / 'a_disparity.npy'), 4.0))
 

@@ -1,6 +1,6 @@
 """Unmixing files: every image and video of an input specification, results to a folder.
 
-Images are read as viewers show them (EXIF orientation applied: `media.read_upright`).
+Images are read as viewers show them (EXIF orientation applied: `input_images.read_upright`).
 Outputs per input `<name>` in the output folder, where `<name>` is the file stem, or stem
 + '_' + extension when inputs share a stem (`media.output_names`): the views
 (`<name>_left.png` and `<name>_right.png` for the 'separate' layout, else
@@ -51,6 +51,7 @@ from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import printable
@@ -162,21 +163,24 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
                  request: Optional[Dict] = None) -> int:
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
-  image, orientation = media.read_upright(item.path)
+  found = input_images.header(item.path)
+  image, orientation = input_images.read_upright(item.path, found)
   stored = hints.stored(image_io.chroma_halved(item.path))  # A 4:2:0 JPEG (unmixing/chroma).
   unmix_start = time.perf_counter()
   outputs = unmixer(image, **stored)
   report.unmix_seconds += time.perf_counter() - unmix_start
-  icc_profile = media.icc_profile_of(item.path)
+  icc_profile = found.icc_profile
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,
                                       max_display_disparity, formats, image, icc_profile)
   if icc_profile:
     written['icc_profile'] = f'the input\'s, {len(icc_profile)} bytes: kept in the views'
   if orientation != 1:
     written['exif_orientation'] = orientation  # Applied: the outputs are upright.
-  if media.truncated_jpeg(item.path):
+  if input_images.truncated_jpeg(item.path):
     written['warning'] = 'the JPEG file ends before its end marker: rows may be missing'
     logging.warning('%s: %s.', item.path, written['warning'])
+  if found.pages > 1:  # Logged by read_upright.
+    written['warning'] = f'the file holds {found.pages} pages: only the first was unmixed'
   info_file.write_info(output_dir, item, dict(outputs.get('info', {}), **written), request)
   return 1
 

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.cli import beam_batch
+from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import unmix_files
@@ -229,7 +230,7 @@ def test_binary_on_an_input_list(tmp_path):
   assert sorted(os.listdir(tmp_path / 'out')) == sorted(
       ['b_tb.png', 'b_disparity.png', 'b_disparity16.png', 'b_disparity.npy', 'b_info.json',
        *OWN_FILES])
-  assert media.read_image(str(tmp_path / 'out' / 'b_tb.png')).shape == (72, 52, 3)
+  assert input_images.read_image(str(tmp_path / 'out' / 'b_tb.png')).shape == (72, 52, 3)
 
 
 def test_an_interrupted_binary_exits_130_saying_how_to_continue(tmp_path):

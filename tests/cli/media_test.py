@@ -8,6 +8,7 @@ import numpy as np
 from PIL import Image
 import pytest
 
+from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import media
 from mixstereo_tf.data import image_io
 
@@ -96,34 +97,6 @@ def test_iter_inputs_glob_double_star_reaches_nested_folders(tmp_path):
   assert sorted(os.path.basename(i.path) for i in items) == ['deep.png', 'top.png']
 
 
-def test_gif_images_are_inputs_and_animated_ones_are_refused(tmp_path):
-  rng = np.random.default_rng(0)
-  frames = [rng.integers(0, 256, (12, 16, 3), dtype=np.uint8) for _ in range(2)]
-  Image.fromarray(frames[0]).save(tmp_path / 'still.gif')
-  Image.fromarray(frames[0]).save(tmp_path / 'wiggle.gif', save_all=True,
-                                  append_images=[Image.fromarray(frames[1])], loop=0)
-  items = list(media.iter_inputs(str(tmp_path)))
-  assert [i.name for i in items] == ['still', 'wiggle']
-  expected = np.asarray(Image.open(tmp_path / 'still.gif').convert('RGB'))
-  np.testing.assert_array_equal(media.read_image(str(tmp_path / 'still.gif')), expected)
-  with pytest.raises(ValueError, match=r'wiggle\.gif is an animated image \(2 frames\)'):
-    media.read_image(str(tmp_path / 'wiggle.gif'))
-
-
-@pytest.mark.parametrize('orientation, stored', [(6, Image.ROTATE_90), (8, Image.ROTATE_270),
-                                                  (3, Image.ROTATE_180),
-                                                  (2, Image.FLIP_LEFT_RIGHT)])
-def test_rotated_tiff_reads_upright(tmp_path, orientation, stored):
-  # TIFF decoders apply the orientation tag themselves; OpenCV 5.0 cannot decode the
-  # tags that transpose (6, 8), which Pillow then reads. The tag is applied once.
-  upright = np.random.default_rng(orientation).integers(0, 256, (12, 16, 3), dtype=np.uint8)
-  path = str(tmp_path / f'phone_{orientation}.tiff')
-  Image.fromarray(upright).transpose(stored).save(path, tiffinfo={0x0112: orientation})
-  image, found = media.read_upright(path)
-  assert found == orientation
-  np.testing.assert_array_equal(image, upright)
-
-
 def test_output_names_keep_the_names_an_earlier_run_gave(tmp_path):
   old, new = str(tmp_path / 'b' / 'x.png'), str(tmp_path / 'a' / 'x.png')
   assert media.output_names([new, old]) == ['x_png', 'x_png_2']  # Renamed by the list.
@@ -185,38 +158,6 @@ def test_prepare_output_dir_names_a_folder_nothing_can_be_written_into(tmp_path,
     media.prepare_output_dir([], str(tmp_path / 'out'))
 
 
-@pytest.mark.parametrize('orientation', range(1, 9))
-def test_read_upright_applies_the_exif_orientation_as_opencv_does(tmp_path, orientation):
-  """OpenCV's colour reader applies EXIF orientation itself: an independent reference."""
-  stored = np.zeros((12, 20, 3), np.uint8)
-  stored[:4, :4] = 255  # A corner mark: every turn and mirror moves it.
-  stored[:, 10:, 1] = 120
-  exif = Image.Exif()
-  exif[0x0112] = orientation
-  path = str(tmp_path / 'phone.jpg')
-  Image.fromarray(stored).save(path, exif=exif, quality=100)
-  image, found = media.read_upright(path)
-  reference = cv2.imread(path, cv2.IMREAD_COLOR)[..., ::-1]
-  assert found == orientation and image.shape == reference.shape
-  assert image.shape[:2] == ((20, 12) if orientation >= 5 else (12, 20))
-  assert np.abs(image.astype(int) - reference).max() <= 2
-
-
-def test_truncated_jpeg_is_told_apart(tmp_path):
-  image = np.random.default_rng(0).integers(0, 256, (64, 64, 3), dtype=np.uint8)
-  whole = str(tmp_path / 'whole.jpg')
-  cv2.imwrite(whole, image)
-  data = open(whole, 'rb').read()
-  (tmp_path / 'padded.jpg').write_bytes(data + b'\x00' * 10)
-  (tmp_path / 'cut.jpg').write_bytes(data[:len(data) * 2 // 3])
-  assert not media.truncated_jpeg(whole)
-  assert not media.truncated_jpeg(str(tmp_path / 'padded.jpg'))
-  assert media.truncated_jpeg(str(tmp_path / 'cut.jpg'))
-  assert media.read_image(str(tmp_path / 'cut.jpg')).shape == (64, 64, 3)  # Still read.
-  _write_png(tmp_path / 'a.png', 10)
-  assert not media.truncated_jpeg(str(tmp_path / 'a.png'))
-
-
 def test_output_names_are_unique_when_stems_collide():
   assert media.output_names(['in/a.png', 'in/b.jpg']) == ['a', 'b']
   # Shared stem: the extension joins the name (its case kept).
@@ -249,13 +190,6 @@ def test_iter_inputs_errors(tmp_path):
     list(media.iter_inputs(str(tmp_path)))
   with pytest.raises(ValueError, match='match'):
     list(media.iter_inputs(str(tmp_path / '*.png')))
-
-
-def test_read_image_gray_to_rgb(tmp_path):
-  path = str(tmp_path / 'gray.png')
-  cv2.imwrite(path, np.full((5, 6), 77, np.uint8))
-  image = media.read_image(path)
-  assert image.shape == (5, 6, 3) and np.all(image == 77)
 
 
 def test_iter_inputs_marks_videos(tmp_path):
@@ -301,20 +235,6 @@ def test_a_folder_notes_its_subfolders_and_skips_earlier_results(tmp_path, caplo
       'a_left']  # Named by itself: taken.
   with pytest.raises(ValueError, match='holds only results of earlier runs'):
     list(media.iter_inputs(str(tmp_path / 'a_*.png'), skip=skip))
-
-
-def test_only_rgb_colour_profiles_are_kept_for_the_rgb_outputs(tmp_path):
-  """A gray (or CMYK) profile describes channels the RGB outputs do not have: it was
-  embedded in them (libpng: 'Gray color space not permitted on RGB PNG')."""
-  from PIL import ImageCms  # pylint: disable=import-outside-toplevel
-  rgb = ImageCms.ImageCmsProfile(ImageCms.createProfile('sRGB')).tobytes()
-  assert rgb[16:20] == b'RGB '
-  gray = rgb[:16] + b'GRAY' + rgb[20:]  # The header's colour space field.
-  image = np.full((8, 8), 128, np.uint8)
-  for name, profile, kept in (('rgb.png', rgb, rgb), ('gray.png', gray, None),
-                              ('none.png', None, None)):
-    Image.fromarray(image).save(tmp_path / name, icc_profile=profile)
-    assert media.icc_profile_of(str(tmp_path / name)) == kept, name
 
 
 def test_a_link_to_a_parent_folder_lists_each_file_once(tmp_path):

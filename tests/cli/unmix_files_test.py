@@ -21,6 +21,7 @@ import tensorflow as tf
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import runs
+from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.cli import unmix_files
@@ -180,15 +181,15 @@ def test_every_layout_for_one_image(setup, tmp_path):
               'scene_info.json']
     assert sorted(os.listdir(out)) == sorted(names + common)
     for name in names:
-      assert media.read_image(str(out / name)).shape == shapes[name]
+      assert input_images.read_image(str(out / name)).shape == shapes[name]
   # The three disparity files agree with each other and with the unmixer.
   disparity = np.load(tmp_path / 'tb' / 'scene_disparity.npy')
-  direct = setup(media.read_image(str(tmp_path / 'scene.png')))['disparity_left']
+  direct = setup(input_images.read_image(str(tmp_path / 'scene.png')))['disparity_left']
   np.testing.assert_allclose(disparity, direct, atol=1e-5)
   raw = cv2.imread(str(tmp_path / 'tb' / 'scene_disparity16.png'), cv2.IMREAD_UNCHANGED)
   assert raw.dtype == np.uint16
   np.testing.assert_allclose(raw / 256.0, disparity, atol=1 / 512 + 1e-6)
-  colour = media.read_image(str(tmp_path / 'tb' / 'scene_disparity.png'))
+  colour = input_images.read_image(str(tmp_path / 'tb' / 'scene_disparity.png'))
   low, high = media.display_range(disparity)  # The range the map covers.
   np.testing.assert_array_equal(colour, colormap.colorize(disparity, high, low))
   info = json.loads((tmp_path / 'tb' / 'scene_info.json').read_text())
@@ -212,7 +213,7 @@ def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
   assert 'b.png' in report.failures[0][1]
   assert unmix_files.failure_message(report) == (
       f'error: 1 of 3 input(s) failed: {folder / "b.png"}')
-  assert media.read_image(str(tmp_path / 'out' / 'c_sbs_half.png')).shape == (33, 47, 3)
+  assert input_images.read_image(str(tmp_path / 'out' / 'c_sbs_half.png')).shape == (33, 47, 3)
   assert not os.path.exists(tmp_path / 'out' / 'b_disparity.npy')
   # Nothing readable: the report asks for a non-zero exit.
   os.remove(folder / 'a.png')
@@ -480,8 +481,8 @@ def test_classical_method(tmp_path):
   mixture = _image(tmp_path / 'x.png', (30, 44, 3))
   report = unmix_files.unmix_inputs(setup, str(tmp_path / 'x.png'), str(tmp_path / 'out'))
   assert report.processed == 1 and not report.failures
-  left = media.read_image(str(tmp_path / 'out' / 'x_left.png'))
-  right = media.read_image(str(tmp_path / 'out' / 'x_right.png'))
+  left = input_images.read_image(str(tmp_path / 'out' / 'x_left.png'))
+  right = input_images.read_image(str(tmp_path / 'out' / 'x_right.png'))
   np.testing.assert_array_equal(left[..., 0], mixture[..., 0])  # Red-cyan channels kept.
   np.testing.assert_array_equal(right[..., 1:], mixture[..., 1:])
   assert np.load(tmp_path / 'out' / 'x_disparity.npy').shape == (30, 44)
@@ -656,7 +657,7 @@ def test_inputs_sharing_a_stem_keep_their_own_outputs(setup, tmp_path):
   for ext in ('png', 'jpg'):
     path = str(folder / f'a.{ext}')  # The JPEG is 4:2:0 (OpenCV's default).
     hint = hints.FrameHint(chroma_halved=image_io.chroma_halved(path))
-    expected = setup(media.read_image(path), hint=hint)['disparity_left']
+    expected = setup(input_images.read_image(path), hint=hint)['disparity_left']
     np.testing.assert_allclose(np.load(out / f'a_{ext}_disparity.npy'), expected, atol=1e-5)
 
 
@@ -841,3 +842,13 @@ def test_other_write_errors_stay_the_inputs_own(setup, tmp_path, monkeypatch):
   monkeypatch.setattr(media, 'write_image_outputs', too_large)
   report = unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
   assert len(report.failures) == 1 and 'too large' in report.failures[0][1]
+
+
+def test_a_multi_page_tiff_says_in_its_info_that_only_its_first_page_was_unmixed(setup,
+                                                                                  tmp_path):
+  pages = [Image.fromarray(_image(tmp_path / f'{seed}.png', seed=seed)) for seed in (0, 1)]
+  pages[0].save(tmp_path / 'scans.tif', save_all=True, append_images=pages[1:])
+  report = unmix_files.unmix_inputs(setup, str(tmp_path / 'scans.tif'), str(tmp_path / 'out'))
+  assert report.processed == 1
+  info = json.loads((tmp_path / 'out' / 'scans_info.json').read_text())
+  assert info['warning'] == 'the file holds 2 pages: only the first was unmixed'
