@@ -194,8 +194,9 @@ class _UnmixFn(beam.DoFn):
       return
     start = time.perf_counter()
     try:
-      unmix_files.unmix_item(self._unmixer, item, self._output_dir, self._options,
-                             unmix_files.UnmixReport())
+      with unmix_files.naming_input(item.path):  # Per thread (Beam's threads run several).
+        unmix_files.unmix_item(self._unmixer, item, self._output_dir, self._options,
+                               unmix_files.UnmixReport())
     except unmix_files.INPUT_ERRORS as e:
       unmix_files.check_output_room(self._output_dir, e)  # OutputFull ends the job.
       yield from _failed(index, item, unmix_files.reason(e) + earlier,

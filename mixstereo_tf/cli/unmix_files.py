@@ -38,6 +38,7 @@ import errno
 import logging as std_logging
 import os
 import shutil
+import threading
 import time
 from typing import Dict, Iterator, List, Optional, TextIO, Tuple
 
@@ -207,31 +208,44 @@ def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: s
                       options.max_display_disparity, report, options.formats, request)
 
 
-class _NamingInput(std_logging.Filter):
-  """Prefixes warnings and errors with the input they concern (`naming_input`)."""
+class _NamingInputs(std_logging.Filter):
+  """Prefixes warnings and errors with the input they concern (`naming_input`): the one
+  its thread runs, else, while a single input runs, that one (a warning of a helper
+  thread, e.g. the video pipeline's); unnamed while several run (Beam's threads) and the
+  thread runs none of them."""
 
-  def __init__(self, path: str):
+  def __init__(self):
     super().__init__()
-    self.path = printable.printable(path)  # Added after core.printable's filter.
+    self.paths: Dict[int, str] = {}  # Thread id -> its input, printable.
 
   def filter(self, record: std_logging.LogRecord) -> bool:
+    paths = dict(self.paths)  # A copy: other threads add and remove theirs.
+    path = paths.get(record.thread or 0) or (next(iter(paths.values())) if len(paths) == 1
+                                             else None)
     # The formatted message: a record whose arguments name the path is not named twice.
     message = record.getMessage()
-    if record.levelno >= std_logging.WARNING and not message.startswith(self.path):
-      record.msg, record.args = f'{self.path}: {message}', ()
+    if path and record.levelno >= std_logging.WARNING and not message.startswith(path):
+      record.msg, record.args = f'{path}: {message}', ()
     return True
+
+
+_NAMING = _NamingInputs()
 
 
 @contextlib.contextmanager
 def naming_input(path: str) -> Iterator[None]:
-  """While inside, the warnings logged (by any thread) name `path`: the library's own
-  (a detected encoding's doubt, a clipped range) do not know the file."""
-  naming = _NamingInput(path)
-  logging.get_absl_logger().addFilter(naming)
+  """While inside, the warnings logged by this thread (and by any thread while no other
+  input runs) name `path`: the library's own (a detected encoding's doubt, a clipped
+  range) do not know the file."""
+  logger = logging.get_absl_logger()
+  if _NAMING not in logger.filters:
+    logger.addFilter(_NAMING)  # After core.printable's filter: the path is printable.
+  thread = threading.get_ident()
+  _NAMING.paths[thread] = printable.printable(path)
   try:
     yield
   finally:
-    logging.get_absl_logger().removeFilter(naming)
+    _NAMING.paths.pop(thread, None)
 
 
 def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,

@@ -339,3 +339,16 @@ def test_a_read_only_output_ends_the_job_with_room_left(tmp_path, monkeypatch):
   with pytest.raises((unmix_files.OutputFull, RuntimeError), match='Read-only file system'):
     beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(tmp_path / 'out'),
                    OPTIONS)
+
+
+def test_the_librarys_warnings_name_their_input(tmp_path, caplog):
+  """The batch's warnings did not say which file they were about."""
+  folder = _folder(tmp_path / 'in')
+  os.remove(folder / 'broken.png')
+  caplog.set_level(std_logging.WARNING, logger='absl')
+  wide = dataclasses.replace(CONFIG, disparity_range=(0, 60))  # Beyond the 52-px images.
+  beam_batch.run(beam_batch.list_inputs(str(folder), None), wide, str(tmp_path / 'out'),
+                 OPTIONS)
+  beyond = sorted(r.getMessage().split(': The disparity range')[0] for r in caplog.records
+                  if 'reaches beyond the image' in r.getMessage())
+  assert beyond == sorted(str(folder / name) for name in ('a.jpg', 'a.png', 'b.png'))

@@ -8,6 +8,8 @@ import json
 import os
 import shutil
 import subprocess
+import threading
+import time
 import zlib
 
 import av
@@ -790,6 +792,37 @@ def test_warnings_while_an_input_runs_name_it(caplog):
     with unmix_files.naming_input(latin):
       logging.warning('%s: clipped', latin)
   assert [r.getMessage() for r in caplog.records] == ['scans/caf\\xe9.jpg: clipped']
+
+
+def test_warnings_name_the_input_of_their_thread_while_several_run(caplog):
+  """Beam's threads each run an input: every naming filter prefixed every warning, so a
+  warning carried the other inputs' names too."""
+  from absl import logging  # pylint: disable=import-outside-toplevel
+  started, done = threading.Barrier(2), threading.Event()
+
+  def run(path):
+    with unmix_files.naming_input(path):
+      started.wait()
+      logging.warning('clipped')
+      done.wait()
+  threads = [threading.Thread(target=run, args=(f'{name}.jpg',)) for name in 'ab']
+  with caplog.at_level('WARNING'):
+    for thread in threads:
+      thread.start()
+    while len(caplog.records) < 2:
+      time.sleep(0.01)
+    other = threading.Thread(target=logging.warning, args=('from elsewhere',))
+    other.start()
+    other.join()
+    done.set()
+    for thread in threads:
+      thread.join()
+    with unmix_files.naming_input('c.jpg'):  # Alone: a helper thread's warning is named.
+      helper = threading.Thread(target=logging.warning, args=('helper',))
+      helper.start()
+      helper.join()
+  assert sorted(r.getMessage() for r in caplog.records) == [
+      'a.jpg: clipped', 'b.jpg: clipped', 'c.jpg: helper', 'from elsewhere']
 
 
 def test_a_full_output_disk_ends_the_run_instead_of_failing_every_input(setup, tmp_path,
