@@ -315,28 +315,22 @@ def test_an_input_replaced_by_a_failing_file_says_its_earlier_results_remain(tmp
   assert 'the results of its earlier version remain (b_info.json' in dead[0]['error']
 
 
-def test_a_full_output_disk_ends_the_job(tmp_path, monkeypatch):
+@pytest.mark.parametrize('error, free, message', [
+    (OSError('4800 requested and 3040 written'), 0, 'on a full disk'),  # NumPy's tofile.
+    (OSError(errno.EROFS, os.strerror(errno.EROFS)), None, 'Read-only file system'),
+])
+def test_a_full_or_read_only_output_ends_the_job(tmp_path, monkeypatch, error, free, message):
+  """A read-only disk ends it with room left (its inputs failed one by one)."""
   folder = _folder(tmp_path / 'in')
   os.remove(folder / 'broken.png')
   usage = unmix_files.shutil.disk_usage(tmp_path)
 
-  def full(*args, **kwargs):
-    raise OSError('4800 requested and 3040 written')
-  monkeypatch.setattr(media, 'write_image_outputs', full)
-  monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage._replace(free=0))
-  with pytest.raises((unmix_files.OutputFull, RuntimeError), match='on a full disk'):
-    beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(tmp_path / 'out'),
-                   OPTIONS)
-
-
-def test_a_read_only_output_ends_the_job_with_room_left(tmp_path, monkeypatch):
-  folder = _folder(tmp_path / 'in')
-  os.remove(folder / 'broken.png')
-
-  def read_only(*args, **kwargs):
-    raise OSError(errno.EROFS, os.strerror(errno.EROFS))
-  monkeypatch.setattr(media, 'write_image_outputs', read_only)
-  with pytest.raises((unmix_files.OutputFull, RuntimeError), match='Read-only file system'):
+  def failing(*args, **kwargs):
+    raise error
+  monkeypatch.setattr(media, 'write_image_outputs', failing)
+  if free is not None:
+    monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage._replace(free=free))
+  with pytest.raises((unmix_files.OutputFull, RuntimeError), match=message):
     beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(tmp_path / 'out'),
                    OPTIONS)
 
