@@ -91,6 +91,12 @@ class DetectConfig:
     ghost_softness: the logistic's scale on the leak's distance to ghost_fraction: 0.08,
       the standard deviation of the colour encodings' leaks above (0.083; a Dubois
       decision claimed confidence 1 before, whatever its leak).
+    doubtful_family_score: a family score above min_family_score but below this is
+      reported as a doubt (`Detection.doubt`): photographs with saturated colours reach
+      up to 0.13 (13 of 189 photographs, PNG / JPEG / H.264, accepted, all amber-blue;
+      GreenMeadow 0.128) where FFmpeg anaglyphs score a median 0.53-0.71; the doubt falls
+      on all 13 photos and on 4 / 17 / 21 of about 270 accepted anaglyphs per storage
+      (png / jpeg / h264; DESIGN.md, unmixing: detection).
     min_brightness: an image whose brightest channel's 99th percentile is below this
       (0..1) is too dark to tell (no encoding named): the frames of a fade from black,
       whose colours lie under the codec's noise, read as gray with confidence 1 (a colour
@@ -117,6 +123,7 @@ class DetectConfig:
   ghost_collinearity: float = 0.3
   ghost_fraction: float = 0.3
   ghost_softness: float = 0.08
+  doubtful_family_score: float = 0.15
   min_brightness: float = 0.15
 
 
@@ -132,12 +139,15 @@ class Detection:
       of the expected) and explained shares (encoding names).
     also_fits: the family's colour encoding when a smaller set (half-colour, optimized)
       was chosen: the colour encoding explains every image, so it fits as well.
+    doubt: why an ordinary photograph might read so, when the family's channels are
+      displaced only weakly (`DetectConfig.doubtful_family_score`); None otherwise.
   """
   name: Optional[str]
   confidence: float
   reason: str
   scores: Dict[str, float]
   also_fits: Optional[str] = None
+  doubt: Optional[str] = None
 
 
 def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
@@ -217,6 +227,14 @@ def _span(kept: np.ndarray) -> Tuple[int, int]:
   return int(index[0]), int(index[-1]) + 1
 
 
+def _doubt(family: str, score: float, config: DetectConfig) -> Optional[str]:
+  """`Detection.doubt` of an accepted family of score `score`."""
+  if score >= config.doubtful_family_score:
+    return None
+  return (f'its {family} channels are displaced only weakly (score {score:.3f} < '
+          f'{config.doubtful_family_score}), as in some photographs with saturated colours')
+
+
 def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
   """The anaglyph encoding of an [H, W, 3] RGB image (uint8, or float in [0, 1]); uniform
   margins (letterbox bars, a frame, a border) are left out (`content_box`)."""
@@ -273,4 +291,5 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   return Detection(name, family_confidence * variant_confidence,
                    f'{family} channels displaced (score {families[family]:.3f}); '
                    f'{len(obs)} colour samples: {name} is the smallest encoding that '
-                   'explains them', scores, also_fits)
+                   'explains them', scores, also_fits,
+                   _doubt(family, families[family], config))

@@ -126,6 +126,10 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
                             'if it is a double image, name it (PredictorConfig.mixture='
                             'diplopia); a single photo or a side-by-side pair is no mixture.')
     name = found.name
+    if found.doubt:
+      info['detection_doubt'] = found.doubt
+      logging.warning('Detected %s, but %s: if the image is no anaglyph, its results mean '
+                      'nothing.', name, found.doubt)
     if found.also_fits:
       info['also_fits'] = found.also_fits
       logging.warning('Detected %s, the smallest encoding that explains the image; %s fits '

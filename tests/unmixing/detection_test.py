@@ -237,3 +237,23 @@ def test_gray_surroundings_with_text_are_left_out_of_detection():
   assert detection.detect(page).name == 'anaglyph'
   gray = _ours('gray', *_pair()[:2])
   assert detection.content_box(gray) == (0, gray.shape[0], 0, gray.shape[1])
+
+
+def _weakly_displaced(rows):
+  """An amber-blue anaglyph whose views differ only in their top `rows` of 150 (elsewhere
+  the right view is the left one): about rows / 150 of the pixels displaced."""
+  left, right, _ = _pair()
+  right = np.concatenate([right[:rows], left[rows:]])
+  return _ours('amber_blue', left, right)
+
+
+def test_weakly_displaced_channels_are_detected_with_a_doubt():
+  """Photographs with saturated colours read as amber-blue at family scores up to 0.13
+  (GreenMeadow: 0.128), accepted without a word."""
+  weak = detection.detect(_weakly_displaced(18))  # 12% of the pixels displaced.
+  assert weak.name == 'amber_blue' and 0.08 <= weak.scores['family:amber_blue'] < 0.15
+  assert 'displaced only weakly (score 0.1' in weak.doubt
+  assert detection.detect(_weakly_displaced(30)).doubt is None  # 20%: above 0.15.
+  assert detection.detect(_weakly_displaced(8)).name is None  # Refused, as before.
+  left, right, _ = _pair()
+  assert detection.detect(_ours('amber_blue', left, right)).doubt is None

@@ -36,6 +36,17 @@ def test_auto_on_a_half_colour_anaglyph_records_and_warns_that_colour_fits_too(m
   assert 'also_fits' not in info and not warnings
 
 
+def test_auto_records_and_warns_a_doubtful_detection(monkeypatch):
+  warnings = []
+  monkeypatch.setattr(logging, 'warning', lambda msg, *args: warnings.append(msg % args))
+  image = detection_test._weakly_displaced(18)  # pylint: disable=protected-access
+  name, info = steps.resolve_mixture(image, 'auto', mixtures.ANAGLYPH_NAMES)
+  assert name == 'amber_blue' and 'displaced only weakly' in info['detection_doubt']
+  assert len(warnings) == 1 and 'if the image is no anaglyph' in warnings[0]
+  _, info = steps.resolve_mixture(image, 'amber_blue', mixtures.ANAGLYPH_NAMES)
+  assert 'detection_doubt' not in info  # Named: the user knows.
+
+
 def test_auto_refuses_a_plain_photo_with_a_clear_message():
   left, _, _ = detection_test._pair()  # pylint: disable=protected-access
   with pytest.raises(steps.NoAnaglyphError,
