@@ -93,10 +93,10 @@ class DetectConfig:
       decision claimed confidence 1 before, whatever its leak).
     doubtful_family_score: a family score above min_family_score but below this is
       reported as a doubt (`Detection.doubt`): photographs with saturated colours reach
-      up to 0.13 (13 of 189 photographs, PNG / JPEG / H.264, accepted, all amber-blue;
+      up to 0.13 (8 of 36 photographs x 3 storages accepted, all as amber-blue;
       GreenMeadow 0.128) where FFmpeg anaglyphs score a median 0.53-0.71; the doubt falls
-      on all 13 photos and on 4 / 17 / 21 of about 270 accepted anaglyphs per storage
-      (png / jpeg / h264; DESIGN.md, unmixing: detection).
+      on all 8 and on 4 / 17 / 21 of 279 / 266 / 263 accepted anaglyphs (png / jpeg /
+      h264; `experiments/results/detection_photos.md`).
     min_brightness: an image whose brightest channel's 99th percentile is below this
       (0..1) is too dark to tell (no encoding named): the frames of a fade from black,
       whose colours lie under the codec's noise, read as gray with confidence 1 (a colour
