@@ -28,6 +28,7 @@ from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
+from mixstereo_tf.cli import worker_output
 from mixstereo_tf.unmixing import predictors
 
 try:
@@ -76,7 +77,8 @@ def main(argv):
   for name in ('apache_beam.runners.common', 'apache_beam.runners.worker.bundle_processor'):
     std_logging.getLogger(name).addFilter(beam_batch.DropInterrupts())  # Ctrl-C's traceback.
   try:
-    counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
+    with worker_output.filtered_stderr():  # Multi-processing workers' notes and Ctrl-C.
+      counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
   except (KeyboardInterrupt, RuntimeError) as e:  # Beam re-raises Ctrl-C as RuntimeError.
     if 'OutputFull' in str(e) or isinstance(e, unmix_files.OutputFull):
       sys.exit(f'error: {str(e).split("OutputFull: ", 1)[-1]}')
