@@ -13,8 +13,14 @@ setuptools.setup(
     python_requires='>=3.9',
     # The repository's top-level data_lists/ (the KITTI split lists) is installed as package
     # data mixstereo_tf/data_lists/, where mixstereo_tf.data.split_lists finds it.
-    packages=setuptools.find_packages(include=['mixstereo_tf', 'mixstereo_tf.*']) + [
-        'mixstereo_tf.data_lists'],
+    # Folders of data only (data_lists/kitti, a shipped model's folder) are listed as
+    # namespace packages: setuptools warned about each (10 warnings, 40 lines apiece, on
+    # every install) and will stop installing their files otherwise.
+    packages=setuptools.find_namespace_packages(
+        include=['mixstereo_tf', 'mixstereo_tf.*'], exclude=['*.__pycache__']) + [
+            'mixstereo_tf.data_lists'] + [
+                f'mixstereo_tf.data_lists.{name}'
+                for name in setuptools.find_namespace_packages(where='data_lists')],
     package_dir={'mixstereo_tf.data_lists': 'data_lists'},
     # The shipped models (mixstereo_tf/artifacts/pretrained/NAME/{info.json,weights.npz}).
     package_data={'mixstereo_tf.data_lists': ['README.md', 'kitti/*.txt', 'middlebury/*.txt',
