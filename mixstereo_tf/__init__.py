@@ -78,7 +78,7 @@ def _image(image) -> np.ndarray:
   be); ValueError naming `image=` for videos, bytes that are no path, and arrays that
   are not uint8 images."""
   from mixstereo_tf.cli import input_images  # pylint: disable=g-import-not-at-top
-  from mixstereo_tf.cli import media  # pylint: disable=g-import-not-at-top
+  from mixstereo_tf.cli import input_listing  # pylint: disable=g-import-not-at-top
   if isinstance(image, bytes) and (b'\0' in image or len(image) > 4096):
     raise ValueError(f'image= is {len(image)} bytes that name no file (a file\'s contents?); '
                      'give its path, or an RGB array (e.g. np.asarray(PIL.Image.open('
@@ -86,7 +86,7 @@ def _image(image) -> np.ndarray:
                      'with [..., ::-1]).')
   if isinstance(image, (str, bytes, os.PathLike)):
     path = os.fsdecode(image)
-    if os.path.splitext(path)[1].lower() in media.VIDEO_EXTENSIONS:
+    if os.path.splitext(path)[1].lower() in input_listing.VIDEO_EXTENSIONS:
       raise ValueError(f'image={path} is a video; unmix() takes one image (videos: '
                        f'mixstereo-unmix --input={path}).')
     return input_images.read_image(path)

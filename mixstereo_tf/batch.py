@@ -26,7 +26,7 @@ from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
-from mixstereo_tf.cli import media
+from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.cli import worker_output
 from mixstereo_tf.unmixing import predictors
@@ -65,7 +65,7 @@ def main(argv):
     items = beam_batch.list_inputs(FLAGS.input, FLAGS.input_list, FLAGS.output_dir)
     options = cli_flags.output_options(config)
     pipeline_options = beam_batch.pipeline_options(argv[1:])
-    media.prepare_output_dir(items, FLAGS.output_dir)
+    input_listing.prepare_output_dir(items, FLAGS.output_dir)
   except ValueError as e:
     raise flag_errors.usage_error(e) from None
   logging.info('%d input(s) to %s.', len(items), FLAGS.output_dir)

@@ -2,7 +2,7 @@
 
 The one module that imports Beam (the `.[beam]` extra), so the base install stays light.
 Each input gets exactly the outputs and `<name>_info.json` that `mixstereo-unmix` writes
-(`unmix_files`), names from `media.output_names` over the whole input list (an input an
+(`unmix_files`), names from `input_listing.output_names` over the whole input list (an input an
 earlier run into the folder named keeps its name, so a grown archive renames nothing). The
 unmixer is built once per worker (`_UnmixFn.setup`). Runs are resumable: an input whose outputs are
 complete (`completed_info`) is skipped. An input that fails with one of
@@ -32,6 +32,7 @@ from apache_beam.options.pipeline_options import PipelineOptions
 from apache_beam.options.pipeline_options import StandardOptions
 
 from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.core import printable
@@ -51,11 +52,11 @@ DEFAULT_RUNNER = 'FnApiRunner'
 
 
 def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
-                    ) -> List[media.MediaItem]:
+                    ) -> List[input_listing.MediaItem]:
   """The items of a text file holding one input path per line (blank lines and lines
   starting with '#' ignored, a file listed twice in any spelling taken once), on any file
   system Beam reads (`.gz` and other compressed lists are decompressed), named by
-  `media.output_names` (with `earlier`, the names an earlier run gave).
+  `input_listing.output_names` (with `earlier`, the names an earlier run gave).
 
   Raises:
     ValueError: the list cannot be read, is empty, or names a non-local path (workers
@@ -80,13 +81,13 @@ def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
       raise ValueError(f'--input_list: entry {number} of {path}, {entry}, is not a local '
                        'path; workers read inputs as local files (mount the file system '
                        'and list the mounted paths).')
-  return [media.MediaItem(entry, os.path.splitext(entry)[1].lower() in media.VIDEO_EXTENSIONS,
-                          name) for entry, name in zip(paths, media.output_names(paths, earlier))]
+  return [input_listing.MediaItem(entry, os.path.splitext(entry)[1].lower() in input_listing.VIDEO_EXTENSIONS,
+                          name) for entry, name in zip(paths, input_listing.output_names(paths, earlier))]
 
 
 def list_inputs(input_spec: Optional[str], input_list: Optional[str],
-                output_dir: str = '') -> List[media.MediaItem]:
-  """The items of `--input` (as `mixstereo-unmix` expands it: `media.iter_inputs`) or of
+                output_dir: str = '') -> List[input_listing.MediaItem]:
+  """The items of `--input` (as `mixstereo-unmix` expands it: `input_listing.iter_inputs`) or of
   `--input_list` (`read_input_list`); exactly one must be given. Inputs an earlier run into
   `output_dir` named keep their names, and what they wrote is no input
   (`info_file.read_earlier`).
@@ -99,7 +100,7 @@ def list_inputs(input_spec: Optional[str], input_list: Optional[str],
   earlier = info_file.read_earlier(output_dir) if output_dir else info_file.Earlier()
   if input_list is not None:
     return read_input_list(input_list, earlier.names)
-  return list(media.iter_inputs(input_spec, earlier.names, earlier.outputs))
+  return list(input_listing.iter_inputs(input_spec, earlier.names, earlier.outputs))
 
 
 def completed_info(output_dir: str, name: str) -> Optional[Dict[str, object]]:
@@ -121,7 +122,7 @@ def completed_info(output_dir: str, name: str) -> Optional[Dict[str, object]]:
   return info
 
 
-def foreign_results(info: Dict[str, object], item: media.MediaItem, method: str,
+def foreign_results(info: Dict[str, object], item: input_listing.MediaItem, method: str,
                     request: Optional[Dict[str, object]] = None) -> Optional[str]:
   """Why complete results under `item.name` are not `item`'s by `method` asked for as
   `request` (`info_file.describe`; another input, another method or other options: a
@@ -148,7 +149,7 @@ def _text(path: str) -> str:
   return printable.printable(path)
 
 
-def summary_row(item: media.MediaItem, status: str, info: Dict[str, object],
+def summary_row(item: input_listing.MediaItem, status: str, info: Dict[str, object],
                 seconds: float, error: str = '') -> Dict[str, object]:
   """One `SUMMARY_FIELDS` row from an input's info (`{}` when it failed)."""
   search = info.get('disparity_range')
@@ -176,7 +177,7 @@ class _UnmixFn(beam.DoFn):
     os.makedirs(self._output_dir, exist_ok=True)
 
   def process(self, element: Tuple[int, bytes, bool, bytes]) -> Iterator[object]:
-    index, item = element[0], media.MediaItem(os.fsdecode(element[1]), element[2],
+    index, item = element[0], input_listing.MediaItem(os.fsdecode(element[1]), element[2],
                                               os.fsdecode(element[3]))
     info = completed_info(self._output_dir, item.name)
     other = info and foreign_results(info, item, self._unmixer.method, self._request)
@@ -207,7 +208,7 @@ class _UnmixFn(beam.DoFn):
                              time.perf_counter() - start)
 
 
-def _failed(index: int, item: media.MediaItem, why: str, seconds: float) -> Iterator[object]:
+def _failed(index: int, item: input_listing.MediaItem, why: str, seconds: float) -> Iterator[object]:
   """`_UnmixFn`'s outputs for an input that failed: logged, counted, a dead letter and its
   summary row."""
   logging.error('failed %s: %s (to the dead-letter list)', item.path, why)
@@ -227,7 +228,7 @@ def _write_csv(path: str, fields: Sequence[str],
   os.replace(path + '.tmp', path)
 
 
-def build(pipeline: beam.Pipeline, items: Sequence[media.MediaItem],
+def build(pipeline: beam.Pipeline, items: Sequence[input_listing.MediaItem],
           config: predictors.PredictorConfig, output_dir: str,
           options: media.OutputOptions) -> None:
   """Adds the unmixing of `items` into `output_dir` and the two CSV files to `pipeline`."""
@@ -275,7 +276,7 @@ def pipeline_options(args: Sequence[str]) -> PipelineOptions:
   return options
 
 
-def run(items: Sequence[media.MediaItem], config: predictors.PredictorConfig,
+def run(items: Sequence[input_listing.MediaItem], config: predictors.PredictorConfig,
         output_dir: str, options: media.OutputOptions,
         beam_options: Optional[PipelineOptions] = None) -> Dict[str, int]:
   """Unmixes `items` into `output_dir` on the runner of `beam_options` (default:
@@ -284,7 +285,7 @@ def run(items: Sequence[media.MediaItem], config: predictors.PredictorConfig,
   Returns:
     {status: inputs} for `STATUSES`, from the job's metrics.
   """
-  media.prepare_output_dir(items, output_dir)
+  input_listing.prepare_output_dir(items, output_dir)
   pipeline = beam.Pipeline(options=beam_options or pipeline_options([]))
   build(pipeline, items, config, output_dir, options)
   result = pipeline.run()

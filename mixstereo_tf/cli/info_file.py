@@ -14,6 +14,7 @@ import json
 import os
 from typing import Dict, FrozenSet, List, Optional
 
+from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import media
 from mixstereo_tf.unmixing import predictors
 
@@ -134,7 +135,7 @@ def _stale_files(path: str, name: str, files: List[str]) -> List[str]:
           and (old.startswith(name + '_') or old.startswith(name + '.'))]
 
 
-def write_info(output_dir: str, item: media.MediaItem, info: Dict[str, object],
+def write_info(output_dir: str, item: input_listing.MediaItem, info: Dict[str, object],
                request: Optional[Dict] = None) -> str:
   """Writes `<name>_info.json` beside an input's results: what was done to which file (its
   absolute path: a rerun from another folder reads it alike; its size and modification

@@ -2,7 +2,7 @@
 
 Images are read as viewers show them (EXIF orientation applied: `input_images.read_upright`).
 Outputs per input `<name>` in the output folder, where `<name>` is the file stem, or stem
-+ '_' + extension when inputs share a stem (`media.output_names`): the views
++ '_' + extension when inputs share a stem (`input_listing.output_names`): the views
 (`<name>_left.png` and `<name>_right.png` for the 'separate' layout, else
 `<name>_<layout>.png`), the colour-mapped left disparity `<name>_disparity.png` (over the
 range found, or a fixed one), KITTI-style `<name>_disparity16.png` (uint16, d * 256; only
@@ -53,6 +53,7 @@ from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import input_images
+from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import printable
@@ -158,7 +159,7 @@ def check_output_room(output_dir: str, error: Optional[BaseException] = None) ->
                      + keep)
 
 
-def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
+def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, output_dir: str,
                  layout: str, max_display_disparity: Optional[float],
                  report: UnmixReport, formats: Tuple[str, ...] = (),
                  request: Optional[Dict] = None) -> int:
@@ -186,7 +187,7 @@ def _unmix_image(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir:
   return 1
 
 
-def unmix_item(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
+def unmix_item(unmixer: predictors.Unmixer, item: input_listing.MediaItem, output_dir: str,
                options: media.OutputOptions, report: UnmixReport,
                progress_stream: Optional[TextIO] = None) -> int:
   """Unmixes one image or video into `output_dir` (existing); returns the frames unmixed.
@@ -251,7 +252,7 @@ def naming_input(path: str) -> Iterator[None]:
 def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
                  options: media.OutputOptions = media.OutputOptions(),
                  progress_stream: Optional[TextIO] = None) -> UnmixReport:
-  """Unmixes every image / video of `input_spec` (see `media.iter_inputs`) by `unmix_item`.
+  """Unmixes every image / video of `input_spec` (see `input_listing.iter_inputs`) by `unmix_item`.
 
   An input that cannot be read, unmixed or written is logged with its path and the reason,
   recorded in `UnmixReport.failures` and skipped; the others still run.
@@ -263,11 +264,11 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
 
   Raises:
     ValueError: `input_spec` names nothing usable, or `output_dir` cannot take the results
-      (`media.prepare_output_dir`).
+      (`input_listing.prepare_output_dir`).
   """
   earlier = info_file.read_earlier(output_dir)
-  items = list(media.iter_inputs(input_spec, earlier.names, earlier.outputs))
-  media.prepare_output_dir(items, output_dir)
+  items = list(input_listing.iter_inputs(input_spec, earlier.names, earlier.outputs))
+  input_listing.prepare_output_dir(items, output_dir)
   report = UnmixReport()
   run_start = time.perf_counter()
   bar = progress.ProgressBar(len(items), stream=progress_stream) if len(items) > 1 else None

@@ -14,6 +14,7 @@ from typing import Callable, Dict, List, Optional, TextIO, Tuple
 from absl import logging
 
 from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import stereo_formats
@@ -33,7 +34,7 @@ def default_settings(unmixer: predictors.Unmixer) -> Dict[str, object]:
           'max_disparity': unmixer.max_disparity, 'restore_colour': unmixer.restore_colour}
 
 
-def _video_outputs(item: media.MediaItem, output_dir: str, layout: str,
+def _video_outputs(item: input_listing.MediaItem, output_dir: str, layout: str,
                    formats: Tuple[str, ...]) -> Tuple[Dict[str, str], Tuple[str, ...],
                                                       Dict[str, str]]:
   """A video's ({key: output path}, the stereo formats drawn as videos, {format skipped:
@@ -103,7 +104,7 @@ def _drawn_when_done(pending, state: Dict[str, object], layout: str,
   return images
 
 
-def unmix_video(unmixer: predictors.Unmixer, item: media.MediaItem, output_dir: str,
+def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, output_dir: str,
                 layout: str, display: Tuple[float, float], settings: Dict[str, object],
                 video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
                 report, temporal_config: temporal.TemporalConfig,

@@ -17,6 +17,7 @@ from mixstereo_tf.cli import beam_batch
 from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
 
@@ -115,7 +116,7 @@ def test_input_list_names_like_the_cli(tmp_path):
     f.write('\n'.join(paths[:2]) + '\n\n  ' + paths[2] + '\n')
   items = beam_batch.list_inputs(None, str(tmp_path / 'list.txt.gz'))
   assert [item.path for item in items] == paths
-  assert [item.name for item in items] == media.output_names(paths) == [
+  assert [item.name for item in items] == input_listing.output_names(paths) == [
       'p_png', 'p_png_2', 'clip']
   assert [item.is_video for item in items] == [False, False, True]
   (tmp_path / 'remote.txt').write_text(f'{paths[0]}\ngs://bucket/scan.jpg\n')
@@ -143,7 +144,7 @@ def test_input_list_names_like_the_cli(tmp_path):
 
 
 def test_results_of_another_input_or_method_are_not_skipped_as_done(tmp_path):
-  item = media.MediaItem(str(tmp_path / 'in' / 'p.png'), False, 'p')
+  item = input_listing.MediaItem(str(tmp_path / 'in' / 'p.png'), False, 'p')
   mine = {'input': item.path, 'method': 'classical'}
   assert beam_batch.foreign_results(mine, item, 'classical') is None
   assert beam_batch.foreign_results({'files': []}, item, 'model') is None  # Older infos.

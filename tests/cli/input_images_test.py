@@ -8,7 +8,7 @@ from PIL import Image
 import pytest
 
 from mixstereo_tf.cli import input_images
-from mixstereo_tf.cli import media
+from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import mpo
 
 
@@ -18,7 +18,7 @@ def test_gif_images_are_inputs_and_animated_ones_are_refused(tmp_path):
   Image.fromarray(frames[0]).save(tmp_path / 'still.gif')
   Image.fromarray(frames[0]).save(tmp_path / 'wiggle.gif', save_all=True,
                                   append_images=[Image.fromarray(frames[1])], loop=0)
-  items = list(media.iter_inputs(str(tmp_path)))
+  items = list(input_listing.iter_inputs(str(tmp_path)))
   assert [i.name for i in items] == ['still', 'wiggle']
   expected = np.asarray(Image.open(tmp_path / 'still.gif').convert('RGB'))
   np.testing.assert_array_equal(input_images.read_image(str(tmp_path / 'still.gif')), expected)

@@ -575,7 +575,7 @@ def test_a_video_resumed_after_its_last_segment_records_what_was_done(tmp_path,
 
 def test_a_webm_video_is_unmixed_into_matroska_with_its_audio(tmp_path):
   """WebM holds no H.264: its results go in Matroska, WebM's parent format."""
-  source = _anaglyph_clip(tmp_path / 'clip.webm', 'gray', frames=6)
+  _anaglyph_clip(tmp_path / 'clip.webm', 'gray', frames=6)
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(
       'classical', mixture='gray', disparity_range=(0, 8)))
   report = unmix_files.unmix_inputs(unmixer, str(tmp_path), str(tmp_path / 'out'))
