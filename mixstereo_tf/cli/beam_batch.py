@@ -81,8 +81,9 @@ def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
       raise ValueError(f'--input_list: entry {number} of {path}, {entry}, is not a local '
                        'path; workers read inputs as local files (mount the file system '
                        'and list the mounted paths).')
-  return [input_listing.MediaItem(entry, os.path.splitext(entry)[1].lower() in input_listing.VIDEO_EXTENSIONS,
-                          name) for entry, name in zip(paths, input_listing.output_names(paths, earlier))]
+  videos = input_listing.VIDEO_EXTENSIONS
+  return [input_listing.MediaItem(entry, os.path.splitext(entry)[1].lower() in videos, name)
+          for entry, name in zip(paths, input_listing.output_names(paths, earlier))]
 
 
 def list_inputs(input_spec: Optional[str], input_list: Optional[str],
@@ -208,7 +209,8 @@ class _UnmixFn(beam.DoFn):
                              time.perf_counter() - start)
 
 
-def _failed(index: int, item: input_listing.MediaItem, why: str, seconds: float) -> Iterator[object]:
+def _failed(index: int, item: input_listing.MediaItem, why: str,
+            seconds: float) -> Iterator[object]:
   """`_UnmixFn`'s outputs for an input that failed: logged, counted, a dead letter and its
   summary row."""
   logging.error('failed %s: %s (to the dead-letter list)', item.path, why)

@@ -106,7 +106,8 @@ def test_output_names_are_unique_when_stems_collide():
                                                                      'a_png_3']
   # A fallback equal to another input's stem, and names differing only in case, are
   # numbered too (case-insensitive file systems would merge them).
-  assert input_listing.output_names(['a.jpg', 'a.png', 'a_png.bmp']) == ['a_jpg', 'a_png', 'a_png_2']
+  assert input_listing.output_names(['a.jpg', 'a.png', 'a_png.bmp']) == [
+      'a_jpg', 'a_png', 'a_png_2']
   assert input_listing.output_names(['A.png', 'a.png']) == ['A_png', 'a_png_2']
   # A numbered name never takes the plain name another input still wants.
   assert input_listing.output_names(['x/a.png', 'y/a.png', 'a_png_2.bmp']) == [
