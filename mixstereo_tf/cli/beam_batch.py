@@ -2,10 +2,10 @@
 
 The one module that imports Beam (the `.[beam]` extra), so the base install stays light.
 Each input gets exactly the outputs and `<name>_info.json` that `mixstereo-unmix` writes
-(`unmix_files`), names from `input_listing.output_names` over the whole input list (an input an
-earlier run into the folder named keeps its name, so a grown archive renames nothing). The
-unmixer is built once per worker (`_UnmixFn.setup`). Runs are resumable: an input whose outputs are
-complete (`completed_info`) is skipped. An input that fails with one of
+(`unmix_files`), names from `input_listing.output_names` over the whole input list (an
+input an earlier run into the folder named keeps its name, so a grown archive renames
+nothing). The unmixer is built once per worker (`_UnmixFn.setup`). Runs are resumable: an
+input whose outputs are complete (`completed_info`) is skipped. An input that fails with one of
 `unmix_files.INPUT_ERRORS` goes to the dead-letter list and the job goes on; any other
 error is a bug and fails the job, as in `mixstereo-unmix`. The output folder also gets
 `batch_summary.csv` (one row per input, `SUMMARY_FIELDS`) and `batch_dead_letters.csv`
@@ -88,8 +88,8 @@ def read_input_list(path: str, earlier: Optional[Dict[str, str]] = None
 
 def list_inputs(input_spec: Optional[str], input_list: Optional[str],
                 output_dir: str = '') -> List[input_listing.MediaItem]:
-  """The items of `--input` (as `mixstereo-unmix` expands it: `input_listing.iter_inputs`) or of
-  `--input_list` (`read_input_list`); exactly one must be given. Inputs an earlier run into
+  """The items of `--input` (as `mixstereo-unmix` expands it: `input_listing.iter_inputs`)
+  or of `--input_list` (`read_input_list`); exactly one must be given. Inputs an earlier run into
   `output_dir` named keep their names, and what they wrote is no input
   (`info_file.read_earlier`).
 
@@ -144,21 +144,17 @@ def foreign_results(info: Dict[str, object], item: input_listing.MediaItem, meth
   return None
 
 
-def _text(path: str) -> str:
-  """A path as UTF-8 text for the CSV files: the bytes of a name that is no UTF-8 (held as
-  surrogates, which Beam's coder and a UTF-8 file refuse) as \\xNN escapes."""
-  return printable.printable(path)
-
-
 def summary_row(item: input_listing.MediaItem, status: str, info: Dict[str, object],
                 seconds: float, error: str = '') -> Dict[str, object]:
   """One `SUMMARY_FIELDS` row from an input's info (`{}` when it failed)."""
   search = info.get('disparity_range')
-  return {'input': _text(item.path), 'name': _text(item.name), 'status': status,
+  # Names that are no UTF-8 as \xNN (`core.printable`): Beam's coder and the CSV refuse them.
+  text = printable.printable
+  return {'input': text(item.path), 'name': text(item.name), 'status': status,
           'mixture': info.get('mixture') or '', 'detected': info.get('detected') or '',
           'confidence': info.get('confidence', ''),
           'disparity_range': ','.join(str(v) for v in search) if search else '',
-          'seconds': round(seconds, 3), 'error': _text(error)}
+          'seconds': round(seconds, 3), 'error': text(error)}
 
 
 class _UnmixFn(beam.DoFn):
@@ -178,8 +174,8 @@ class _UnmixFn(beam.DoFn):
     os.makedirs(self._output_dir, exist_ok=True)
 
   def process(self, element: Tuple[int, bytes, bool, bytes]) -> Iterator[object]:
-    index, item = element[0], input_listing.MediaItem(os.fsdecode(element[1]), element[2],
-                                              os.fsdecode(element[3]))
+    index, item = element[0], input_listing.MediaItem(
+        os.fsdecode(element[1]), element[2], os.fsdecode(element[3]))
     info = completed_info(self._output_dir, item.name)
     other = info and foreign_results(info, item, self._unmixer.method, self._request)
     if other:  # Before the change test: a changed input is not redone with other flags.
@@ -215,8 +211,8 @@ def _failed(index: int, item: input_listing.MediaItem, why: str,
   summary row."""
   logging.error('failed %s: %s (to the dead-letter list)', item.path, why)
   beam.metrics.Metrics.counter('mixstereo', 'failed').inc()
-  yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': _text(item.path),
-                                                 'error': _text(why)}))
+  yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': printable.printable(item.path),
+                                                 'error': printable.printable(why)}))
   yield index, summary_row(item, 'failed', {}, seconds, why)
 
 

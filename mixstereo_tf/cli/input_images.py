@@ -1,7 +1,8 @@
 """Reading an input image file as viewers show it, and what its header says.
 
 One look at the header (`header`: a single Pillow open) gives the EXIF orientation, the
-colour profile and how many images the file holds. A file holding more than the one
+colour profile, whether colour is stored at half resolution and how many images the file
+holds. A file holding more than the one
 picture the tools unmix is named, not read silently:
   * an animated GIF, WebP or PNG (APNG) is refused: only its first frame would be read;
   * an MPO stereo pair (a 3D camera's, typed `Multi-Frame Image: (Disparity)`) is refused:
@@ -45,12 +46,14 @@ class ImageHeader:
     frames: images the file holds (an animation's frames, an MPO's images, TIFF pages).
     stereo_views: images of an MPO marked as views of a stereo pair (0 for other files).
     pages: a TIFF's full-resolution pages (1 for other files).
+    chroma_halved: colour stored at half the width or less (`image_io.chroma_halved`).
   """
   orientation: int = 1
   icc_profile: Optional[bytes] = None
   frames: int = 1
   stereo_views: int = 0
   pages: int = 1
+  chroma_halved: bool = False
 
 
 def _tiff_pages(image: Image.Image, frames: int) -> int:
@@ -85,6 +88,7 @@ def header(path: str) -> ImageHeader:
     with Image.open(path) as image:
       orientation = image.getexif().get(0x0112, 1)
       profile = image.info.get('icc_profile') or None
+      halved = image_io.chroma_halved_of(image, path)
       frames = int(getattr(image, 'n_frames', 1))
       stereo = _stereo_views(image, frames)
       pages = _tiff_pages(image, frames) if image.format == 'TIFF' and frames > 1 else 1
@@ -92,7 +96,7 @@ def header(path: str) -> ImageHeader:
     return ImageHeader()
   return ImageHeader(orientation if orientation in _ORIENTATIONS else 1,
                      profile if profile and profile[16:20] == b'RGB ' else None,
-                     frames, stereo, pages)
+                     frames, stereo, pages, halved)
 
 
 def _refuse_other_images(path: str, found: ImageHeader) -> None:

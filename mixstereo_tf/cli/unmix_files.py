@@ -57,7 +57,6 @@ from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import printable
-from mixstereo_tf.data import image_io
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import streams
 
@@ -143,20 +142,19 @@ def check_output_room(output_dir: str, error: Optional[BaseException] = None) ->
   bytes free, or when `error` (the input's) is a write error every later input would meet
   (`_STOPPING_ERRNOS`); called when an input failed (a full disk made every later input fail
   as a bad one, and the batch's summary was then not written)."""
-  keep = ('the finished inputs are kept: free some space and run the same command to '
-          'continue')
+  keep = 'the finished inputs are kept: {} and run the same command to continue'
   stopping = _stopping_error(error)
   if stopping:
     raise OutputFull(f'writing the results failed with "{stopping}" (the output folder '
                      f'{output_dir} or its disk), as it would for every later input; '
-                     + keep.replace('free some space', 'fix it'))
+                     + keep.format('fix it'))
   try:
     free = shutil.disk_usage(output_dir).free
   except OSError:
     return
   if free < OUTPUT_RESERVE:
     raise OutputFull(f'the output folder {output_dir} is on a full disk ({free} bytes free); '
-                     + keep)
+                     + keep.format('free some space'))
 
 
 def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, output_dir: str,
@@ -167,7 +165,7 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
   returns 1 (frame)."""
   found = input_images.header(item.path)
   image, orientation = input_images.read_upright(item.path, found)
-  stored = hints.stored(image_io.chroma_halved(item.path))  # A 4:2:0 JPEG (unmixing/chroma).
+  stored = hints.stored(found.chroma_halved)  # A 4:2:0 JPEG (unmixing/chroma).
   unmix_start = time.perf_counter()
   outputs = unmixer(image, **stored)
   report.unmix_seconds += time.perf_counter() - unmix_start

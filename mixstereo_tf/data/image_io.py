@@ -132,10 +132,15 @@ def chroma_halved(path: str) -> bool:
   WebP (always 4:2:0). False for other files and for files that do not open."""
   try:
     with Image.open(path) as image:
-      if image.format == 'JPEG':
-        return JpegImagePlugin.get_sampling(image) in (1, 2)
+      return chroma_halved_of(image, path)
   except (OSError, ValueError, SyntaxError):
     return False
+
+
+def chroma_halved_of(image: Image.Image, path: str) -> bool:
+  """`chroma_halved` of the file at `path`, already open as `image`."""
+  if image.format == 'JPEG':
+    return JpegImagePlugin.get_sampling(image) in (1, 2)
   return _lossy_webp(path)
 
 

@@ -10,6 +10,7 @@ import pytest
 from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import mpo
+from mixstereo_tf.data import image_io
 
 
 def test_gif_images_are_inputs_and_animated_ones_are_refused(tmp_path):
@@ -156,3 +157,15 @@ def test_reduced_resolution_tiff_pages_are_not_pages(tmp_path, caplog):
   caplog.set_level(logging.WARNING, logger='absl')
   found = input_images.header(path)
   assert found.frames == 2 and found.pages == (1 if reduced else 2)
+
+
+def test_the_header_says_what_image_io_says_of_the_stored_colour(tmp_path):
+  image = np.random.default_rng(0).integers(0, 256, (16, 16, 3), dtype=np.uint8)
+  for name, params in (('420.jpg', []), ('444.jpg', [cv2.IMWRITE_JPEG_SAMPLING_FACTOR,
+                                                     cv2.IMWRITE_JPEG_SAMPLING_FACTOR_444]),
+                       ('a.png', []), ('lossy.webp', [cv2.IMWRITE_WEBP_QUALITY, 80])):
+    path = str(tmp_path / name)
+    cv2.imwrite(path, image, params)
+    assert input_images.header(path).chroma_halved == image_io.chroma_halved(path), name
+  assert input_images.header(str(tmp_path / '420.jpg')).chroma_halved
+  assert not input_images.header(str(tmp_path / 'a.png')).chroma_halved
