@@ -26,6 +26,7 @@ from absl import flags
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.classical import matcher
+from mixstereo_tf.data import disparity_io
 from mixstereo_tf.data import image_io
 from mixstereo_tf.data import sources
 from mixstereo_tf.evaluation import metrics
@@ -80,7 +81,7 @@ def _real(shared_dir):
   if not shared_dir:
     return
   folder = os.path.join(shared_dir, realworld.SCENEFLOW_FRAME)
-  disparity = image_io.read_pfm(os.path.join(folder, 'disp_left.pfm')).astype(np.float32)
+  disparity = disparity_io.read_pfm(os.path.join(folder, 'disp_left.pfm')).astype(np.float32)
   yield 'sceneflow', {'left': image_io.read_image(os.path.join(folder, 'left.png')),
                       'right': image_io.read_image(os.path.join(folder, 'right.png')),
                       'disparity_left': disparity, 'valid_left': disparity > 0}

@@ -1,5 +1,6 @@
 """File writers the tests use to build tiny datasets."""
 
+import cv2
 import numpy as np
 
 
@@ -15,3 +16,14 @@ def write_pfm(path: str, array: np.ndarray) -> None:
   with open(path, 'wb') as f:
     f.write(header)
     f.write(np.flipud(array).astype('<f4').tobytes())
+
+
+def write_image(path, array: np.ndarray) -> str:
+  """cv2.imwrite(path, array) (BGR order, format from the extension), asserted; the path."""
+  assert cv2.imwrite(str(path), array), path
+  return str(path)
+
+
+def random_rgb(height: int = 8, width: int = 12, seed: int = 0) -> np.ndarray:
+  """A uint8 [height, width, 3] image of uniform random values."""
+  return np.random.default_rng(seed).integers(0, 256, (height, width, 3), dtype=np.uint8)

@@ -124,7 +124,7 @@ def read_upright(path: str, found: Optional[ImageHeader] = None) -> Tuple[np.nda
   _refuse_other_images(path, found)
   image = image_io.read_image(path)
   if found.orientation == 1 or os.path.splitext(path)[1].lower() in image_io.TIFF_EXTENSIONS:
-    return image, found.orientation  # TIFF decoders apply the tag (`image_io._read_raw`).
+    return image, found.orientation  # TIFF decoders apply the tag (`image_io.read_raw`).
   return np.ascontiguousarray(_ORIENTATIONS[found.orientation](image)), found.orientation
 
 

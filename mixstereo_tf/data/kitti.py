@@ -6,7 +6,7 @@ holds .png files, so each entry also matches the same stem with the other extens
 
 Stereo 2012/2015 ground truth: uint16 PNG, disparity = value / 256, 0 = invalid. `disp_occ`
 covers all pixels with ground truth and is the left disparity; `disp_noc` covers the
-non-occluded ones and is recorded as the `nonocc_left` mask (`image_io.read_mask` reads a
+non-occluded ones and is recorded as the `nonocc_left` mask (`disparity_io.read_mask` reads a
 16-bit file as "value > 0").
 """
 

@@ -29,6 +29,7 @@ from typing import Dict
 import cv2
 import numpy as np
 
+from mixstereo_tf.data import disparity_io
 from mixstereo_tf.data import image_io
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import sample
@@ -92,7 +93,7 @@ def _folder_pair(folder: str) -> Dict[str, np.ndarray]:
   if not os.path.isfile(path):
     raise ValueError(f'--real_pairs: {folder} has neither disp_left.pfm nor calib.txt and '
                      'lidar.bin (data/real_pairs.py lists the layouts).')
-  disparity = image_io.read_pfm(path).astype(np.float32)
+  disparity = disparity_io.read_pfm(path).astype(np.float32)
   pair = {'left': image_io.read_image(os.path.join(folder, 'left.png')),
           'right': image_io.read_image(os.path.join(folder, 'right.png')),
           'disparity_left': disparity, 'valid_left': np.isfinite(disparity) & (disparity > 0)}

@@ -34,7 +34,7 @@ class StereoSample:
     velodyne: optional path of the frame's Velodyne scan (KITTI raw).
     source: where the sample was listed, as 'file:line' or the scene folder, for errors.
     fit_disparity: when set, loading shrinks the pair by the smallest integer k with (largest
-      ground-truth disparity) / k <= fit_disparity - 1 (`image_io.shrink`), so a scene
+      ground-truth disparity) / k <= fit_disparity - 1 (`sample_files.shrink`), so a scene
       deeper than a network's levels (Middlebury 2014 at full size) fits them.
   """
   name: str

@@ -17,7 +17,7 @@ from typing import Callable, Dict, List, Optional, Tuple
 from absl import logging
 import numpy as np
 
-from mixstereo_tf.data import image_io
+from mixstereo_tf.data import sample_files
 from mixstereo_tf.data import kitti
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import records
@@ -196,4 +196,4 @@ def load_sample(record: records.StereoSample) -> Dict[str, np.ndarray]:
   """
   if record.is_virtual:
     return sample.load_virtual(record)
-  return image_io.load_file_sample(record)
+  return sample_files.load_file_sample(record)

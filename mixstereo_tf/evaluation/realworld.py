@@ -22,6 +22,7 @@ import numpy as np
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.data import disparity_io
 from mixstereo_tf.data import image_io
 from mixstereo_tf.data import sources
 from mixstereo_tf.evaluation import ffmpeg_encoder
@@ -41,7 +42,7 @@ def scenes(shared_dir: Optional[str],
     yield record.name, sources.load_sample(record)
   if shared_dir:
     folder = os.path.join(shared_dir, SCENEFLOW_FRAME)
-    disparity = image_io.read_pfm(os.path.join(folder, 'disp_left.pfm')).astype(np.float32)
+    disparity = disparity_io.read_pfm(os.path.join(folder, 'disp_left.pfm')).astype(np.float32)
     yield SCENEFLOW_FRAME, {
         'left': image_io.read_image(os.path.join(folder, 'left.png')),
         'right': image_io.read_image(os.path.join(folder, 'right.png')),

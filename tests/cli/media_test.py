@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.cli import media
-from mixstereo_tf.data import image_io
+from mixstereo_tf.data import disparity_io
 
 
 def _views(height=4, width=6):
@@ -63,7 +63,7 @@ def test_png16_round_trip_kitti_convention(tmp_path):
   assert raw.dtype == np.uint16
   # A zero disparity (a point at infinity) is valid: 1 / 256 px, not the invalid 0.
   np.testing.assert_array_equal(raw, [[1, 256, 2688, 9536], [0, 0, 65535, 1]])
-  decoded, valid = image_io.read_disparity(path, scale=256.0)
+  decoded, valid = disparity_io.read_disparity(path, scale=256.0)
   np.testing.assert_array_equal(valid, [[True, True, True, True], [False, False, True, True]])
   np.testing.assert_allclose(decoded[0], [0.0, 1.0, 10.5, 37.25], atol=1 / 256)
 
