@@ -20,8 +20,8 @@ from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
 from mixstereo_tf.core import hints
+from mixstereo_tf.unmixing import mixture_choice
 from mixstereo_tf.unmixing import predictors
-from mixstereo_tf.unmixing import steps
 from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import streams
@@ -185,11 +185,11 @@ def opening(unmixer: predictors.Unmixer, path: str) -> Dict[str, object]:
   last = None
   try:
     for index, frame in enumerate(frames):
-      if index % SCAN_STRIDE and unmixer.mixture == steps.AUTO:
+      if index % SCAN_STRIDE and unmixer.mixture == mixture_choice.AUTO:
         continue
       try:
         return unmixer(frame.image, **stored).get('info', {})
-      except steps.NoAnaglyphError as e:
+      except mixture_choice.NoAnaglyphError as e:
         if index + SCAN_STRIDE >= SCAN_FRAMES:
           raise ValueError(f'No frame of the first {SCAN_FRAMES} of {path} looks like an '
                            f'anaglyph ({e}); name its mixture (--mixture).') from None

@@ -34,7 +34,7 @@ class FrameHint:
       range estimation and its matching; None: its own (they follow the core count, and
       the aggregation differs near strip borders); 1: the same result on every machine.
     fallback_mixture: 'auto' only: the encoding a frame in which detection finds no anaglyph
-      is read as (`steps.resolve_mixture`): the video's last shot's, or the first frame's
+      is read as (`mixture_choice.resolve_mixture`): the video's last shot's, or the first frame's
       with one (black frames, fades, titles); None: such a frame fails.
     mixing_weight: double images: the left view's weight a of I = a L + (1 - a) R; None:
       1/2 (`--mixture=diplopia` exactly); 'auto': estimated from the frame; a number in

@@ -26,6 +26,7 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import families
+from mixstereo_tf.unmixing import mixture_choice
 from mixstereo_tf.unmixing import shipped
 from mixstereo_tf.unmixing import steps
 from mixstereo_tf.unmixing import unmixer
@@ -147,7 +148,7 @@ def _classical(config: PredictorConfig) -> Unmixer:
     raise ValueError("PredictorConfig.method='classical' needs PredictorConfig.mixture (a "
                      "name or 'auto').")
   supported = families.classical_names()
-  if config.mixture not in supported + (steps.AUTO,):
+  if config.mixture not in supported + (mixture_choice.AUTO,):
     raise ValueError(f"PredictorConfig.method='classical' does not support "
                      f'PredictorConfig.mixture={config.mixture}; supported: '
                      f'{", ".join(supported)}.')
@@ -166,7 +167,7 @@ def _sgbm(config: PredictorConfig) -> Unmixer:
   if config.mixture is None:
     raise ValueError("PredictorConfig.method='sgbm' needs PredictorConfig.mixture (an "
                      "anaglyph encoding or 'auto').")
-  if config.mixture not in supported + (steps.AUTO,):
+  if config.mixture not in supported + (mixture_choice.AUTO,):
     raise ValueError(f"PredictorConfig.method='sgbm' needs PredictorConfig.mixture, an "
                      f"anaglyph encoding or 'auto' (got {config.mixture}); supported: "
                      f'{", ".join(supported)}.')
@@ -205,14 +206,14 @@ def build_unmixer(config: PredictorConfig) -> Unmixer:
   if config.method not in _BUILDERS:
     raise ValueError(f'Unknown PredictorConfig.method={config.method!r}; valid: '
                      f'{", ".join(METHODS)}.')
-  if config.mixture not in (None, steps.AUTO):
+  if config.mixture not in (None, mixture_choice.AUTO):
     with _naming(config, 'mixture'):
       mixtures.get_mixture(config.mixture)  # ValueError listing the valid names.
   if config.method != 'model' and config.pretrained:
     raise ValueError("PredictorConfig.pretrained applies to method 'model' only.")
   if config.method != 'model' and config.restore_colour is not None:
     raise ValueError("PredictorConfig.restore_colour applies to method 'model' only.")
-  if (config.mixing_weight is not None and config.mixture not in (None, steps.AUTO)
+  if (config.mixing_weight is not None and config.mixture not in (None, mixture_choice.AUTO)
       and not families.of(config.mixture).weighted):
     raise ValueError(f'PredictorConfig.mixing_weight applies to double images; mixture '
                      f'{config.mixture!r} has no mixing weight.')

@@ -23,6 +23,7 @@ from mixstereo_tf.models import refiner
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import learned_diplopia
 from mixstereo_tf.unmixing import learned_matching
+from mixstereo_tf.unmixing import mixture_choice
 from mixstereo_tf.unmixing import steps
 from mixstereo_tf.unmixing import unmixer
 
@@ -137,7 +138,7 @@ def pretrained_unmixer(entry: pretrained.Pretrained,
   if lacking:
     raise ValueError(f'{entry.name}: mixtures {", ".join(lacking)} have no {entry.kind} stage.')
   if config.mixture is None and len(trained) > 1:  # Several encodings: detect each image's.
-    config = dataclasses.replace(config, mixture=steps.AUTO)
+    config = dataclasses.replace(config, mixture=mixture_choice.AUTO)
   requested = unmixer.check_mixture(config, trained)
   built = stage(entry, base and stage(base))
 

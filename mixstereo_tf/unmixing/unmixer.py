@@ -15,6 +15,7 @@ from mixstereo_tf.artifacts import runs
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.core import hints
 from mixstereo_tf.unmixing import families
+from mixstereo_tf.unmixing import mixture_choice
 from mixstereo_tf.unmixing import steps
 
 Outputs = Dict[str, np.ndarray]
@@ -135,7 +136,7 @@ def check_mixture(config: PredictorConfig, trained: Sequence[str]) -> str:
     ValueError: an encoding the model was not trained on.
   """
   requested = config.mixture or trained[0]
-  if requested != steps.AUTO and requested not in trained:
+  if requested != mixture_choice.AUTO and requested not in trained:
     raise ValueError(f'PredictorConfig.mixture={requested} but the model was trained on '
                      f'{", ".join(repr(m) for m in trained)} mixtures '
                      f'({config.saved_model or config.checkpoint or "this model"}).')
@@ -166,7 +167,7 @@ def model_unmixer(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], run_info: 
   warn_if_untrained(run_info, config.checkpoint or config.saved_model)
   levels = run_info.model_config.max_disparity
   restore = config.restore_colour
-  named = [requested] if requested != steps.AUTO else list(trained)
+  named = [requested] if requested != mixture_choice.AUTO else list(trained)
   if restore and not any(families.of(m).restores_views for m in named):
     raise ValueError(f'PredictorConfig.restore_colour=True restores anaglyph views; '
                      f'{", ".join(repr(m) for m in named)} mixtures have no channels to '
@@ -202,7 +203,7 @@ def image_unmixer(method: str, requested: str, allowed: Sequence[str],
 
 def family_of(mixture: str) -> families.Family:
   """The family of a mixture name; for 'auto', the one detection finds."""
-  return families.detected() if mixture == steps.AUTO else families.of(mixture)
+  return families.detected() if mixture == mixture_choice.AUTO else families.of(mixture)
 
 
 def classical_range(mixture: str) -> Tuple[int, int]:

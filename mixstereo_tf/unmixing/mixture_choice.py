@@ -1,0 +1,120 @@
+"""Step 1 of unmixing (`steps`): the encoding an image is unmixed with, the one asked for or
+the one detected (`detection`), and what the detection found (`info`).
+
+'auto' takes the detected encoding (or a fallback where none is found: a double image
+predictor's 'diplopia', a video's encoding for its black frames); a named encoding the
+detector confidently contradicts is logged as a warning; a detection that is doubtful or
+that another encoding fits as well is recorded in `info` and warned about.
+"""
+
+from typing import Dict, Optional, Sequence, Tuple
+
+from absl import logging
+import numpy as np
+
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.unmixing import detection
+from mixstereo_tf.unmixing import families
+
+AUTO = 'auto'
+# A named encoding the detector contradicts with at least this confidence is warned about;
+# one of other glasses (family), at this confidence.
+WARN_CONFIDENCE = 0.9
+FAMILY_WARN_CONFIDENCE = 0.85
+
+
+def settle(image: np.ndarray, name: str, info: Dict[str, object],
+            may_be: str) -> Tuple[str, Dict[str, object]]:
+  """(encoding, detection info) of a frame of a shot read as `name` that may be `may_be`:
+  `may_be` where the frame's detection gives it (its colours are more than `name` can
+  explain), else the shot's."""
+  found = detection.detect(image)
+  return (may_be, _detection_info(found)) if found.name == may_be else (name, info)
+
+
+def _detection_info(found: detection.Detection) -> Dict[str, object]:
+  """The info a frame records of its detection: {'detected', 'confidence'}, and where it
+  finds no anaglyph {'detection': why} (the confidence is then that there is none)."""
+  info = {'detected': found.name, 'confidence': round(found.confidence, 3)}
+  if found.name is None:
+    info['detection'] = f'no anaglyph ({found.reason})'
+  return info
+
+
+class NoAnaglyphError(ValueError):
+  """'auto' found no anaglyph in an image (or it is too small to tell) and has no fallback."""
+
+
+def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
+                    weighted: bool = False, fallback: Optional[str] = None
+                    ) -> Tuple[str, Dict[str, object]]:
+  """(encoding to unmix with, detection info) for an image.
+
+  Args:
+    image: uint8 [H, W, 3] mixture.
+    requested: a mixture name, or 'auto' to detect it; an image 'auto' finds no anaglyph
+      in is read as the one encoding of `allowed` detection cannot tell, if there is one
+      (`families.undetectable`: a double image model's 'diplopia').
+    allowed: the encodings the predictor can unmix.
+    weighted: a mixing weight was given (only weighted encodings take one).
+    fallback: for 'auto', the encoding an image with no anaglyph found (or too small or
+      dark to tell) is read as: a video's (`hints.FrameHint.fallback_mixture`: black
+      frames, fades); its info then says 'undecided' (a shot is not decided by it).
+
+  Raises:
+    NoAnaglyphError: 'auto' on an image that is not an anaglyph or too small to tell.
+    ValueError: an encoding outside `allowed`.
+  """
+  try:
+    found = detection.detect(image)
+  except ValueError as e:  # Too small or thin to detect: a named mixture needs no check.
+    if requested == AUTO and not fallback:
+      raise NoAnaglyphError(f'{e} The encoding cannot be detected on it: name its mixture '
+                            '(e.g. PredictorConfig.mixture=anaglyph).') from None
+    if requested == AUTO:
+      return fallback, {'detected': None, 'detection': str(e), 'read_as': fallback,
+                        'undecided': True}
+    return families.allowed_name(requested, allowed), {'detected': None, 'detection': str(e)}
+  info = _detection_info(found)
+  if requested == AUTO:
+    only = families.undetectable(allowed, weighted)
+    if found.name is None and (only or fallback):
+      why = ('a mixing weight given' if weighted else 'the only encoding this predictor '
+             'takes') if only else "the video's encoding"
+      return only or fallback, dict(info, read_as=f'{only or fallback}: no anaglyph found, '
+                                    f'{why}', **({} if only else {'undecided': True}))
+    if found.name is None:
+      raise NoAnaglyphError(f'This image does not look like an anaglyph ({found.reason}); '
+                            'if it is a double image, name it (PredictorConfig.mixture='
+                            'diplopia); a single photo or a side-by-side pair is no mixture.')
+    name = found.name
+    if found.doubt:
+      info['detection_doubt'] = found.doubt
+      logging.warning('Detected %s, but %s: if the image is no anaglyph, its results mean '
+                      'nothing.', name, found.doubt)
+    if found.also_fits:
+      info['also_fits'] = found.also_fits
+      logging.warning('Detected %s, the smallest encoding that explains the image; %s fits '
+                      'it as well. Name the mixture if you know it: %s read as %s loses '
+                      'much more colour than the other way round.', name, found.also_fits,
+                      found.also_fits, name)
+  else:
+    name = requested
+    if _contradicts(found, name):
+      logging.warning('The image was given as %r, but the detector %s (confidence %.2f).',
+                      name, f'reads it as {found.name!r}' if found.name else
+                      'finds no anaglyph in it', found.confidence)
+  return families.allowed_name(name, allowed), info
+
+
+def _contradicts(found: detection.Detection, name: str) -> bool:
+  """Whether a detection is sure enough that the named encoding `name` is wrong: another
+  encoding at WARN_CONFIDENCE, or one of other glasses at FAMILY_WARN_CONFIDENCE (a family
+  is read more surely than the encoding within it: a clean red-cyan anaglyph reads at
+  0.89, a random-noise test image as green-magenta at 0.77)."""
+  if found.name == name or (found.name is None and not families.of(name).detectable):
+    return False
+  other_glasses = (found.name is not None and mixtures.get_mixture(found.name).family
+                   != mixtures.get_mixture(name).family)
+  return found.confidence >= WARN_CONFIDENCE or (
+      other_glasses and found.confidence >= FAMILY_WARN_CONFIDENCE)
