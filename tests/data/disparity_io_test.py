@@ -6,6 +6,9 @@ import pytest
 from mixstereo_tf.data import disparity_io
 from tests import data_helpers
 
+_write = data_helpers.write_image
+_rgb = data_helpers.random_rgb
+
 
 def test_pfm_round_trip_keeps_inf_nan_and_row_order(tmp_path):
   gray = np.arange(12, dtype=np.float32).reshape(3, 4) - 2.5
@@ -37,18 +40,18 @@ def test_pfm_bad_input(tmp_path):
 
 def test_kitti_16_bit_disparity(tmp_path):
   stored = np.array([[256 * 5, 0], [256 * 7 + 128, 1]], np.uint16)
-  disparity, valid = disparity_io.read_disparity(data_helpers.write_image(tmp_path / 'd.png', stored), 256.0)
+  disparity, valid = disparity_io.read_disparity(_write(tmp_path / 'd.png', stored), 256.0)
   assert disparity.dtype == np.float32
   np.testing.assert_allclose(disparity, [[5, 0], [7.5, 1 / 256]])
   np.testing.assert_array_equal(valid, [[True, False], [True, True]])
   # Saved as 8 bits by mistake: every disparity would read below 1 px.
-  eight = data_helpers.write_image(tmp_path / 'd8.png', np.array([[200, 0]], np.uint8))
+  eight = _write(tmp_path / 'd8.png', np.array([[200, 0]], np.uint8))
   with pytest.raises(ValueError, match=r'd8.png is an 8-bit image.*at most 1.00 px'):
     disparity_io.read_disparity(eight, 256.0)
 
 
 def test_8_bit_and_pfm_disparity(tmp_path):
-  pgm = data_helpers.write_image(tmp_path / 'truedisp.pgm', np.array([[80, 0, 16]], np.uint8))
+  pgm = _write(tmp_path / 'truedisp.pgm', np.array([[80, 0, 16]], np.uint8))
   disparity, valid = disparity_io.read_disparity(pgm, 16.0)
   np.testing.assert_allclose(disparity, [[5, 0, 1]])
   np.testing.assert_array_equal(valid, [[True, False, True]])
@@ -59,13 +62,13 @@ def test_8_bit_and_pfm_disparity(tmp_path):
   np.testing.assert_array_equal(valid, [[True, False, False, False]])
   with pytest.raises(ValueError, match='positive.*disp0.pfm'):
     disparity_io.read_disparity(pfm, 0.0)
-  color = data_helpers.write_image(tmp_path / 'c.png', data_helpers.random_rgb())
+  color = _write(tmp_path / 'c.png', _rgb())
   with pytest.raises(ValueError, match='single-channel.*c.png'):
     disparity_io.read_disparity(color, 1.0)
 
 
 def test_read_mask(tmp_path):
-  mask = disparity_io.read_mask(data_helpers.write_image(tmp_path / 'm.png', np.array([[255, 128, 0]], np.uint8)))
+  mask = disparity_io.read_mask(_write(tmp_path / 'm.png', np.array([[255, 128, 0]], np.uint8)))
   np.testing.assert_array_equal(mask, [[True, False, False]])
-  noc = disparity_io.read_mask(data_helpers.write_image(tmp_path / 'noc.png', np.array([[0, 1, 300]], np.uint16)))
+  noc = disparity_io.read_mask(_write(tmp_path / 'noc.png', np.array([[0, 1, 300]], np.uint16)))
   np.testing.assert_array_equal(noc, [[False, True, True]])

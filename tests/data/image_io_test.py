@@ -11,6 +11,9 @@ import pytest
 from mixstereo_tf.data import image_io
 from tests import data_helpers
 
+_write = data_helpers.write_image
+_rgb = data_helpers.random_rgb
+
 
 def _palette_png(path, palette, indices):
   """Writes an indexed-colour (PNG colour type 3) file by hand, without PIL."""
@@ -29,8 +32,8 @@ def _palette_png(path, palette, indices):
 
 @pytest.mark.parametrize('ext', ['.png', '.ppm', '.jpg'])
 def test_read_image_returns_rgb(tmp_path, ext):
-  rgb = data_helpers.random_rgb()
-  path = data_helpers.write_image(tmp_path / f'a{ext}', rgb[:, :, ::-1])  # cv2 writes BGR.
+  rgb = _rgb()
+  path = _write(tmp_path / f'a{ext}', rgb[:, :, ::-1])  # cv2 writes BGR.
   image = image_io.read_image(path)
   assert image.dtype == np.uint8 and image.shape == (8, 12, 3)
   if ext == '.jpg':  # Lossy: only check the channel order survived.
@@ -42,16 +45,16 @@ def test_read_image_returns_rgb(tmp_path, ext):
 
 @pytest.mark.parametrize('ext', ['.png', '.pgm'])
 def test_gray_becomes_three_equal_channels(tmp_path, ext):
-  gray = data_helpers.random_rgb()[:, :, 0]
-  image = image_io.read_image(data_helpers.write_image(tmp_path / f'g{ext}', gray))
+  gray = _rgb()[:, :, 0]
+  image = image_io.read_image(_write(tmp_path / f'g{ext}', gray))
   for c in range(3):
     np.testing.assert_array_equal(image[:, :, c], gray)
 
 
 def test_rgba_drops_alpha(tmp_path):
-  rgb = data_helpers.random_rgb()
+  rgb = _rgb()
   bgra = np.concatenate([rgb[:, :, ::-1], np.full((8, 12, 1), 7, np.uint8)], axis=2)
-  np.testing.assert_array_equal(image_io.read_image(data_helpers.write_image(tmp_path / 'a.png', bgra)), rgb)
+  np.testing.assert_array_equal(image_io.read_image(_write(tmp_path / 'a.png', bgra)), rgb)
 
 
 def test_palette_png_is_expanded(tmp_path):
@@ -63,12 +66,12 @@ def test_palette_png_is_expanded(tmp_path):
 
 def test_16_bit_scaled_by_257_with_rounding(tmp_path):
   values = np.array([[0, 65535, 257 * 3, 257 * 3 + 128, 257 * 3 + 129]], np.uint16)
-  image = image_io.read_image(data_helpers.write_image(tmp_path / 'g16.png', values))
+  image = image_io.read_image(_write(tmp_path / 'g16.png', values))
   np.testing.assert_array_equal(image[0, :, 1], [0, 255, 3, 3, 4])
   color = np.zeros((1, 1, 3), np.uint16)
   color[0, 0] = [257 * 10, 257 * 20, 257 * 30]  # BGR on disk.
   np.testing.assert_array_equal(
-      image_io.read_image(data_helpers.write_image(tmp_path / 'c16.ppm', color))[0, 0], [30, 20, 10])
+      image_io.read_image(_write(tmp_path / 'c16.ppm', color))[0, 0], [30, 20, 10])
 
 
 def test_missing_and_undecodable_images_name_the_path(tmp_path):
@@ -82,8 +85,8 @@ def test_missing_and_undecodable_images_name_the_path(tmp_path):
 
 
 def test_find_image_swaps_jpg_and_png(tmp_path):
-  png = data_helpers.write_image(tmp_path / 'x.png', data_helpers.random_rgb())
-  jpg = data_helpers.write_image(tmp_path / 'y.jpg', data_helpers.random_rgb())
+  png = _write(tmp_path / 'x.png', _rgb())
+  jpg = _write(tmp_path / 'y.jpg', _rgb())
   assert image_io.find_image(png) == png
   assert image_io.find_image(str(tmp_path / 'x.jpg')) == png
   assert image_io.find_image(str(tmp_path / 'y.png')) == jpg

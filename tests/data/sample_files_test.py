@@ -8,10 +8,13 @@ from mixstereo_tf.data import sample_files
 from mixstereo_tf.data import sources
 from tests import data_helpers
 
+_write = data_helpers.write_image
+_rgb = data_helpers.random_rgb
+
 
 def _sample_files(tmp_path, height=8, width=12):
-  left = data_helpers.write_image(tmp_path / 'l.png', data_helpers.random_rgb(height, width, 1)[:, :, ::-1])
-  right = data_helpers.write_image(tmp_path / 'r.png', data_helpers.random_rgb(height, width, 2)[:, :, ::-1])
+  left = _write(tmp_path / 'l.png', _rgb(height, width, 1)[:, :, ::-1])
+  right = _write(tmp_path / 'r.png', _rgb(height, width, 2)[:, :, ::-1])
   return left, right
 
 
@@ -27,16 +30,16 @@ def test_load_sample_keys_dtypes_and_masks(tmp_path):
   disc[:, 2:6] = 255
   disc[:, 6] = 128
   sample = records.StereoSample(
-      'a', left, right, disparity_left=data_helpers.write_image(tmp_path / 'd.png', disp), disparity_scale=256,
-      all_left=data_helpers.write_image(tmp_path / 'all.png', all_mask),
-      nonocc_left=data_helpers.write_image(tmp_path / 'noc.png', nonocc),
-      disc_left=data_helpers.write_image(tmp_path / 'disc.png', disc), source='list.txt:3')
+      'a', left, right, disparity_left=_write(tmp_path / 'd.png', disp), disparity_scale=256,
+      all_left=_write(tmp_path / 'all.png', all_mask),
+      nonocc_left=_write(tmp_path / 'noc.png', nonocc),
+      disc_left=_write(tmp_path / 'disc.png', disc), source='list.txt:3')
   loaded = sources.load_sample(sample)
   assert set(loaded) == set(records.LOADED_KEYS)
   for key, dtype in records.LOADED_KEYS.items():
     assert loaded[key].dtype == dtype, key
     assert loaded[key].shape[:2] == (8, 12), key
-  np.testing.assert_array_equal(loaded['left'], data_helpers.random_rgb(8, 12, 1))
+  np.testing.assert_array_equal(loaded['left'], _rgb(8, 12, 1))
   expected_valid = np.zeros((8, 12), bool)
   expected_valid[:, 4:11] = True
   np.testing.assert_array_equal(loaded['valid_left'], expected_valid)
@@ -63,14 +66,14 @@ def test_load_sample_without_gt_or_masks(tmp_path):
 
 def test_load_sample_size_mismatches_name_the_files(tmp_path):
   left, _ = _sample_files(tmp_path)
-  small = data_helpers.write_image(tmp_path / 'small.png', data_helpers.random_rgb(8, 10))
+  small = _write(tmp_path / 'small.png', _rgb(8, 10))
   with pytest.raises(ValueError, match=r'scene7.*l\.png.*small\.png'):
     sample_files.load_file_sample(records.StereoSample('a', left, small, source='scene7'))
-  disp = data_helpers.write_image(tmp_path / 'disp.png', np.zeros((4, 12), np.uint16))
+  disp = _write(tmp_path / 'disp.png', np.zeros((4, 12), np.uint16))
   with pytest.raises(ValueError, match=r'scene7.*disp\.png'):
     sample_files.load_file_sample(records.StereoSample('a', left, left, disparity_left=disp,
                                                    source='scene7'))
-  disc = data_helpers.write_image(tmp_path / 'disc.png', np.zeros((8, 10), np.uint8))
+  disc = _write(tmp_path / 'disc.png', np.zeros((8, 10), np.uint8))
   with pytest.raises(ValueError, match=r'scene7.*mask .*disc\.png'):
     sample_files.load_file_sample(records.StereoSample('a', left, left, disc_left=disc,
                                                    source='scene7'))

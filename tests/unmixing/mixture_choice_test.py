@@ -96,11 +96,12 @@ def test_named_glasses_the_detector_contradicts_warn_below_the_encoding_threshol
   found = detection.Detection('anaglyph', 0.87, 'red_cyan channels', {})
   monkeypatch.setattr(detection, 'detect', lambda image: found)
   image = np.zeros((32, 32, 3), np.uint8)
-  mixture_choice.resolve_mixture(image, 'half_color', mixtures.ANAGLYPH_NAMES)  # Same glasses: kept.
+  # Same glasses: kept.
+  mixture_choice.resolve_mixture(image, 'half_color', mixtures.ANAGLYPH_NAMES)
   assert not warnings
   for named in ('green_magenta', 'diplopia'):
-    assert mixture_choice.resolve_mixture(image, named, mixtures.ANAGLYPH_NAMES + ('diplopia',))[0] == (
-        named)
+    allowed = mixtures.ANAGLYPH_NAMES + ('diplopia',)
+    assert mixture_choice.resolve_mixture(image, named, allowed)[0] == named
   assert len(warnings) == 2 and all("reads it as 'anaglyph' (confidence 0.87)" in w
                                     for w in warnings)
   warnings.clear()
