@@ -105,11 +105,6 @@ class MixtureSpec:
     return self._copied(self.right_matrix, self.left_matrix)
 
   @property
-  def is_channel_anaglyph(self) -> bool:
-    """True when each view keeps at least one exact channel."""
-    return bool(self.left_channels) and bool(self.right_channels)
-
-  @property
   def transmits_colour(self) -> bool:
     """False when the mixture holds only one colour combination of each view (gray
     anaglyphs: luminance only), so no view's colour can be recovered."""
