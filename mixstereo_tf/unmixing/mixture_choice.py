@@ -21,10 +21,15 @@ AUTO = 'auto'
 # one of other glasses (family), at this confidence.
 WARN_CONFIDENCE = 0.9
 FAMILY_WARN_CONFIDENCE = 0.85
+# Views' RGB PSNR lost (dB) when a colour anaglyph is read as the smaller encoding that also
+# explains it, and the reverse: means over photo warps stored as png and JPEG (DESIGN.md,
+# unmixing: what detection misreads cost). Said in the warning of such a tie.
+TIE_COST_DB = {'half_color': (13.0, 6.0), 'green_magenta_half': (7.0, 5.5),
+               'amber_blue_half': (11.0, 1.0)}
 
 
 def settle(image: np.ndarray, name: str, info: Dict[str, object],
-            may_be: str) -> Tuple[str, Dict[str, object]]:
+           may_be: str) -> Tuple[str, Dict[str, object]]:
   """(encoding, detection info) of a frame of a shot read as `name` that may be `may_be`:
   `may_be` where the frame's detection gives it (its colours are more than `name` can
   explain), else the shot's."""
@@ -95,9 +100,8 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
     if found.also_fits:
       info['also_fits'] = found.also_fits
       logging.warning('Detected %s, the smallest encoding that explains the image; %s fits '
-                      'it as well. Name the mixture if you know it: %s read as %s loses '
-                      'much more colour than the other way round.', name, found.also_fits,
-                      found.also_fits, name)
+                      'it as well. Name the mixture if you know it%s', name, found.also_fits,
+                      _tie_cost(name, found.also_fits))
   else:
     name = requested
     if _contradicts(found, name):
@@ -105,6 +109,15 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
                       name, f'reads it as {found.name!r}' if found.name else
                       'finds no anaglyph in it', found.confidence)
   return families.allowed_name(name, allowed), info
+
+
+def _tie_cost(name: str, colour: str) -> str:
+  """The end of the tie warning: what each misread costs (`TIE_COST_DB`), where measured."""
+  if name not in TIE_COST_DB:
+    return '.'
+  to_smaller, to_colour = TIE_COST_DB[name]
+  return (f': on photo warps, reading {colour} as {name} lost about {to_smaller:g} dB of the '
+          f"views' PSNR, reading {name} as {colour} about {to_colour:g} dB.")
 
 
 def _contradicts(found: detection.Detection, name: str) -> bool:
