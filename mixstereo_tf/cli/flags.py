@@ -10,19 +10,18 @@ import dataclasses
 import functools
 import os
 import sys
-from typing import Any, Dict, Optional, Sequence, Tuple
+from typing import Any, Dict, Optional, Tuple
 
 from absl import app
 from absl import flags
 
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import pretrained
-from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.cli import flag_parsers
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import disparity_range
-from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import temporal
@@ -129,34 +128,6 @@ def define_checkpoint() -> None:
                       'or a checkpoint prefix such as runs/demo/ckpt-7000.')
 
 
-class SwapEyesParser(flags.ArgumentParser):
-  """--swap_eyes: a boolean flag (--swap_eyes, --noswap_eyes) that also takes 'auto'."""
-
-  def parse(self, argument):
-    """False, True or eye_order.AUTO from absl's boolean spellings or 'auto'."""
-    if isinstance(argument, str) and argument.strip().lower() == eye_order.AUTO:
-      return eye_order.AUTO
-    try:
-      return flags.BooleanParser().parse(argument)
-    except ValueError:
-      raise ValueError(f'expected true, false or {eye_order.AUTO!r}, got {argument!r}') from None
-
-  def flag_type(self):
-    return 'bool or auto'
-
-
-def parse_mixing_weight(text: Optional[str]):
-  """--mixing_weight: None (unset: 1/2), 'auto', or a number in (0, 1); UsageError naming
-  the flag otherwise."""
-  if text is None or text.strip().lower() == diplopia_layers.AUTO:
-    return None if text is None else diplopia_layers.AUTO
-  try:
-    return diplopia_layers.check_weight(float(text))
-  except ValueError as e:
-    raise app.UsageError(f"--mixing_weight: expected 'auto' or a number in (0, 1), got "
-                         f'{text!r} ({e})') from None
-
-
 @functools.lru_cache(maxsize=None)
 def define_predictor() -> None:
   """The predictor group: --method, --checkpoint, --saved_model, --mixture, --restore_colour,
@@ -184,7 +155,7 @@ def define_predictor() -> None:
                        "A model's input is reduced to at most this many pixels.",
                        lower_bound=1)
   flags.DEFINE_flag(flags.Flag(
-      SwapEyesParser(), flags.ArgumentSerializer(), 'swap_eyes', defaults.swap_eyes,
+      flag_parsers.SwapEyesParser(), flags.ArgumentSerializer(), 'swap_eyes', defaults.swap_eyes,
       "Anaglyphs with the left eye in the cyan (second filter's) channels: cyan-red glasses, "
       "mirrored scans; --swap_eyes=auto detects it per image (a video: per shot) from the "
       "texture of the pixels hidden beside depth edges; the info JSON records the order "
@@ -271,7 +242,8 @@ def predictor_config() -> predictors.PredictorConfig:
       method=FLAGS.method, checkpoint=FLAGS.checkpoint, saved_model=FLAGS.saved_model,
       mixture=FLAGS.mixture, restore_colour=FLAGS.restore_colour, disparity_range=search,
       max_network_pixels=FLAGS.max_network_pixels, pretrained=FLAGS.pretrained,
-      swap_eyes=FLAGS.swap_eyes, mixing_weight=parse_mixing_weight(FLAGS.mixing_weight))
+      swap_eyes=FLAGS.swap_eyes,
+      mixing_weight=flag_parsers.parse_mixing_weight(FLAGS.mixing_weight))
 
 
 def unmix_predictor_config() -> predictors.PredictorConfig:
@@ -293,24 +265,4 @@ def middlebury_scales() -> Tuple[Tuple[str, float], ...]:
   Raises:
     app.UsageError: an item is not scene:scale with a number as scale.
   """
-  return parse_scene_scales(FLAGS.middlebury_scale)
-
-
-def parse_scene_scales(items: Sequence[str]) -> Tuple[Tuple[str, float], ...]:
-  """Parses `scene:scale` items (['tsukuba:16', 'venus:8']) into (scene, scale) pairs.
-
-  Scales are checked by the configs (positive, each scene once).
-
-  Raises:
-    app.UsageError: an item is not `scene:scale` with a number as scale, naming the item.
-  """
-  pairs = []
-  for item in items:
-    scene, _, value = item.rpartition(':')
-    try:
-      scale = float(value)
-    except ValueError:
-      raise app.UsageError(f'--middlebury_scale: expected scene:scale with a number as scale '
-                           f'(e.g. tsukuba:16), got {item!r}.') from None
-    pairs.append((scene.strip(), scale))
-  return tuple(pairs)
+  return flag_parsers.parse_scene_scales(FLAGS.middlebury_scale)

@@ -6,7 +6,6 @@ import copy
 import importlib
 import importlib.util
 import os
-import re
 import subprocess
 import sys
 
@@ -17,15 +16,6 @@ import pytest
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.unmixing import predictors
-
-
-def test_scale_items_are_parsed_or_named():
-  assert cli_flags.parse_scene_scales(['tsukuba:16', ' Venus : 8.5']) == (('tsukuba', 16.0),
-                                                                         ('Venus', 8.5))
-  assert cli_flags.parse_scene_scales([]) == ()
-  for item in ('tsukuba', 'tsukuba:abc', 'venus:'):
-    with pytest.raises(app.UsageError, match=rf"--middlebury_scale: .*{re.escape(repr(item))}"):
-      cli_flags.parse_scene_scales(['cones:4', item])
 
 
 def test_groups_declare_each_flag_once():
