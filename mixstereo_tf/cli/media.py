@@ -20,10 +20,10 @@ from mixstereo_tf.video import jobs
 from mixstereo_tf.video import temporal
 
 LAYOUTS = ('separate', 'sbs', 'sbs_half', 'tb')
-# The stereo mode a layout's video is tagged with (`streams.STEREO_MODES`).
+# The stereo mode a layout's video is tagged with (`encoders.STEREO_MODES`).
 STEREO_MODES = {'sbs': 'left_right', 'sbs_half': 'left_right', 'tb': 'top_bottom'}
 # Video inputs whose results go in another container: WebM holds only VP8 / VP9 / AV1,
-# and the outputs are H.264 (`streams.ENCODERS`), so Matroska, WebM's parent format; an
+# and the outputs are H.264 (`encoders.ENCODERS`), so Matroska, WebM's parent format; an
 # .m4v (Apple's name for MP4) gives .mp4 files. MPEG transport streams (broadcasts,
 # camcorders' AVCHD .mts / .m2ts), MPEG program streams, WMV and FLV carry no stereo
 # layout tag and audio (MP2, AC-3, WMA) that MP4 may refuse: Matroska takes both.

@@ -3,7 +3,7 @@
 `assemble` concatenates the parts (files of one encoder configuration, `streams.VideoWriter`)
 packet by packet, shifted by each part's start time, and interleaves the audio and
 subtitle packets of a source file unchanged (no re-encode); rotation and the stereo layout
-become stream metadata (`streams.STEREO_MODES`).
+become stream metadata (`encoders.STEREO_MODES`).
 """
 
 import dataclasses
@@ -15,7 +15,7 @@ from typing import Dict, Iterator, Optional, Sequence, Tuple
 from absl import logging
 import av
 
-from mixstereo_tf.video import streams
+from mixstereo_tf.video import encoders
 
 Fraction = fractions.Fraction
 
@@ -117,7 +117,7 @@ def assemble(parts: Sequence[Part], output: str, frame_rate: Fraction,
   """
   if not parts:
     raise ValueError(f'No video to write to {output}')
-  if streams.encoder_for(output).codec == 'mjpeg' or not time_base:
+  if encoders.encoder_for(output).codec == 'mjpeg' or not time_base:
     time_base = 1 / Fraction(frame_rate)
   with av.open(parts[0].path) as first:
     template = first.streams.video[0]

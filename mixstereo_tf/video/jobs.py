@@ -27,6 +27,7 @@ import numpy as np
 
 from mixstereo_tf.video import assembly
 from mixstereo_tf.video import pipelining
+from mixstereo_tf.video import encoders
 from mixstereo_tf.video import streams
 
 Fraction = fractions.Fraction
@@ -66,7 +67,7 @@ class VideoJob:
     settings: JSON-serialisable description of everything that changes the frames (the
       unmixer, the layout, ...); finished segments are reused only when it is equal.
     config: segment length.
-    stereo_modes: {key: `streams.STEREO_MODES` name} of the outputs tagged as stereo
+    stereo_modes: {key: `encoders.STEREO_MODES` name} of the outputs tagged as stereo
       (frame-packing SEI, Matroska StereoMode).
   """
   input_path: str
@@ -93,7 +94,7 @@ def _identity(job: VideoJob) -> Dict[str, object]:
   return {'version': _VERSION, 'input': os.path.abspath(job.input_path),
           'size': stat.st_size, 'mtime_ns': stat.st_mtime_ns,
           'segment_frames': job.config.segment_frames, 'outputs': sorted(job.outputs),
-          'encoder': dataclasses.asdict(streams.encoder_for(next(iter(job.outputs.values())))),
+          'encoder': dataclasses.asdict(encoders.encoder_for(next(iter(job.outputs.values())))),
           'stereo_modes': job.stereo_modes, 'settings': job.settings}
 
 
@@ -141,7 +142,7 @@ class _Segment:
     self.job, self.index, self.start, self.frames = job, index, start, 0
     self.writers = {key: streams.VideoWriter(partial_path(_segment_path(job, key, index)),
                                               info.frame_rate, info.time_base,
-                                              streams.encoder_for(
+                                              encoders.encoder_for(
                                                   path, job.stereo_modes.get(key)),
                                               info.aspect, info.colour)
                     for key, path in job.outputs.items()}

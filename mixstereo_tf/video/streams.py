@@ -8,84 +8,32 @@
 
 Times are exact `Fraction` seconds (a frame's pts times its stream's time base), so frame
 rates like 30000/1001 and variable frame rates survive. The encoder follows the output
-extension (`encoder_for`). `assembly.assemble` concatenates encoded parts packet by packet
+extension (`encoders.encoder_for`). `assembly.assemble` concatenates encoded parts packet by packet
 and copies the audio and subtitle packets of the source unchanged (no re-encode).
 Rotation (the display matrix) is read from the decoded frames; FFmpeg's libraries take it
-into a file only through the stream's side data, which PyAV cannot set, so `assemble` adds it with a stream-copy pass of
-imageio-ffmpeg's ffmpeg binary when that package is installed (else it is logged as lost).
+into a file only through the stream's side data, which PyAV cannot set, so `assemble`
+adds it with a stream-copy pass of imageio-ffmpeg's ffmpeg binary when that package is
+installed (else it is logged as lost).
 """
 
 import dataclasses
 import fractions
 import itertools
 import math
-import os
 import struct
-from typing import Dict, Iterator, Optional, Tuple
+from typing import Iterator, Optional, Tuple
 
 from absl import logging
 import av
 import numpy as np
+
+from mixstereo_tf.video import encoders
 
 Fraction = fractions.Fraction
 # What PyAV raises for unreadable or unwritable media.
 FFmpegError = av.FFmpegError
 # Frame rate assumed when a video does not report one.
 DEFAULT_FRAME_RATE = Fraction(25)
-
-
-@dataclasses.dataclass(frozen=True)
-class EncoderSettings:
-  """How a container is encoded: codec, pixel format, codec options, and the RGB -> YUV
-  matrix and range, both used and tagged (FFmpeg's AVColorSpace / AVColorRange numbers:
-  1 BT.709 / limited, 5 BT.601 / full)."""
-  codec: str
-  pix_fmt: str
-  options: Tuple[Tuple[str, str], ...] = ()
-  matrix: int = 1
-  color_range: int = 1
-
-
-# H.264 at constant quality 18 (visually lossless for x264) in 4:2:0, which every player
-# decodes; AVI gets Motion JPEG at the best quantiser (AVI holds no B-frame timing).
-# Preset veryfast: on a 2560x720 side-by-side clip it encodes in 61 ms a frame on one core
-# where medium took 166 ms, at the same PSNR (41.03 / 41.01 dB) and size (987 / 1036
-# KiB); on a 2-core machine medium's encoding took a third of the CPU of a video job.
-# x264's macroblock-tree rate control is off (mbtree=0): on CPUs with AVX-512 its AVX-512
-# code encodes identical frames differently from run to run (seen with libx264 core 165
-# whenever the width in macroblocks is not a multiple of 16, e.g. 96 or 1920 px), and a
-# resumed video job must re-encode its segments exactly as an uninterrupted run does.
-# Colour: BT.709 limited range, tagged (untagged 4:2:0 is read as BT.709 by most players
-# at HD sizes, where FFmpeg's default conversion wrote BT.601: green 255 showed as 215);
-# AVI's Motion JPEG is JFIF's full-range BT.601.
-_H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'veryfast'),
-                                               ('x264-params', 'mbtree=0')))
-ENCODERS: Dict[str, EncoderSettings] = {
-    '.mp4': _H264, '.mov': _H264, '.mkv': _H264,
-    '.avi': EncoderSettings('mjpeg', 'yuvj420p', (('qmin', '1'), ('qmax', '2')), 5, 2),
-}
-
-
-# Stereo tags (Matroska StereoMode names: the muxer reads the stream's `stereo_mode` tag) ->
-# x264's frame-packing SEI type (any container; ffprobe: frames' "Stereo 3D" side data).
-# MP4 / MOV get the SEI alone: FFmpeg's st3d box needs stream side data PyAV cannot set.
-STEREO_MODES = {'left_right': 3, 'top_bottom': 4}
-
-
-def encoder_for(path: str, stereo_mode: Optional[str] = None) -> EncoderSettings:
-  """The encoder of a video path's extension (ENCODERS); ValueError naming the path.
-
-  `stereo_mode` (a STEREO_MODES key) adds x264's frame-packing SEI (other codecs: none)."""
-  extension = os.path.splitext(path)[1].lower()
-  if extension not in ENCODERS:
-    raise ValueError(f'Cannot write video {path}: extension must be one of '
-                     f'{" ".join(ENCODERS)}.')
-  settings = ENCODERS[extension]
-  if stereo_mode is None or settings.codec != 'libx264':
-    return settings
-  options = tuple((key, f'{value}:frame-packing={STEREO_MODES[stereo_mode]}')
-                  if key == 'x264-params' else (key, value) for key, value in settings.options)
-  return dataclasses.replace(settings, options=options)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -237,7 +185,7 @@ def open_video(path: str, skip: int = 0,
 
 class VideoWriter:
   """Encodes uint8 RGB frames [H, W, 3] into a video-only file (default encoder: the
-  path's, `encoder_for`).
+  path's, `encoders.encoder_for`).
 
   The size comes from the first frame; odd sizes are padded by one row / column of edge
   replication (4:2:0 chroma needs even sizes); `aspect` is the sample aspect ratio encoded,
@@ -247,10 +195,10 @@ class VideoWriter:
   """
 
   def __init__(self, path: str, frame_rate: Fraction, time_base: Optional[Fraction] = None,
-               encoder: Optional[EncoderSettings] = None, aspect: Optional[Fraction] = None,
-               colour: Tuple[int, int] = (2, 2)):
+               encoder: Optional[encoders.EncoderSettings] = None,
+               aspect: Optional[Fraction] = None, colour: Tuple[int, int] = (2, 2)):
     self.path, self.aspect, self.colour = path, aspect, colour
-    self.settings = encoder or encoder_for(path)
+    self.settings = encoder or encoders.encoder_for(path)
     self.frame_rate = Fraction(frame_rate)
     frame_index = self.settings.codec == 'mjpeg' or not time_base
     self.time_base = 1 / self.frame_rate if frame_index else Fraction(time_base)

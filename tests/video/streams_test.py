@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.video import assembly
+from mixstereo_tf.video import encoders
 from mixstereo_tf.video import streams
 
 Fraction = fractions.Fraction
@@ -91,7 +92,7 @@ def test_parts_assembled_keep_rate_timestamps_and_audio(tmp_path, extension):
   for first in (0, 8):
     part = str(tmp_path / f'part{first}.mov')
     with streams.VideoWriter(part, info.frame_rate, info.time_base,
-                              streams.encoder_for(source)) as writer:
+                              encoders.encoder_for(source)) as writer:
       for frame in frames[first:first + (8 if first == 0 else 12)]:
         writer.write(frame.image, frame.time - frames[first].time)
     parts.append(assembly.Part(part, frames[first].time))
@@ -119,7 +120,7 @@ def test_a_short_last_part_with_wider_spaced_frames_assembles(tmp_path):
                        (10, [Fraction(2 * i, 12) for i in range(3)])):
     part = str(tmp_path / f'part{first}.mov')
     with streams.VideoWriter(part, info.frame_rate, info.time_base,
-                              streams.encoder_for(source)) as writer:
+                              encoders.encoder_for(source)) as writer:
       for index, time in enumerate(times):
         writer.write(frames[first + index].image, time)
     parts.append(assembly.Part(part, frames[first].time))
@@ -168,7 +169,7 @@ def test_assembly_keeps_the_sources_tags_audio_language_aspect_and_subtitles(tmp
   assert info.aspect == Fraction(4, 3)
   part = str(tmp_path / 'part.mov')
   with streams.VideoWriter(part, info.frame_rate, info.time_base,
-                            streams.encoder_for(source), info.aspect) as writer:
+                            encoders.encoder_for(source), info.aspect) as writer:
     for frame in frames:
       writer.write(frame.image, frame.time)
   output = str(tmp_path / f'out{extension}')
@@ -194,7 +195,7 @@ def test_writer_tags_the_matrix_it_uses_and_passes_primaries_on(tmp_path, extens
                               (0, 255, 255), (255, 0, 255), (128, 64, 32), (200, 200, 200)]):
     bars[:, 16 * i:16 * (i + 1)] = colour
   path = str(tmp_path / f'bars{extension}')
-  settings = streams.encoder_for(path)
+  settings = encoders.encoder_for(path)
   with streams.VideoWriter(path, Fraction(10), colour=(1, 1)) as writer:
     for index in range(2):
       writer.write(bars, Fraction(index, 10))
@@ -297,16 +298,6 @@ def test_bad_files_are_named(tmp_path):
     streams.VideoWriter(str(tmp_path / 'clip.flv'), Fraction(25))
   with pytest.raises(ValueError, match='No video'):
     assembly.assemble([], str(tmp_path / 'out.mp4'), Fraction(25))
-
-
-def test_stereo_modes_add_x264_frame_packing_only():
-  plain = streams.encoder_for('a.mp4')
-  tagged = streams.encoder_for('a.mp4', 'top_bottom')
-  assert dict(tagged.options)['x264-params'] == dict(plain.options)['x264-params'] + (
-      ':frame-packing=4')
-  assert dict(streams.encoder_for('a.mkv', 'left_right').options)['x264-params'].endswith(
-      'frame-packing=3')
-  assert streams.encoder_for('a.avi', 'left_right') == streams.encoder_for('a.avi')
 
 
 def test_video_info_says_whether_colour_is_stored_at_half_resolution(tmp_path):
