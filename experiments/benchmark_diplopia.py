@@ -9,7 +9,7 @@ panned 4 px per frame, mixed as I = (L + R) / 2, written as an H.264 MP4 and unm
 (decoding, unmixing, encoding), after one warm-up frame: per frame (`--notemporal`: the
 encoding and the range are found again on every frame) and per shot (the default: found at
 the shot's first frame, and the previous frame's disparity is a soft prior,
-`diplopia.add_prior`). Frames/s of the whole call
+`diplopia_costs.add_prior`). Frames/s of the whole call
 and inside the unmixer, per method (`METHODS`);
 then one frame's stages timed apart (range, cost volume, SGM and post-processing, mixing
 weight, layers, seconds) for the classical method and the learned echo stage. Each
@@ -36,6 +36,7 @@ import numpy as np
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import parallel_sgm
@@ -142,7 +143,8 @@ def stage_seconds(image, costs, density):
 # One frame's stage timings: label -> the expression of its costs function (`b`: this
 # module, in the process that measures).
 STAGE_ROWS = {
-    'classical': 'b.diplopia.zncc_costs',
+    # Checkouts before diplopia_costs held zncc_costs in diplopia.
+    'classical': 'getattr(b, "diplopia_costs", b.diplopia).zncc_costs',
     'learned echo': ('b.learned_diplopia.echo_costs(b.learned_diplopia.echo_function('
                      'b.pretrained.load_model(b.pretrained.get("diplopia_echo"))))')}
 

@@ -25,7 +25,7 @@ non-occluded pixels of every frame. Speed: frames/s of the unmixer alone on the 
 `--speed_frames` frames of scene A upscaled (bicubic) to 1280x720 and 1920x1080.
 Writes experiments/results/temporal.md. With --temporal_mixture=diplopia the same clip is
 mixed as double images I = (L + R) / 2 and unmixed with `--mixture=diplopia` (the double
-images' prior: `diplopia.add_prior`, a penalty on lags outside the window around the
+images' prior: `diplopia_costs.add_prior`, a penalty on lags outside the window around the
 previous frame's disparity).
 """
 

@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.core import image_range
 
@@ -45,7 +46,7 @@ def estimate_range(mixture, config: Optional[diplopia.DiplopiaConfig] = None, wi
   """
   config = config or diplopia.DiplopiaConfig()
   diplopia.check_size(np.shape(mixture), config)
-  gray = diplopia.gray_255(image_range.as_unit_float(mixture, 'mixture'))
+  gray = diplopia_costs.gray_255(image_range.as_unit_float(mixture, 'mixture'))
   full_width = gray.shape[1]
   scale = max(1.0, full_width / width)
   if scale > 1.0:
@@ -55,7 +56,8 @@ def estimate_range(mixture, config: Optional[diplopia.DiplopiaConfig] = None, wi
   config = dataclasses.replace(config, matching=dataclasses.replace(
       config.matching, min_disparity=1, max_disparity=reach, p1=RANGE_PENALTIES[0],
       p2=RANGE_PENALTIES[1]))
-  matched = parallel_sgm.match_volume(diplopia.self_matching_volume(gray, config), config.matching)
+  matched = parallel_sgm.match_volume(diplopia_costs.self_matching_volume(gray, config),
+                                      config.matching)
   found = matched['disparity_left'][matched['consistent_left']]
   counts = np.histogram(found, bins=np.arange(1, reach + 2))[0]  # counts[i]: lag i + 1.
   share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)

@@ -1,4 +1,4 @@
-"""The numba kernel of `diplopia.self_matching_volume`: ZNCC of an image against itself
+"""The numba kernel of `diplopia_costs.self_matching_volume`: ZNCC of an image against itself
 shifted, every lag, row block by row block.
 
 For lag d, the cost of pixel (y, x) is (1 - zncc) * scale with

@@ -14,8 +14,8 @@ searched, scale, method, seconds, files, the EXIF orientation applied, the reque
 video, in the input's container (`.mp4`, `.mov`, `.mkv`, `.avi`; `.webm` in `.mkv`) with
 its frame rate, timestamps, audio and subtitle streams (copied), frames a player turns by
 quarter turns (portrait phone videos) turned upright before they are unmixed and written
-so (other rotations copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`; side by side and
-top-bottom tagged as such: `encoders.STEREO_MODES`), `<name>_disparity<ext>`,
+so (other rotations copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`;
+side by side and top-bottom tagged as such: `encoders.STEREO_MODES`), `<name>_disparity<ext>`,
 `<name>_<format><ext>` for the formats drawn as videos (rgbd, anaglyphs; the others are
 skipped, saying why) and `<name>_info.json` (the first unmixed frame's info, frames, frame
 rate, rotation left to players, `turned_upright` degrees, audio streams, the scene cuts

@@ -2,7 +2,7 @@
 
 A double image I = a L + (1 - a) R shows every surface twice; its self-similarity between
 x and x - d peaks at the left disparity d_L(x) and at echoes of texture, and the classical
-method scores it by ZNCC of the high-passed mixture (`diplopia.self_matching_volume`).
+method scores it by ZNCC of the high-passed mixture (`diplopia_costs.self_matching_volume`).
 Here:
   1. descriptors of the mixture (`matching_features.EchoFeatures`, trained on photographs
      warped by drawn disparity fields with a random weight a; `training/feature_loop.py`);
@@ -22,6 +22,7 @@ import numpy as np
 import tensorflow as tf
 
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import feature_costs
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import workers
@@ -72,7 +73,7 @@ def echo_costs(echo: Echo, config: EchoConfig = EchoConfig()) -> diplopia.Costs:
                                         high - low + 1, config.cost_scale,
                                         threads=workers.usable_cpus())
     if config.zncc_weight:
-      zncc = diplopia.zncc_costs(mixture01, diplopia_config)
+      zncc = diplopia_costs.zncc_costs(mixture01, diplopia_config)
       volume = feature_costs.blend(zncc, volume, config.zncc_weight, workers.usable_cpus())
     return volume
 

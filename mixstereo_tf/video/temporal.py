@@ -11,7 +11,7 @@ change and consecutive disparities are close, so `VideoState` keeps, per shot:
   * the previous frame's left disparity (its first stage's, before any refiner:
     `hints.FrameHint.on_disparity`, `video.frame_pipeline`), handed to the solver as a
     prior (the classical matcher searches around it, `matcher.match(..., prior)`; a double
-    image's self-matching penalises lags away from it, `diplopia.add_prior`), except where
+    image's self-matching penalises lags away from it, `diplopia_costs.add_prior`), except where
     that frame's match failed the left-right check (NaN: those pixels search the valid
     prior's range nearby, or the whole range where none is near).
 Everything is reset at a scene cut. A cut is found between consecutive frames when the

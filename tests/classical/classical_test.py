@@ -10,6 +10,7 @@ import tensorflow as tf
 
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import sgm
@@ -174,14 +175,14 @@ def test_add_prior_penalises_each_lag_by_its_distance_to_the_prior_window():
   volume[1, 2] = 250
   prior = np.full((2, 3), 10.0, np.float32)
   prior[0, 1] = np.nan  # No prior there: the whole range, no penalty.
-  out = diplopia.add_prior(volume, config, prior, (1, 0))  # Window [9, 11].
+  out = diplopia_costs.add_prior(volume, config, prior, (1, 0))  # Window [9, 11].
   lags = np.arange(1, 31)
   expected = np.minimum(4 * np.maximum(np.maximum(9 - lags, 0), lags - 11), 16)
   np.testing.assert_array_equal(out[0, 0], expected)  # e.g. lag 8: 4, lag 5: cap 16.
   np.testing.assert_array_equal(out[0, 1], 0)
   np.testing.assert_array_equal(out[1, 2], np.minimum(250 + expected, 255))  # Saturates.
   with pytest.raises(ValueError, match='prior'):
-    diplopia.add_prior(volume, config, prior[:1], (1, 0))
+    diplopia_costs.add_prior(volume, config, prior[:1], (1, 0))
 
 
 def test_a_prior_holds_the_echo_that_noise_hides():
@@ -283,19 +284,19 @@ def test_the_small_lag_penalty_keeps_a_real_double_image_off_the_smallest_lags()
 
 def test_the_small_lag_penalty_spares_narrow_ranges_and_saturates():
   config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=1, max_disparity=16))
-  assert diplopia.small_lags(config) == 3  # Lags 1, 2, 3.
+  assert diplopia_costs.small_lags(config) == 3  # Lags 1, 2, 3.
   volume = np.full((2, 2, 16), 10, np.uint8)
   volume[0, 0, 1] = 250
-  out = diplopia.penalise_small_lags(volume.copy(), config)
+  out = diplopia_costs.penalise_small_lags(volume.copy(), config)
   expected = volume.astype(int)
   expected[..., :3] += 8
   np.testing.assert_array_equal(out, np.minimum(expected, 255))  # 250 + 8 saturates.
   narrow = dataclasses.replace(config, matching=sgm.SgmConfig(min_disparity=1,
                                                                max_disparity=15))
-  assert diplopia.small_lags(narrow) == 0  # Copies at most 15 px apart keep lags 1-3.
+  assert diplopia_costs.small_lags(narrow) == 0  # Copies at most 15 px apart keep lags 1-3.
   above = dataclasses.replace(config, matching=sgm.SgmConfig(min_disparity=6,
                                                               max_disparity=40))
-  assert diplopia.small_lags(above) == 0
+  assert diplopia_costs.small_lags(above) == 0
   with pytest.raises(ValueError, match='min_lag'):
     diplopia.DiplopiaConfig(min_lag=0)
   with pytest.raises(ValueError, match='small_lag_penalty'):

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.classical import sgm
@@ -70,7 +71,7 @@ def test_a_stored_volume_through_the_numba_sgm_equals_sgm_match_volume(seed):
   gray = (left[..., 0] + right.mean(-1)) / 2
   config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=1, max_disparity=20,
                                                           p1=8, p2=64))
-  volumes = [diplopia.self_matching_volume(gray, config),
+  volumes = [diplopia_costs.self_matching_volume(gray, config),
              rng.integers(0, 256, (24, 40, 9)).astype(np.uint8) // 16 * 16]
   for volume, low in zip(volumes, (1, 3)):
     settings = sgm.SgmConfig(min_disparity=low, max_disparity=low + volume.shape[2] - 1,
@@ -217,7 +218,7 @@ def test_a_stored_volume_in_strips_changes_almost_nothing():
   gray = (left[..., 0] + right.mean(-1)) / 2
   config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=1, max_disparity=20,
                                                           p1=8, p2=64), window_radius=3)
-  volume = diplopia.self_matching_volume(gray, config)  # Any volume: a 7 x 7 ZNCC one.
+  volume = diplopia_costs.self_matching_volume(gray, config)  # Any volume: a 7 x 7 ZNCC one.
   one = parallel_sgm.match_volume(volume, config.matching)
   # Three 20-row strips, each aggregating up to 32 rows beyond its own, in three threads:
   # vertical paths that start there move a few winners (with 8 rows, 6% of them here).

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import sgm
 
 
 def _reference(gray, config):
-  """`diplopia.self_matching_volume` written with OpenCV box filters, lag by lag."""
+  """`diplopia_costs.self_matching_volume` written with OpenCV box filters, lag by lag."""
   matching = config.matching
   height, width = gray.shape
   high = (gray - cv2.GaussianBlur(gray, (0, 0), config.highpass_sigma)).astype(np.float32)
@@ -36,7 +37,7 @@ def test_the_kernel_equals_the_definition():
   texture = cv2.GaussianBlur(rng.uniform(0, 255, (48, 90)).astype(np.float32), (0, 0), 1.5)
   gray = (texture + np.roll(texture, 7, axis=1)) / 2  # An echo at lag 7.
   config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=2, max_disparity=30))
-  got, want = diplopia.self_matching_volume(gray, config), _reference(gray, config)
+  got, want = diplopia_costs.self_matching_volume(gray, config), _reference(gray, config)
   assert got.shape == want.shape == (48, 90, 29)
   difference = np.abs(got.astype(int) - want)
   # float32 sums in another order: a rounding tie may go the other way.
@@ -49,7 +50,7 @@ def test_lags_up_to_the_image_width_and_windows_wider_than_it():
   gray = rng.uniform(0, 255, (9, 12)).astype(np.float32)
   config = diplopia.DiplopiaConfig(window_radius=7,
                                    matching=sgm.SgmConfig(min_disparity=1, max_disparity=40))
-  got, want = diplopia.self_matching_volume(gray, config), _reference(gray, config)
+  got, want = diplopia_costs.self_matching_volume(gray, config), _reference(gray, config)
   assert got.shape == want.shape == (9, 12, 11)  # Lags 1..11: the width minus one.
   assert np.abs(got.astype(int) - want).max() <= 1
 
@@ -61,8 +62,8 @@ def test_two_passes_give_the_stored_costs_volume_bit_for_bit():
   texture = cv2.GaussianBlur(rng.uniform(0, 255, (37, 83)).astype(np.float32), (0, 0), 1.2)
   gray = (texture + np.roll(texture, 5, axis=1)) / 2
   config = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(min_disparity=1, max_disparity=40))
-  stored = diplopia.self_matching_volume(gray, config)
-  twice = diplopia.self_matching_volume(gray, dataclasses.replace(config, max_float_mib=0))
+  stored = diplopia_costs.self_matching_volume(gray, config)
+  twice = diplopia_costs.self_matching_volume(gray, dataclasses.replace(config, max_float_mib=0))
   assert stored.dtype == twice.dtype == np.uint8
   np.testing.assert_array_equal(twice, stored)
   assert np.abs(stored.astype(int) - _reference(gray, config)).max() <= 1

@@ -5,6 +5,7 @@ import pytest
 import tensorflow as tf
 
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import hints
 from mixstereo_tf.models import matching_features
@@ -37,7 +38,7 @@ def test_learned_costs_are_zero_at_the_echo_and_blend_with_zncc():
   assert (learned[:, inside, _D - 1] == 0).all()  # Lag d_i = 1 + i.
   assert (np.delete(learned[:, inside], _D - 1, axis=2) == 32).all()  # 1 - 0 cosine.
   blended = learned_diplopia.echo_costs(_column_echo)(mixture, _config())
-  zncc = diplopia.zncc_costs(mixture, _config())
+  zncc = diplopia_costs.zncc_costs(mixture, _config())
   np.testing.assert_allclose(blended, np.rint(0.5 * zncc + 0.5 * learned), atol=1)
 
 
