@@ -16,10 +16,15 @@ the left-right check; it outputs the view, the restored one plus a residual on t
 channels the anaglyph does not copy (5 conv3x3 x 16, dilations 1-2-4-8-1, ReLU, a
 zero-initialised 3-channel output: 8.5k parameters). Training: MSE to the true view, Adam
 1e-3 (3e-4 after half the steps), batches of 8 random 128 x 256 crops, mirrored with
-p = 0.5, both views of each pair. Rows: 'colouriser' the network's views, 'half' their
+p = 0.5, both views of each pair. `--colouriser_degrade` degrades each view of a training
+pair on its own before mixing, the targets as degraded (a real pair's cameras differ,
+a warp's views do not): 'apart' blur (p = 0.5, sigma U[0.3, 0.9]) and noise (sigma
+U[0, 4] grey levels); 'apart_camera' blur up to 1.0, noise up to 6, half the right views
+shifted vertically by U[-0.5, 0.5] px (rectification) and half the views through an RGGB
+mosaic and OpenCV's demosaicking. Rows: 'colouriser' the network's views, 'half' their
 mean with the restored views (the choice made on validation warps, seeds 10^9 on, 256 x
 512: the training photographs under new fields). Scenes: `same_channel.py`'s, colour
-anaglyph; every camera unseen.
+anaglyph; every camera unseen; the KITTI 2015 frame scored on its views alone.
 """
 
 import os
@@ -27,6 +32,7 @@ import time
 
 from absl import app
 from absl import flags
+import cv2
 import numpy as np
 import tensorflow as tf
 
@@ -45,6 +51,8 @@ from mixstereo_tf.unmixing import learned_matching
 
 flags.DEFINE_integer('colouriser_pairs', 400, 'Training photo warps.')
 flags.DEFINE_integer('colouriser_steps', 1200, 'Training steps.')
+flags.DEFINE_enum('colouriser_degrade', 'none', ['none', 'apart', 'apart_camera'],
+                  'Degrade the views of each training pair apart (module docstring).')
 flags.DEFINE_string('colouriser_output', 'experiments/results/colouriser_prototype.md',
                     'Markdown report.')
 FLAGS = flags.FLAGS
@@ -104,11 +112,41 @@ def both_inputs(disparities, consistent, restored):
           for i, side in enumerate(('left', 'right'))]
 
 
+def demosaicked(view):
+  """uint8 RGB [H, W, 3] (H, W even) through an RGGB mosaic and OpenCV's demosaicking."""
+  mosaic = np.empty(view.shape[:2], np.uint8)
+  mosaic[0::2, 0::2], mosaic[0::2, 1::2] = view[0::2, 0::2, 0], view[0::2, 1::2, 1]
+  mosaic[1::2, 0::2], mosaic[1::2, 1::2] = view[1::2, 0::2, 1], view[1::2, 1::2, 2]
+  return cv2.cvtColor(mosaic, cv2.COLOR_BayerBG2RGB)
+
+
+def degraded_apart(pair, seed, camera):
+  """`pair` with each view degraded on its own (`--colouriser_degrade`: 'apart', or with
+  `camera` 'apart_camera')."""
+  rng = np.random.default_rng(seed + (23 if camera else 17))
+  out = dict(pair)
+  for key in ('left', 'right'):
+    view = pair[key].astype(np.float32)
+    if camera and key == 'right' and rng.uniform() < 0.5:
+      shift = np.float32([[1, 0, 0], [0, 1, rng.uniform(-0.5, 0.5)]])
+      view = cv2.warpAffine(view, shift, view.shape[1::-1], flags=cv2.INTER_LINEAR,
+                            borderMode=cv2.BORDER_REFLECT)
+    if rng.uniform() < 0.5:
+      view = cv2.GaussianBlur(view, (0, 0), rng.uniform(0.3, 1.0 if camera else 0.9))
+    view = view + rng.normal(0, rng.uniform(0, 6 if camera else 4), view.shape)
+    out[key] = np.clip(np.round(view), 0, 255).astype(np.uint8)
+    if camera and rng.uniform() < 0.5:
+      out[key] = demosaicked(out[key])
+  return out
+
+
 def training_set(descriptors, atlas):
   """(inputs [2N, H, W, 10], true views [2N, H, W, 3] in [0, 1]) of the training warps."""
   inputs, targets = [], []
   for seed in range(TRAIN_SEED, TRAIN_SEED + FLAGS.colouriser_pairs):
     pair = photo_warps.warped_pair(seed, WARP, atlas)
+    if FLAGS.colouriser_degrade != 'none':
+      pair = degraded_apart(pair, seed, FLAGS.colouriser_degrade == 'apart_camera')
     image = realworld.make_anaglyph(pair, NAME, 'ffmpeg' if seed % 2 else 'ours')
     inputs += both_inputs(*stage_views(descriptors, pair, image))
     targets += [pair['left'], pair['right']]
@@ -165,8 +203,9 @@ def evaluate(model, descriptors, atlas):
     rows = variants(model, restored, both_inputs(disparities, consistent, restored))
     groups.setdefault('validation warps', []).append(
         {k: psnrs(v, pair) for k, v in rows.items()})
-  for scene, data in same_channel.scenes(FLAGS.shared_dir):
-    pair = realworld.window_align(data, same_channel.FRACTION)
+  for scene, data in same_channel.scenes(FLAGS.shared_dir, views_only=True):
+    pair = same_channel.without_estimated_truth(
+        data, realworld.window_align(data, same_channel.FRACTION))
     image = realworld.make_anaglyph(pair, NAME, 'ffmpeg')
     classical = same_channel.unmixer(NAME, 'classical')(image)
     out = same_channel.unmixer(NAME, 'learned')(image)
@@ -200,7 +239,8 @@ def main(argv):
                    f"{minus('classical')} | {minus('learned')} |")
   text = ['# A prototype learned colouriser on the learned stage (colour anaglyph)', '',
           f'Written by `python -m experiments.colouriser_prototype --photo_dir='
-          f'{FLAGS.photo_dir} --shared_dir={FLAGS.shared_dir}` in '
+          f'{FLAGS.photo_dir} --shared_dir={FLAGS.shared_dir} --colouriser_degrade='
+          f'{FLAGS.colouriser_degrade}` in '
           f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores; '
           f'{FLAGS.colouriser_pairs} training pairs, {FLAGS.colouriser_steps} steps. '
           'See the module docstring. A rerun of this command was not timed or compared; '

@@ -216,6 +216,20 @@ def test_camera_difference_finds_a_known_gain_and_what_it_costs_the_views():
     camera_difference.camera_difference(pair)
 
 
+def test_colouriser_prototype_degrades_each_view_apart():
+  from experiments import colouriser_prototype as proto  # pylint: disable=import-outside-toplevel
+  flat = np.zeros((8, 12, 3), np.uint8) + np.array([200, 50, 10], np.uint8)
+  np.testing.assert_array_equal(proto.demosaicked(flat), flat)  # Flat colour survives.
+  pair = {'left': flat, 'right': flat.copy(), 'disparity_left': np.ones((8, 12))}
+  for camera in (False, True):
+    out = proto.degraded_apart(pair, 3, camera)
+    assert out['disparity_left'] is pair['disparity_left']
+    assert out['left'].shape == flat.shape and out['left'].dtype == np.uint8
+    assert not np.array_equal(out['left'], out['right'])  # Each view its own noise.
+    assert np.abs(out['left'].astype(int) - flat).mean() < 6
+  np.testing.assert_array_equal(pair['left'], flat)  # The pair given is not changed.
+
+
 def test_colouriser_prototype_inputs_and_copied_channels():
   from experiments import colouriser_prototype as proto  # pylint: disable=import-outside-toplevel
   rng = np.random.default_rng(1)
