@@ -81,6 +81,8 @@ def changed(info: Dict[str, object], path: str) -> bool:
 
 
 INFO_SUFFIX = '_info.json'
+# Written before an input's results and removed with its info written (`begin_outputs`).
+UNFINISHED_SUFFIX = '_unfinished.json'
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,7 +104,10 @@ def read_earlier(output_dir: str) -> Earlier:
   if not os.path.isdir(output_dir):
     return Earlier()
   names, outputs = {}, set()
-  for file_name in sorted(os.listdir(output_dir)):
+  listing = sorted(os.listdir(output_dir))
+  for file_name in listing:
+    if file_name.endswith(UNFINISHED_SUFFIX):
+      _unfinished(output_dir, file_name, listing, names, outputs)
     if not file_name.endswith(INFO_SUFFIX):
       continue
     path = os.path.join(output_dir, file_name)
@@ -118,6 +123,32 @@ def read_earlier(output_dir: str) -> Earlier:
     outputs.update(os.path.realpath(os.path.join(output_dir, name)) for name in
                    (files if isinstance(files, list) else []) if isinstance(name, str))
   return Earlier(names, frozenset(outputs))
+
+
+def begin_outputs(output_dir: str, item: input_listing.MediaItem) -> None:
+  """Writes `<name>_unfinished.json` (the input's path) before an input's results are
+  written; `write_info` removes it. A run killed meanwhile leaves results that no info
+  lists: `read_earlier` then takes that name's files (`<name>_*`, `<name>.*`) for results,
+  so a rerun over a tree holding the output folder redoes the input instead of refusing
+  them as inputs its outputs could overwrite (`input_listing.prepare_output_dir`)."""
+  with open(os.path.join(output_dir, item.name + UNFINISHED_SUFFIX), 'w',
+            encoding='utf-8') as f:
+    json.dump({'input': os.path.abspath(item.path)}, f)
+
+
+def _unfinished(output_dir: str, file_name: str, listing: List[str], names: Dict[str, str],
+                outputs: set) -> None:
+  """Adds an unfinished input's name and files (`begin_outputs`) to `read_earlier`'s."""
+  name = file_name[:-len(UNFINISHED_SUFFIX)]
+  try:
+    with open(os.path.join(output_dir, file_name), encoding='utf-8') as f:
+      source = json.load(f).get('input')
+  except (OSError, ValueError, AttributeError):
+    source = None
+  if isinstance(source, str):
+    names.setdefault(os.path.realpath(source), name)
+  outputs.update(os.path.realpath(os.path.join(output_dir, other)) for other in listing
+                 if other.startswith((name + '_', name + '.')))
 
 
 def _stale_files(path: str, name: str, files: List[str]) -> List[str]:
@@ -153,4 +184,7 @@ def write_info(output_dir: str, item: input_listing.MediaItem, info: Dict[str, o
     json.dump(dict(info, input=os.path.abspath(item.path), **input_stamp(item.path),
                    **({'request': request} if request else {})), f, indent=2, sort_keys=True)
   os.replace(path + '.tmp', path)
+  unfinished = os.path.join(output_dir, item.name + UNFINISHED_SUFFIX)
+  if os.path.exists(unfinished):
+    os.remove(unfinished)
   return path

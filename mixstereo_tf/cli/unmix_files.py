@@ -170,6 +170,7 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
   outputs = unmixer(image, **stored)
   report.unmix_seconds += time.perf_counter() - unmix_start
   icc_profile = found.icc_profile
+  info_file.begin_outputs(output_dir, item)
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,
                                       max_display_disparity, formats, image, icc_profile)
   if icc_profile:

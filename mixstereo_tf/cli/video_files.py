@@ -143,6 +143,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
                            temporal=dataclasses.asdict(temporal_config), formats=drawn),
                       video_config, {layout: media.STEREO_MODES[layout]}
                       if layout in media.STEREO_MODES else {})
+  info_file.begin_outputs(output_dir, item)
   try:
     with pipeline:
       done = jobs.run(job, render, on_start)

@@ -17,11 +17,11 @@ from typing import Callable, Dict, List, Optional, Tuple
 from absl import logging
 import numpy as np
 
-from mixstereo_tf.data import sample_files
 from mixstereo_tf.data import kitti
 from mixstereo_tf.data import middlebury
 from mixstereo_tf.data import records
 from mixstereo_tf.data import sample
+from mixstereo_tf.data import sample_files
 from mixstereo_tf.data import split_lists
 
 SPLITS = ('train', 'heldout')

@@ -26,8 +26,8 @@ from typing import Callable, Dict, Optional, Union
 import numpy as np
 
 from mixstereo_tf.video import assembly
-from mixstereo_tf.video import pipelining
 from mixstereo_tf.video import encoders
+from mixstereo_tf.video import pipelining
 from mixstereo_tf.video import streams
 
 Fraction = fractions.Fraction

@@ -23,6 +23,7 @@ import tensorflow as tf
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import runs
+from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import stereo_formats
@@ -710,6 +711,46 @@ def test_results_into_the_input_folder_never_overwrite_an_input(tmp_path):
   # Alone, pic.png writes its results beside itself (pic_left.png is no input then).
   report = unmix_files.unmix_inputs(unmixer, str(tmp_path / 'pic.png'), str(tmp_path))
   assert report.processed == 1 and len(calls) == 1
+
+
+class _Killed(BaseException):
+  """A kill between an input's results and its info file."""
+
+
+def test_a_rerun_redoes_an_input_whose_results_a_kill_left_unlisted(tmp_path, monkeypatch):
+  """Killed after writing pic's views but before its info: the views are no inputs of a
+  rerun over the tree holding the output folder (refused as inputs its results could
+  overwrite before); pic is unmixed again and its marker removed."""
+  calls = []
+
+  def unmix(image):
+    calls.append(image)
+    return {'left': image, 'right': image,
+            'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  unmixer = predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+  media.write_image(str(tmp_path / 'pic.png'), np.full((8, 8, 3), 10, np.uint8))
+  out = tmp_path / 'out'
+  pattern = str(tmp_path / '**' / '*.png')
+  assert unmix_files.unmix_inputs(unmixer, pattern, str(out)).processed == 1
+  assert not list(out.glob('*unfinished*'))
+  os.remove(out / 'pic_info.json')  # As if killed before the info was written.
+  with pytest.raises(ValueError, match=r'holds the input .*pic_\w+\.png, which the outputs'):
+    unmix_files.unmix_inputs(unmixer, pattern, str(out))
+  shutil.rmtree(out)
+  write_info = info_file.write_info
+
+  def killed(*args):
+    raise _Killed()
+
+  monkeypatch.setattr(info_file, 'write_info', killed)
+  with pytest.raises(_Killed):
+    unmix_files.unmix_inputs(unmixer, pattern, str(out))
+  assert (out / 'pic_left.png').exists() and (out / 'pic_unfinished.json').exists()
+  monkeypatch.setattr(info_file, 'write_info', write_info)
+  report = unmix_files.unmix_inputs(unmixer, pattern, str(out))
+  assert report.processed == 1 and not report.failures and len(calls) == 3
+  assert (out / 'pic_info.json').exists() and not list(out.glob('*unfinished*'))
 
 
 def test_failure_message_names_at_most_five_inputs():
