@@ -162,8 +162,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
       files=[os.path.basename(path) for path in outputs.values()],
       **({'skipped_formats': skipped} if skipped else {}),
-      **_notes(info, done['frames'], item.path)),
-      request)
+      **_notes(info, done['frames'], item.path)), request)
   return state['rendered']
 
 
