@@ -693,15 +693,20 @@ def test_tensorflow_and_file_system_errors_skip_only_their_input(tmp_path):
     unmix_files.unmix_inputs(unmixer, str(folder), str(tmp_path / 'out2'))
 
 
-def test_results_into_the_input_folder_never_overwrite_an_input(tmp_path):
-  calls = []
+def _recording_unmixer(calls):
+  """An Unmixer that appends each image to `calls` and returns it as both views."""
 
   def unmix(image):
     calls.append(image)
     return {'left': image, 'right': image,
             'disparity_left': np.zeros(image.shape[:2], np.float32)}
 
-  unmixer = predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+  return predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+
+
+def test_results_into_the_input_folder_never_overwrite_an_input(tmp_path):
+  calls = []
+  unmixer = _recording_unmixer(calls)
   media.write_image(str(tmp_path / 'pic.png'), np.full((8, 8, 3), 10, np.uint8))
   media.write_image(str(tmp_path / 'pic_left.png'), np.full((8, 8, 3), 20, np.uint8))
   before = (tmp_path / 'pic_left.png').read_bytes()
@@ -722,13 +727,7 @@ def test_a_rerun_redoes_an_input_whose_results_a_kill_left_unlisted(tmp_path, mo
   rerun over the tree holding the output folder (refused as inputs its results could
   overwrite before); pic is unmixed again and its marker removed."""
   calls = []
-
-  def unmix(image):
-    calls.append(image)
-    return {'left': image, 'right': image,
-            'disparity_left': np.zeros(image.shape[:2], np.float32)}
-
-  unmixer = predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0)
+  unmixer = _recording_unmixer(calls)
   media.write_image(str(tmp_path / 'pic.png'), np.full((8, 8, 3), 10, np.uint8))
   out = tmp_path / 'out'
   pattern = str(tmp_path / '**' / '*.png')
@@ -738,16 +737,14 @@ def test_a_rerun_redoes_an_input_whose_results_a_kill_left_unlisted(tmp_path, mo
   with pytest.raises(ValueError, match=r'holds the input .*pic_\w+\.png, which the outputs'):
     unmix_files.unmix_inputs(unmixer, pattern, str(out))
   shutil.rmtree(out)
-  write_info = info_file.write_info
 
   def killed(*args):
     raise _Killed()
 
-  monkeypatch.setattr(info_file, 'write_info', killed)
-  with pytest.raises(_Killed):
+  with monkeypatch.context() as patch, pytest.raises(_Killed):
+    patch.setattr(info_file, 'write_info', killed)
     unmix_files.unmix_inputs(unmixer, pattern, str(out))
   assert (out / 'pic_left.png').exists() and (out / 'pic_unfinished.json').exists()
-  monkeypatch.setattr(info_file, 'write_info', write_info)
   report = unmix_files.unmix_inputs(unmixer, pattern, str(out))
   assert report.processed == 1 and not report.failures and len(calls) == 3
   assert (out / 'pic_info.json').exists() and not list(out.glob('*unfinished*'))
