@@ -18,7 +18,6 @@ live on any file system Beam reads (`gs://`, `s3://`, `hdfs://`, ...).
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 
 import csv  # pylint: disable=g-bad-import-order
-import json
 import logging as std_logging
 import os
 import time
@@ -110,13 +109,8 @@ def completed_info(output_dir: str, name: str) -> Optional[Dict[str, object]]:
   Complete: the info file (which `unmix_item` writes last) parses and every file it lists
   exists. A half-written info file or a missing output means the input is done again.
   """
-  path = os.path.join(output_dir, name + info_file.INFO_SUFFIX)
-  try:
-    with open(path, encoding='utf-8') as f:
-      info = json.load(f)
-  except (OSError, ValueError):
-    return None
-  files = info.get('files') if isinstance(info, dict) else None
+  info = info_file.read_json(os.path.join(output_dir, name + info_file.INFO_SUFFIX))
+  files = info.get('files') if info else None
   if not isinstance(files, list) or not all(
       os.path.isfile(os.path.join(output_dir, file)) for file in files):
     return None

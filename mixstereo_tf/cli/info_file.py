@@ -98,6 +98,23 @@ class Earlier:
   outputs: FrozenSet[str] = frozenset()
 
 
+def read_json(path: str) -> Optional[Dict[str, object]]:
+  """The JSON object a file holds; None when it cannot be read or parsed, or holds no
+  object (a half-written or foreign file)."""
+  try:
+    with open(path, encoding='utf-8') as f:
+      value = json.load(f)
+  except (OSError, ValueError):
+    return None
+  return value if isinstance(value, dict) else None
+
+
+def _named_for(file_name: str, name: str) -> bool:
+  """Whether `file_name` is named as a result of the input named `name`: `<name>_*` or
+  `<name>.*` (`media.write_image_outputs`, `stereo_formats`, the video jobs)."""
+  return file_name.startswith((name + '_', name + '.'))
+
+
 def read_earlier(output_dir: str) -> Earlier:
   """The `Earlier` of the info files in `output_dir` (empty when it does not exist;
   unreadable files skipped)."""
@@ -111,12 +128,10 @@ def read_earlier(output_dir: str) -> Earlier:
     if not file_name.endswith(INFO_SUFFIX):
       continue
     path = os.path.join(output_dir, file_name)
-    try:
-      with open(path, encoding='utf-8') as f:
-        info = json.load(f)
-      source, files = info.get('input'), info.get('files')
-    except (OSError, ValueError, AttributeError):
+    info = read_json(path)
+    if info is None:
       continue
+    source, files = info.get('input'), info.get('files')
     if isinstance(source, str):
       names[os.path.realpath(source)] = file_name[:-len(INFO_SUFFIX)]
     outputs.add(os.path.realpath(path))
@@ -140,30 +155,22 @@ def _unfinished(output_dir: str, file_name: str, listing: List[str], names: Dict
                 outputs: set) -> None:
   """Adds an unfinished input's name and files (`begin_outputs`) to `read_earlier`'s."""
   name = file_name[:-len(UNFINISHED_SUFFIX)]
-  try:
-    with open(os.path.join(output_dir, file_name), encoding='utf-8') as f:
-      source = json.load(f).get('input')
-  except (OSError, ValueError, AttributeError):
-    source = None
+  source = (read_json(os.path.join(output_dir, file_name)) or {}).get('input')
   if isinstance(source, str):
     names.setdefault(os.path.realpath(source), name)
   outputs.update(os.path.realpath(os.path.join(output_dir, other)) for other in listing
-                 if other.startswith((name + '_', name + '.')))
+                 if _named_for(other, name))
 
 
 def _stale_files(path: str, name: str, files: List[str]) -> List[str]:
   """The files an earlier `<name>_info.json` at `path` lists that are not in `files`:
   plain names of that input's outputs (`<name>_*` or `<name>.*`), nothing else."""
-  try:
-    with open(path, encoding='utf-8') as f:
-      earlier = json.load(f).get('files')
-  except (OSError, ValueError, AttributeError):
-    return []
+  earlier = (read_json(path) or {}).get('files')
   if not isinstance(earlier, list):
     return []
   return [old for old in earlier if isinstance(old, str) and old not in files
           and os.path.basename(old) == old and old not in ('.', '..')
-          and (old.startswith(name + '_') or old.startswith(name + '.'))]
+          and _named_for(old, name)]
 
 
 def write_info(output_dir: str, item: input_listing.MediaItem, info: Dict[str, object],
