@@ -1,9 +1,9 @@
-"""Known-answer tests of the SGM kernels' winner search (`census_sgm._winners`)."""
+"""Known-answer tests of the SGM kernels' winner search (`sgm_winners.winners`)."""
 
 import numpy as np
 import pytest
 
-from mixstereo_tf.classical import census_sgm
+from mixstereo_tf.classical import sgm_winners
 
 
 def _parabola(base, lower, best, upper):
@@ -53,7 +53,7 @@ def test_winners_equal_plain_loops_with_per_pixel_windows_and_ties(seed):
   for y in range(h):
     offsets = np.concatenate([[0], np.cumsum(nds[y])]).astype(np.int64)
     s = rng.integers(0, 6, offsets[-1]).astype(np.int32)  # Many ties.
-    census_sgm._winners(s, offsets, lo, nds, y, dl, dr, np.zeros(w, np.int64))
+    sgm_winners.winners(s, offsets, lo, nds, y, dl, dr, np.zeros(w, np.int64))
     left, right = _reference(s, offsets, lo, nds, y, w)
     np.testing.assert_array_equal(dl[y], left)
     np.testing.assert_array_equal(dr[y], right)
