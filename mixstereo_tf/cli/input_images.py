@@ -15,7 +15,7 @@ picture the tools unmix is named, not read silently:
 
 import dataclasses
 import os
-from typing import Optional, Tuple
+from typing import Dict, Optional, Tuple
 
 from absl import logging
 import numpy as np
@@ -115,17 +115,22 @@ def _refuse_other_images(path: str, found: ImageHeader) -> None:
                     path, found.pages)
 
 
-def read_upright(path: str, found: Optional[ImageHeader] = None) -> Tuple[np.ndarray, int]:
-  """(uint8 RGB [H, W, 3] as viewers show the file, its EXIF orientation): a phone's
+def read_upright(path: str, found: Optional[ImageHeader] = None
+                 ) -> Tuple[np.ndarray, int, Tuple[str, ...]]:
+  """(uint8 RGB [H, W, 3] as viewers show the file, its EXIF orientation, what reading it
+  at 8 bits in RGB dropped: `image_io.dropped`'s 'bit_depth', 'alpha'): a phone's
   portrait photo of an anaglyph has its eyes side by side only once turned. Gray and
-  alpha images are converted (`image_io.read_image`); ValueError naming bad files, animated
+  alpha images are converted (`image_io.as_rgb8`); ValueError naming bad files, animated
   images and stereo pairs. `found`: the file's `header`, when already read."""
   found = found or header(path)
   _refuse_other_images(path, found)
-  image = image_io.read_image(path)
+  raw = image_io.read_raw(path)
+  image, lost = image_io.as_rgb8(raw, path), image_io.dropped(raw)
+  del raw
   if found.orientation == 1 or os.path.splitext(path)[1].lower() in image_io.TIFF_EXTENSIONS:
-    return image, found.orientation  # TIFF decoders apply the tag (`image_io.read_raw`).
-  return np.ascontiguousarray(_ORIENTATIONS[found.orientation](image)), found.orientation
+    return image, found.orientation, lost  # TIFF decoders apply the tag (`read_raw`).
+  return (np.ascontiguousarray(_ORIENTATIONS[found.orientation](image)), found.orientation,
+          lost)
 
 
 def read_image(path: str) -> np.ndarray:
@@ -141,3 +146,25 @@ def truncated_jpeg(path: str) -> bool:
       return False
     f.seek(max(0, os.path.getsize(path) - 4096))
     return not f.read().rstrip(b'\x00').endswith(b'\xff\xd9')
+
+
+# What reading an image at 8 bits in RGB dropped (`image_io.dropped`) -> its info note.
+_DROPPED = {'bit_depth': 'stores 16-bit samples: it was read, unmixed and written at 8 bits',
+            'alpha': ('has an alpha channel: it was dropped, the transparent pixels were '
+                      'unmixed as stored and the views are opaque')}
+
+
+def reading_notes(path: str, found: ImageHeader, lost: Tuple[str, ...]) -> Dict[str, str]:
+  """Info notes (logged as warnings) of what the input file held that the outputs do not:
+  rows past a cut JPEG's end, pages after the first, and `read_upright`'s `lost`: 16-bit
+  samples, transparency."""
+  notes = {}
+  for key in lost:
+    notes[key] = f'{path} {_DROPPED[key]}'
+    logging.warning('%s.', notes[key])
+  if truncated_jpeg(path):
+    notes['warning'] = 'the JPEG file ends before its end marker: rows may be missing'
+    logging.warning('%s: %s.', path, notes['warning'])
+  if found.pages > 1:  # Logged by read_upright.
+    notes['warning'] = f'the file holds {found.pages} pages: only the first was unmixed'
+  return notes

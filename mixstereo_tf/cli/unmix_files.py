@@ -164,7 +164,7 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
   found = input_images.header(item.path)
-  image, orientation = input_images.read_upright(item.path, found)
+  image, orientation, lost = input_images.read_upright(item.path, found)
   stored = hints.stored(found.chroma_halved)  # A 4:2:0 JPEG (unmixing/chroma).
   unmix_start = time.perf_counter()
   outputs = unmixer(image, **stored)
@@ -177,11 +177,7 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
     written['icc_profile'] = f'the input\'s, {len(icc_profile)} bytes: kept in the views'
   if orientation != 1:
     written['exif_orientation'] = orientation  # Applied: the outputs are upright.
-  if input_images.truncated_jpeg(item.path):
-    written['warning'] = 'the JPEG file ends before its end marker: rows may be missing'
-    logging.warning('%s: %s.', item.path, written['warning'])
-  if found.pages > 1:  # Logged by read_upright.
-    written['warning'] = f'the file holds {found.pages} pages: only the first was unmixed'
+  written.update(input_images.reading_notes(item.path, found, lost))
   info_file.write_info(output_dir, item, dict(outputs.get('info', {}), **written), request)
   return 1
 

@@ -6,7 +6,7 @@ own depth and channels for the ground-truth readers (`disparity_io`). Bad input 
 """
 
 import os
-from typing import Optional
+from typing import Optional, Tuple
 
 import cv2
 import numpy as np
@@ -101,14 +101,19 @@ def eight_bits(array: np.ndarray) -> np.ndarray:
 
 
 def read_image(path: str) -> np.ndarray:
-  """Reads any 8/16-bit gray, gray+alpha, BGR or BGRA image as uint8 RGB `[H, W, 3]`.
-
-  16-bit values v become round(v / 257) (65535 -> 255, 257 k -> k).
+  """Reads any 8/16-bit gray, gray+alpha, BGR or BGRA image as uint8 RGB `[H, W, 3]`
+  (`as_rgb8` of `read_raw`).
 
   Raises:
     ValueError: missing or undecodable file, or an unsupported sample type (e.g. float).
   """
-  array = read_raw(path)
+  return as_rgb8(read_raw(path), path)
+
+
+def as_rgb8(array: np.ndarray, path: str) -> np.ndarray:
+  """A `read_raw` array as uint8 RGB `[H, W, 3]`: 16-bit values v become round(v / 257)
+  (65535 -> 255, 257 k -> k), gray is replicated, alpha dropped (`dropped` names what
+  went); ValueError naming `path` for other sample types and channel counts."""
   if array.dtype == np.uint16:
     array = eight_bits(array)
   elif array.dtype != np.uint8:
@@ -121,6 +126,17 @@ def read_image(path: str) -> np.ndarray:
   if channels in (3, 4):  # BGR (+ alpha): drop alpha, reorder to RGB.
     return np.ascontiguousarray(array[:, :, 2::-1])
   raise ValueError(f'Unsupported channel count {channels} in {path}')
+
+
+def dropped(array: np.ndarray) -> Tuple[str, ...]:
+  """What `as_rgb8` loses of a `read_raw` array: 'bit_depth' (16-bit samples kept at 8
+  bits) and 'alpha' (the transparency of a gray+alpha or BGRA image with any pixel less
+  than opaque; an alpha channel that is opaque everywhere loses nothing)."""
+  lost = ('bit_depth',) if array.dtype == np.uint16 else ()
+  channels = array.shape[2] if array.ndim == 3 else 1
+  if channels in (2, 4) and array[..., -1].min() < np.iinfo(array.dtype).max:
+    lost += ('alpha',)
+  return lost
 
 
 def chroma_halved(path: str) -> bool:

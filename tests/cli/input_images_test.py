@@ -36,7 +36,7 @@ def test_rotated_tiff_reads_upright(tmp_path, orientation, stored):
   upright = np.random.default_rng(orientation).integers(0, 256, (12, 16, 3), dtype=np.uint8)
   path = str(tmp_path / f'phone_{orientation}.tiff')
   Image.fromarray(upright).transpose(stored).save(path, tiffinfo={0x0112: orientation})
-  image, found = input_images.read_upright(path)
+  image, found, _ = input_images.read_upright(path)
   assert found == orientation
   np.testing.assert_array_equal(image, upright)
 
@@ -51,7 +51,7 @@ def test_read_upright_applies_the_exif_orientation_as_opencv_does(tmp_path, orie
   exif[0x0112] = orientation
   path = str(tmp_path / 'phone.jpg')
   Image.fromarray(stored).save(path, exif=exif, quality=100)
-  image, found = input_images.read_upright(path)
+  image, found, _ = input_images.read_upright(path)
   reference = cv2.imread(path, cv2.IMREAD_COLOR)[..., ::-1]
   assert found == orientation and image.shape == reference.shape
   assert image.shape[:2] == ((20, 12) if orientation >= 5 else (12, 20))

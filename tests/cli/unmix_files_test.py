@@ -93,6 +93,29 @@ def test_an_inputs_colour_profile_is_kept_in_the_views(setup, tmp_path):
     assert 'icc_profile' not in written.info
 
 
+def test_an_inputs_depth_and_transparency_are_said_lost_in_its_info(setup, tmp_path):
+  rng = np.random.RandomState(4)
+  bgra = rng.randint(0, 65536, (40, 50, 4)).astype(np.uint16)
+  bgra[..., 3] = 65535
+  cv2.imwrite(str(tmp_path / 'scan16.png'), bgra)  # 16-bit, opaque: depth only.
+  bgra[:5, :5, 3] = 0
+  cv2.imwrite(str(tmp_path / 'logo.png'), (bgra // 257).astype(np.uint8))  # 8-bit, clear.
+  _image(tmp_path / 'plain.png')
+  report = unmix_files.unmix_inputs(setup, str(tmp_path), str(tmp_path / 'out'),
+                                    media.OutputOptions('separate'))
+  assert report.failures == []
+  infos = {}
+  for name in ('scan16', 'logo', 'plain'):
+    with open(tmp_path / 'out' / f'{name}_info.json', encoding='utf-8') as f:
+      infos[name] = json.load(f)
+  assert '16-bit samples' in infos['scan16']['bit_depth']
+  assert 'scan16.png' in infos['scan16']['bit_depth'] and 'alpha' not in infos['scan16']
+  assert 'views are opaque' in infos['logo']['alpha'] and 'bit_depth' not in infos['logo']
+  assert not {'alpha', 'bit_depth'} & set(infos['plain'])
+  with Image.open(tmp_path / 'out' / 'logo_left.png') as view:
+    assert view.mode == 'RGB'
+
+
 def test_a_rerun_into_the_same_folder_leaves_only_its_own_results(setup, tmp_path):
   _image(tmp_path / 'scene.png')
   out = tmp_path / 'out'

@@ -136,3 +136,18 @@ def test_a_file_name_that_is_no_utf8_is_read_and_written(tmp_path):
   image = np.arange(4 * 6 * 3, dtype=np.uint8).reshape(4, 6, 3)
   assert image_io.write_with_opencv(path, image[..., ::-1])
   np.testing.assert_array_equal(image_io.read_image(path), image)
+
+
+@pytest.mark.parametrize('dtype, channels, alpha, expected', [
+    (np.uint8, 3, None, ()), (np.uint8, 4, 255, ()), (np.uint8, 4, 254, ('alpha',)),
+    (np.uint8, 2, 0, ('alpha',)), (np.uint16, 1, None, ('bit_depth',)),
+    (np.uint16, 4, 65535, ('bit_depth',)), (np.uint16, 4, 65534, ('bit_depth', 'alpha'))])
+def test_dropped_names_what_reading_at_8_bits_in_rgb_loses(dtype, channels, alpha,
+                                                           expected):
+  array = np.full((3, 4, channels), 7, dtype)
+  if alpha is not None:
+    array[..., -1] = np.iinfo(dtype).max
+    array[1, 2, -1] = alpha  # One pixel decides: an opaque channel loses nothing.
+  raw = array[..., 0] if channels == 1 else array
+  assert image_io.dropped(raw) == expected
+  assert image_io.as_rgb8(raw, 'x.png').shape == (3, 4, 3)
