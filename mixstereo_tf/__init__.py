@@ -4,7 +4,7 @@ The public face is one function:
 
   import mixstereo_tf
   result = mixstereo_tf.unmix('photo.jpg')  # Or a uint8 [H, W, 3] / gray [H, W] array.
-  result.left, result.right    # uint8 [H, W, 3] views.
+  result.left, result.right    # uint8 [H, W, 3] views (uint16 for a 16-bit anaglyph).
   result.disparity             # float32 [H, W], signed pixels of the left view.
   result.info['mixture']       # The encoding unmixed ('auto': the one detected).
 
@@ -46,8 +46,9 @@ class Unmixed:
   pixel x + disparity_right[y, x].
 
   Attributes:
-    left: uint8 [H, W, 3] left view.
-    right: uint8 [H, W, 3] right view.
+    left: uint8 [H, W, 3] left view; uint16 for a 16-bit anaglyph (a uint16 array or a
+      16-bit file: matched at 8 bits, its views restored at 16).
+    right: the right view, as left.
     disparity: float32 [H, W] disparity of the left view.
     disparity_right: float32 [H, W] disparity of the right view.
     info: what the CLI's side-car `<name>_info.json` holds about the unmixing (JSON-able):
@@ -74,9 +75,9 @@ def _keywords(message: str) -> str:
 
 def _image(image) -> np.ndarray:
   """`unmix`'s image argument as an array: a path (str, bytes, PathLike) read like the CLI
-  reads it, a PIL image as RGB turned upright by its EXIF orientation (as a file would
-  be); ValueError naming `image=` for videos, bytes that are no path, and arrays that
-  are not uint8 images."""
+  reads it (16-bit files as uint16), a PIL image as RGB turned upright by its EXIF
+  orientation (as a file would be); ValueError naming `image=` for videos, bytes that are
+  no path, and arrays that are not uint8 or uint16 images."""
   from mixstereo_tf.cli import input_images  # pylint: disable=g-import-not-at-top
   from mixstereo_tf.cli import input_listing  # pylint: disable=g-import-not-at-top
   if isinstance(image, bytes) and (b'\0' in image or len(image) > 4096):
@@ -89,15 +90,16 @@ def _image(image) -> np.ndarray:
     if os.path.splitext(path)[1].lower() in input_listing.VIDEO_EXTENSIONS:
       raise ValueError(f'image={path} is a video; unmix() takes one image (videos: '
                        f'mixstereo-unmix --input={path}).')
-    return input_images.read_image(path)
+    return input_images.read_image(path, deep=True)
   if hasattr(image, 'getexif') and hasattr(image, 'convert'):  # A PIL image: as a file.
     image = _pil_rgb(image)
   array = np.asarray(image)
   if array.ndim == 3 and array.shape[2] == 4:
     array = array[..., :3]  # RGBA: alpha dropped, as image files' and PIL images' is.
-  if array.dtype != np.uint8:
-    raise ValueError(f'image= must be a uint8 array (0-255), got {array.dtype}; e.g. '
-                     'np.round(x * 255).astype(np.uint8) for floats in [0, 1].')
+  if array.dtype not in (np.uint8, np.uint16):
+    raise ValueError(f'image= must be a uint8 array (0-255) or a 16-bit uint16 one, got '
+                     f'{array.dtype}; e.g. np.round(x * 255).astype(np.uint8) for floats in '
+                     '[0, 1].')
   if array.ndim not in (2, 3) or min(array.shape[:2]) == 0 or (
       array.ndim == 3 and array.shape[2] not in (1, 3)):
     raise ValueError(f'image= must be a [H, W, 3] RGB (or RGBA) or [H, W] gray image, got '
@@ -120,9 +122,8 @@ def _stored_hint(image) -> Dict[str, Any]:
 
 def _pil_rgb(image) -> np.ndarray:
   """A PIL image as uint8 RGB, turned upright by its EXIF orientation: 16-bit gray ('I;16',
-  or 'I' within 0..65535, as Pillow opens 16-bit PNGs) scaled to 8 bits as such a file
-  is; ValueError for float ('F') and other 32-bit images, which `convert` would clip."""
-  from mixstereo_tf.data import image_io  # pylint: disable=g-import-not-at-top
+  or 'I' within 0..65535, as Pillow opens 16-bit PNGs) as uint16 RGB, as such a file is
+  read; ValueError for float ('F') and other 32-bit images, which `convert` would clip."""
   from PIL import ImageOps  # pylint: disable=g-import-not-at-top
   image = ImageOps.exif_transpose(image)
   if image.mode.startswith('I;16') or image.mode == 'I':
@@ -130,7 +131,7 @@ def _pil_rgb(image) -> np.ndarray:
     if values.size and (values.min() < 0 or values.max() > 65535):
       raise ValueError(f"image= is a 32-bit PIL image (mode 'I', values {values.min()} to "
                        f'{values.max()}); give an 8- or 16-bit image.')
-    return np.repeat(image_io.eight_bits(values)[..., None], 3, axis=2)
+    return np.repeat(values.astype(np.uint16)[..., None], 3, axis=2)
   if image.mode == 'F':
     raise ValueError("image= is a floating-point PIL image (mode 'F'), whose range is "
                      'unknown; give np.round(x * 255).astype(np.uint8) for values in [0, 1].')
@@ -195,11 +196,11 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
   without its start-up lines, as the tools do (`core.quiet_import`).
 
   Args:
-    image: a uint8 RGB [H, W, 3] (alpha of RGBA dropped) or gray [H, W] array (OpenCV's
-      cv2.imread / imdecode give BGR: pass `bgr[..., ::-1]`), a PIL image (as RGB, EXIF
-      orientation applied, 16-bit gray scaled to 8 bits), or the path (str, bytes,
-      PathLike) of an image file (read like the CLI reads it: gray and 16-bit files become
-      uint8 RGB, EXIF orientation applied); videos: the `mixstereo-unmix` tool.
+    image: a uint8 (or uint16) RGB [H, W, 3] (alpha of RGBA dropped) or gray [H, W] array
+      (OpenCV's cv2.imread / imdecode give BGR: pass `bgr[..., ::-1]`), a PIL image (as
+      RGB, EXIF orientation applied, 16-bit gray as uint16), or the path (str, bytes,
+      PathLike) of an image file (read like the CLI reads it: gray files become RGB,
+      16-bit ones uint16, EXIF orientation applied); videos: the `mixstereo-unmix` tool.
     mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g. 'gray',
       'diplopia'); 'auto' detects an anaglyph's encoding; None: the model's own.
     method: 'model' (a network), 'classical' (training-free) or 'sgbm' (OpenCV's, a peer).

@@ -128,7 +128,7 @@ def test_a_folder_is_no_image_file(tmp_path):
 def test_a_video_or_an_array_that_is_not_uint8_is_named(tmp_path):
   with pytest.raises(ValueError, match=r'image=.*clip.MP4 is a video; .*mixstereo-unmix'):
     mixstereo_tf.unmix(str(tmp_path / 'clip.MP4'), method='classical', mixture='gray')
-  for dtype in (np.float32, np.uint16, bool):
+  for dtype in (np.float32, np.int32, bool):
     with pytest.raises(ValueError, match=f'image= must be a uint8 array .*got {np.dtype(dtype)}'):
       mixstereo_tf.unmix(np.zeros((20, 20, 3), dtype), method='classical', mixture='gray')
   for shape in ((0, 20, 3), (20, 0), (20, 20, 2), (5, 20, 20, 3)):  # Was ZeroDivisionError.
@@ -174,8 +174,9 @@ def test_image_kinds_read_as_files_are_and_wrong_kinds_are_refused(tmp_path):
   with PIL.Image.open(tmp_path / 'g16.png') as opened:
     assert opened.mode in ('I;16', 'I')
     from_pil = mixstereo_tf._image(opened)  # pylint: disable=protected-access
-  np.testing.assert_array_equal(from_pil, from_file)
-  assert from_pil[0, 1].tolist() == [1, 1, 1] and from_pil[-1, -1].tolist() == [255] * 3
+  np.testing.assert_array_equal(from_pil, from_file)  # 16 bits kept, as RGB.
+  assert from_pil.dtype == np.uint16 and from_pil.shape == (16, 16, 3)
+  assert from_pil[0, 1].tolist() == [257] * 3 and from_pil[-1, -1].tolist() == [65535] * 3
   with pytest.raises(ValueError, match=r"floating-point PIL image \(mode 'F'\)"):
     mixstereo_tf._image(PIL.Image.fromarray(np.zeros((4, 4), np.float32)))  # pylint: disable=protected-access
   rgba = np.random.default_rng(0).integers(0, 256, (6, 8, 4), dtype=np.uint8)
@@ -202,3 +203,16 @@ def test_max_network_pixels_for_a_method_without_a_network_is_refused():
   with pytest.raises(ValueError, match=r"max_network_pixels= applies to method='model'"):
     mixstereo_tf.unmix(np.zeros((8, 8, 3), np.uint8), method='classical', mixture='anaglyph',
                        max_network_pixels=1000)
+
+
+def test_a_16_bit_anaglyph_gives_16_bit_views_holding_its_samples(tmp_path):
+  """An array or a 16-bit PNG: the views' copied channels are the input's own samples."""
+  rng = np.random.default_rng(1)
+  left = rng.integers(0, 65536, (40, 64, 3)).astype(np.uint16)
+  image = np.concatenate([left[..., :1], np.roll(left, -3, axis=1)[..., 1:]], -1)
+  cv2.imwrite(str(tmp_path / 'scan.png'), image[..., ::-1])
+  for given in (image, str(tmp_path / 'scan.png')):
+    result = mixstereo_tf.unmix(given, method='classical', mixture='anaglyph')
+    assert result.left.dtype == result.right.dtype == np.uint16
+    np.testing.assert_array_equal(result.left[..., 0], image[..., 0])
+    np.testing.assert_array_equal(result.right[..., 1:], image[..., 1:])

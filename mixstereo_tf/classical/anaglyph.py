@@ -55,10 +55,11 @@ def unmix_anaglyph(mixture, mixture_name: str,
     on_disparity: called with the disparities and 'consistent_left' once they are
       matched, before the views are restored (`hints.FrameHint.on_disparity`).
     views_from: the image the views are restored from, as `mixture` (the stored image of
-      a colour-resolution copy, `hints.FrameHint.stored_image`); None: `mixture`.
+      a colour-resolution copy or a 16-bit image, `hints.FrameHint.stored_image`); None:
+      `mixture`.
 
   Returns:
-    'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
+    'left', 'right': uint8 [H, W, 3] (uint16 from a uint16 `views_from` or `mixture`); 'disparity_left', 'disparity_right': float32
     [H, W], signed pixels (left x matches right x - d_L; right x matches left x + d_R);
     'consistent_left': bool [H, W], the left-right check before filling;
     'disparity_range': the (min, max) searched.
@@ -77,12 +78,13 @@ def unmix_anaglyph(mixture, mixture_name: str,
   if on_disparity is not None:
     on_disparity({key: matched[key] for key in ('disparity_left', 'disparity_right',
                                                  'consistent_left')})
+  depth = np.asarray(mixture if views_from is None else views_from).dtype
   if views_from is not None:
     image = image_range.as_unit_float(views_from, 'views_from')
   restored = views.restore_views(image, mixture_name, matched['disparity_left'],
                                  matched['disparity_right'], config=config.restore)
-  return {'left': image_range.unit_to_u8(restored['left']),
-          'right': image_range.unit_to_u8(restored['right']),
+  return {'left': image_range.unit_to(restored['left'], depth),
+          'right': image_range.unit_to(restored['right'], depth),
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
           'consistent_left': matched['consistent_left'],

@@ -115,17 +115,19 @@ def _refuse_other_images(path: str, found: ImageHeader) -> None:
                     path, found.pages)
 
 
-def read_upright(path: str, found: Optional[ImageHeader] = None
+def read_upright(path: str, found: Optional[ImageHeader] = None, deep: bool = False
                  ) -> Tuple[np.ndarray, int, Tuple[str, ...]]:
   """(uint8 RGB [H, W, 3] as viewers show the file, its EXIF orientation, what reading it
   at 8 bits in RGB dropped: `image_io.dropped`'s 'bit_depth', 'alpha'): a phone's
   portrait photo of an anaglyph has its eyes side by side only once turned. Gray and
   alpha images are converted (`image_io.as_rgb8`); ValueError naming bad files, animated
-  images and stereo pairs. `found`: the file's `header`, when already read."""
+  images and stereo pairs. `found`: the file's `header`, when already read. `deep`: a
+  16-bit file is read as uint16 RGB (`image_io.as_rgb`), and 'bit_depth' is not lost."""
   found = found or header(path)
   _refuse_other_images(path, found)
   raw = image_io.read_raw(path)
-  image, lost = image_io.as_rgb8(raw, path), image_io.dropped(raw)
+  lost = tuple(key for key in image_io.dropped(raw) if not (deep and key == 'bit_depth'))
+  image = image_io.as_rgb(raw, path) if deep else image_io.as_rgb8(raw, path)
   del raw
   if found.orientation == 1 or os.path.splitext(path)[1].lower() in image_io.TIFF_EXTENSIONS:
     return image, found.orientation, lost  # TIFF decoders apply the tag (`read_raw`).
@@ -133,9 +135,9 @@ def read_upright(path: str, found: Optional[ImageHeader] = None
           lost)
 
 
-def read_image(path: str) -> np.ndarray:
+def read_image(path: str, deep: bool = False) -> np.ndarray:
   """The image of `read_upright`."""
-  return read_upright(path)[0]
+  return read_upright(path, deep=deep)[0]
 
 
 def truncated_jpeg(path: str) -> bool:
@@ -149,9 +151,16 @@ def truncated_jpeg(path: str) -> bool:
 
 
 # What reading an image at 8 bits in RGB dropped (`image_io.dropped`) -> its info note.
-_DROPPED = {'bit_depth': 'stores 16-bit samples: it was read, unmixed and written at 8 bits',
+_DROPPED = {'bit_depth': ('stores 16-bit samples: its views were restored and written at 8 '
+                          'bits (only anaglyph views are restored at 16)'),
             'alpha': ('has an alpha channel: it was dropped, the transparent pixels were '
                       'unmixed as stored and the views are opaque')}
+
+
+def depth_lost(image: np.ndarray, view: np.ndarray) -> Tuple[str, ...]:
+  """('bit_depth',) when a 16-bit `image` (`read_upright(deep=True)`) gave 8-bit views (a
+  double image's or a single view's: only anaglyph views are restored at 16 bits), else ()."""
+  return ('bit_depth',) if image.dtype == np.uint16 and view.dtype != np.uint16 else ()
 
 
 def reading_notes(path: str, found: ImageHeader, lost: Tuple[str, ...]) -> Dict[str, str]:

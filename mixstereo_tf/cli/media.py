@@ -15,6 +15,7 @@ from PIL import Image
 
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
+from mixstereo_tf.core import image_range
 from mixstereo_tf.data import image_io
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import temporal
@@ -54,9 +55,14 @@ def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
 
 
 def write_image(path: str, image: np.ndarray, icc_profile: Optional[bytes] = None) -> None:
-  """Writes a uint8 RGB image (format from the extension), with `icc_profile` (the input's
-  colour space, `icc_profile_of`) embedded when given."""
-  if icc_profile:
+  """Writes a uint8 RGB image (format from the extension; uint16 RGB: a 16-bit PNG), with
+  `icc_profile` (the input's colour space, `icc_profile_of`) embedded when given."""
+  if image.dtype == np.uint16:  # Pillow writes no 16-bit RGB: OpenCV, then the profile.
+    if not image_io.write_with_opencv(path, np.ascontiguousarray(image[:, :, ::-1])):
+      raise ValueError(f'Cannot write image file: {path}')
+    if icc_profile:
+      image_io.add_png_icc(path, icc_profile)
+  elif icc_profile:
     try:
       Image.fromarray(np.ascontiguousarray(image, np.uint8), 'RGB').save(
           path, icc_profile=icc_profile)
@@ -123,14 +129,16 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
   """Writes one image's results (mixstereo_tf/cli/unmix_files.py).
 
   Args:
-    outputs: {'left', 'right': uint8 [H, W, 3], 'disparity_left': [H, W] signed pixels}.
+    outputs: {'left', 'right': uint8 [H, W, 3] (uint16: written as 16-bit PNGs, the
+      formats from their 8-bit copies), 'disparity_left': [H, W] signed pixels}.
     output_dir: existing folder.
     name: the file-name prefix.
     layout: one of LAYOUTS.
     max_display_disparity: a fixed colour-map range 0..this; None: the range found.
     formats: `stereo_formats.FORMATS` names also written (depth images span the colour
       map's range).
-    mixture: the input image, uint8 RGB [H, W, 3] (the 'html' viewer page needs it).
+    mixture: the input image, uint8 (or uint16) RGB [H, W, 3] (the 'html' viewer page
+      needs it).
     icc_profile: the input's ICC profile (`icc_profile_of`), embedded in the views and the
       formats drawn from them; the disparity maps carry none.
 
@@ -139,7 +147,7 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
     'disparity16': why no uint16 PNG was written, when none was (it holds 0..255.996 px:
     negative or larger disparities are not representable; the .npy holds them).}
   """
-  paths = []
+  paths = []  # The views at their depth (16-bit PNG from a 16-bit input), the rest at 8.
   for suffix, image in layout_images(outputs['left'], outputs['right'], layout):
     paths.append(os.path.join(output_dir, f'{name}_{suffix}.png'))
     write_image(paths[-1], image, icc_profile)
@@ -159,9 +167,10 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
                               'KITTI-style uint16 PNG holds; see the .npy')
   paths.append(os.path.join(output_dir, f'{name}_disparity.npy'))
   np.save(paths[-1], disparity)
+  left, right = (image_range.eight_bits(outputs[key]) for key in ('left', 'right'))
+  mixture = None if mixture is None else image_range.eight_bits(mixture)
   paths.extend(stereo_formats.write_formats(stereo_formats.StereoResult(
-      outputs['left'], outputs['right'], disparity, colour, (low, high), mixture,
-      icc_profile),
+      left, right, disparity, colour, (low, high), mixture, icc_profile),
       os.path.join(output_dir, name), formats))
   written['files'] = [os.path.basename(p) for p in paths]
   return written

@@ -44,6 +44,7 @@ from typing import Dict, Iterator, List, Optional, TextIO, Tuple
 
 from absl import logging
 import cv2
+import numpy as np
 from PIL import Image
 import tensorflow as tf
 
@@ -164,11 +165,12 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
   found = input_images.header(item.path)
-  image, orientation, lost = input_images.read_upright(item.path, found)
+  image, orientation, lost = input_images.read_upright(item.path, found, deep=True)
   stored = hints.stored(found.chroma_halved)  # A 4:2:0 JPEG (unmixing/chroma).
   unmix_start = time.perf_counter()
   outputs = unmixer(image, **stored)
   report.unmix_seconds += time.perf_counter() - unmix_start
+  lost += input_images.depth_lost(image, outputs['left'])
   icc_profile = found.icc_profile
   info_file.begin_outputs(output_dir, item)
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,
@@ -177,6 +179,8 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
     written['icc_profile'] = f'the input\'s, {len(icc_profile)} bytes: kept in the views'
   if orientation != 1:
     written['exif_orientation'] = orientation  # Applied: the outputs are upright.
+  if outputs['left'].dtype == np.uint16:
+    written['views_bit_depth'] = 16  # The view PNGs; the formats and maps have 8 bits.
   written.update(input_images.reading_notes(item.path, found, lost))
   info_file.write_info(output_dir, item, dict(outputs.get('info', {}), **written), request)
   return 1

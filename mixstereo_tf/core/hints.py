@@ -54,8 +54,9 @@ class FrameHint:
       every channel, which matches at disparity 0; an anaglyph is then matched without it
       (`unmixing.chroma`).
     stored_image: uint8 [H, W, 3], the image as stored, where the stage is given its
-      colour-resolution copy to match (`steps.run` sets it for chroma_halved anaglyphs):
-      the views are restored from it (`views_image`); None: from the image matched.
+      colour-resolution copy to match (`steps.run` sets it for chroma_halved anaglyphs),
+      or uint16, a 16-bit image matched at 8 bits: the views are restored from it, at its
+      depth (`views_image`); None: from the image matched.
   """
   mixture: Optional[str] = None
   may_be: Optional[str] = None

@@ -1,7 +1,8 @@
 """Image value ranges in one place: uint8 <-> [0, 1] <-> [-1, 1], for NumPy and TensorFlow.
 
 Three ranges are in use (docs/DESIGN.md):
-  * uint8 0..255: image files, readers, predictor inputs and outputs;
+  * uint8 0..255: image files, readers, predictor inputs and outputs (16-bit files: uint16
+    0..65535, their views restored at that depth: `to_unit`, `unit_to`, `eight_bits`);
   * 'unit' [0, 1]: photometric augmentation, the classical baselines, the losses' SSIM/L1
     terms (monodepth's constants are for this range);
   * 'signed' [-1, 1]: network inputs and outputs (the paper normalises to [-1, 1]).
@@ -24,6 +25,31 @@ def u8_to_unit(image):
   if _is_tensor(image):
     return tf.cast(image, tf.float32) / 255.0
   return np.asarray(image).astype(np.float32) / np.float32(255.0)
+
+
+def to_unit(image) -> np.ndarray:
+  """A uint8 (value / 255) or uint16 (value / 65535) NumPy image as float32 [0, 1]."""
+  image = np.asarray(image)
+  if image.dtype == np.uint16:
+    return image.astype(np.float32) / np.float32(65535.0)
+  return u8_to_unit(image)
+
+
+def eight_bits(image) -> np.ndarray:
+  """A uint16 NumPy image as uint8, round(v / 257) (65535 -> 255, 257 k -> k); others as
+  they are."""
+  image = np.asarray(image)
+  if image.dtype != np.uint16:
+    return image
+  return ((image.astype(np.uint32) + 128) // 257).astype(np.uint8)
+
+
+def unit_to(image, dtype) -> np.ndarray:
+  """[0, 1] NumPy image -> `dtype`: uint8 as `unit_to_u8`; uint16 round(x * 65535), clipped."""
+  if np.dtype(dtype) != np.uint16:
+    return unit_to_u8(image)
+  scaled = np.rint(np.asarray(image, np.float32) * np.float32(65535.0))
+  return np.clip(scaled, 0.0, 65535.0, out=scaled).astype(np.uint16)
 
 
 def u8_to_signed(image):
@@ -67,10 +93,10 @@ def signed_to_u8(image):
 
 
 def as_unit_float(image, name: str = 'image') -> np.ndarray:
-  """A NumPy RGB image as float32 [0, 1]: uint8 is divided by 255, float is checked.
+  """A NumPy RGB image as float32 [0, 1]: uint8 / uint16 as `to_unit`, float is checked.
 
   Args:
-    image: uint8 [H, W, 3] (0..255) or float [H, W, 3] in [0, 1].
+    image: uint8 [H, W, 3] (0..255), uint16 (0..65535) or float [H, W, 3] in [0, 1].
     name: what the image is, for error messages.
 
   Raises:
@@ -79,10 +105,11 @@ def as_unit_float(image, name: str = 'image') -> np.ndarray:
   image = np.asarray(image)
   if image.ndim != 3 or image.shape[-1] != 3:
     raise ValueError(f'{name} must be an RGB image [H, W, 3], got shape {image.shape}.')
-  if image.dtype == np.uint8:
-    return u8_to_unit(image)
+  if image.dtype in (np.uint8, np.uint16):
+    return to_unit(image)
   if not np.issubdtype(image.dtype, np.floating):
-    raise ValueError(f'{name} must be uint8 or float in [0, 1], got dtype {image.dtype}.')
+    raise ValueError(f'{name} must be uint8, uint16 or float in [0, 1], got dtype '
+                     f'{image.dtype}.')
   if not np.all(np.isfinite(image)) or image.min() < -1e-3 or image.max() > 1 + 1e-3:
     raise ValueError(f'float {name} must be finite and in [0, 1], got range '
                      f'[{np.nanmin(image)}, {np.nanmax(image)}].')

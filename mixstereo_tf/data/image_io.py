@@ -6,12 +6,15 @@ own depth and channels for the ground-truth readers (`disparity_io`). Bad input 
 """
 
 import os
+import zlib
 from typing import Optional, Tuple
 
 import cv2
 import numpy as np
 from PIL import Image
 from PIL import JpegImagePlugin
+
+from mixstereo_tf.core import image_range
 
 # Extensions `find_image` swaps: monodepth's KITTI lists name .jpg files, downloads hold .png.
 _SWAP_EXTENSIONS = ('.jpg', '.png')
@@ -71,6 +74,21 @@ def write_with_opencv(path: str, array: np.ndarray) -> bool:
   return True
 
 
+def add_png_icc(path: str, icc_profile: bytes) -> None:
+  """Embeds `icc_profile` in the PNG file at `path` as its iCCP chunk (after IHDR; PNG 1.2,
+  section 4.2.2.4: name, NUL, method 0, zlib data), for PNGs that OpenCV wrote (16-bit RGB,
+  which Pillow cannot write); ValueError naming a file that is no PNG."""
+  with open(path, 'rb') as f:
+    data = f.read()
+  if data[:8] != b'\x89PNG\r\n\x1a\n' or data[12:16] != b'IHDR':
+    raise ValueError(f'Cannot embed a colour profile: {path} is no PNG file')
+  end = 8 + 12 + int.from_bytes(data[8:12], 'big')  # Length, type, data, CRC.
+  body = b'iCCP' + b'ICC profile\0\0' + zlib.compress(icc_profile)
+  chunk = (len(body) - 4).to_bytes(4, 'big') + body + zlib.crc32(body).to_bytes(4, 'big')
+  with open(path, 'wb') as f:
+    f.write(data[:end] + chunk + data[end:])
+
+
 def read_raw(path: str) -> np.ndarray:
   """cv2.imread(IMREAD_UNCHANGED), else Pillow, with a ValueError naming a missing or
   unreadable file. Both decoders apply a TIFF's orientation tag themselves (OpenCV 5.0
@@ -95,11 +113,6 @@ def read_raw(path: str) -> np.ndarray:
   return array
 
 
-def eight_bits(array: np.ndarray) -> np.ndarray:
-  """16-bit samples as uint8: round(v / 257) (65535 -> 255, 257 k -> k)."""
-  return ((array.astype(np.uint32) + 128) // 257).astype(np.uint8)
-
-
 def read_image(path: str) -> np.ndarray:
   """Reads any 8/16-bit gray, gray+alpha, BGR or BGRA image as uint8 RGB `[H, W, 3]`
   (`as_rgb8` of `read_raw`).
@@ -114,9 +127,12 @@ def as_rgb8(array: np.ndarray, path: str) -> np.ndarray:
   """A `read_raw` array as uint8 RGB `[H, W, 3]`: 16-bit values v become round(v / 257)
   (65535 -> 255, 257 k -> k), gray is replicated, alpha dropped (`dropped` names what
   went); ValueError naming `path` for other sample types and channel counts."""
-  if array.dtype == np.uint16:
-    array = eight_bits(array)
-  elif array.dtype != np.uint8:
+  return image_range.eight_bits(as_rgb(array, path))
+
+
+def as_rgb(array: np.ndarray, path: str) -> np.ndarray:
+  """`as_rgb8` at the array's own depth: uint8 or uint16 RGB `[H, W, 3]`."""
+  if array.dtype not in (np.uint8, np.uint16):
     raise ValueError(f'Unsupported image sample type {array.dtype} in {path}')
   if array.ndim == 2:
     array = array[:, :, None]

@@ -173,11 +173,11 @@ def learned_unmix(descriptors: Descriptors, image: np.ndarray, name: str,
     return {key: out[key] for key in _KEYS}
   mixture01 = image_range.u8_to_unit(image)
   matched = match(descriptors, mixture01, name, *search, config, family.matching(hint))
-  views_from = image_range.u8_to_unit(hints.views_image(image, hint))
-  restored = family.restore(views_from, name, matched['disparity_left'],
+  views_from = hints.views_image(image, hint)
+  restored = family.restore(image_range.to_unit(views_from), name, matched['disparity_left'],
                             matched['disparity_right'])
-  return {'left': image_range.unit_to_u8(restored['left']),  # As _KEYS.
-          'right': image_range.unit_to_u8(restored['right']),
+  return {'left': image_range.unit_to(restored['left'], views_from.dtype),  # As _KEYS.
+          'right': image_range.unit_to(restored['right'], views_from.dtype),
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
           'consistent_left': matched['consistent_left']}

@@ -12,9 +12,9 @@ Steps, shared by the model and the classical method:
      `classical` stage (`classical_unmix`, the one route of inference and of the
      refiner's training examples); the 'sgbm' baseline: OpenCV's SGBM on the eye
      channels, views restored likewise (`sgbm_unmix`).
-Outputs: 'left', 'right' uint8 [H, W, 3], 'disparity_left', 'disparity_right' float32
-[H, W] signed pixels, and 'info' (a JSON-able dict: mixture, detection, disparity range,
-shift, scale, seconds).
+Outputs: 'left', 'right' uint8 [H, W, 3] (uint16 where restored from a 16-bit image),
+'disparity_left', 'disparity_right' float32 [H, W] signed pixels, and 'info' (a JSON-able
+dict: mixture, detection, disparity range, shift, scale, seconds).
 
 Eye order (`eye_order`), after step 1: the eyes as given, swapped (cyan-red glasses, mirrored
 scans) or detected ('auto', anaglyphs); swapped images go through steps 2-3 mirrored and
@@ -108,11 +108,12 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
        'disparity_right': raw['disparity_right'].numpy()}, chosen, height, width)
   if restore and family.restores_views:
     restored = family.restore(
-        image_range.u8_to_unit(views_from), name,
+        image_range.to_unit(views_from), name,
         outputs['disparity_left'], outputs['disparity_right'],
         image_range.u8_to_unit(outputs['left']),
         image_range.u8_to_unit(outputs['right']))
-    outputs.update({k: image_range.unit_to_u8(restored[k]) for k in ('left', 'right')})
+    outputs.update({k: image_range.unit_to(restored[k], views_from.dtype)
+                    for k in ('left', 'right')})
   outputs['info'] = {'shift': chosen.shift, 'scale': round(chosen.scale, 4)}
   return outputs
 
@@ -136,7 +137,10 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   disparities and starts while these are refined (measured on temporal.py's clips,
   docs/DESIGN.md). The views come from the hint's stored_image where it has one; a gray
   image (every channel equal) gets gray views, the refined views' channel mean."""
-  base = (base_stage or classical_unmix)(image, name, search, hint)
+  deep = hint is not None and hint.stored_image is not None and (
+      hint.stored_image.dtype == np.uint16)  # The base as at 8 bits; the views from it below.
+  base = (base_stage or classical_unmix)(
+      image, name, search, dataclasses.replace(hint, stored_image=None) if deep else hint)
   family = families.of(name)
   unread = hint and hint.unread
   skipped = (unread if unread in ('disparity_left', 'disparity_right')
@@ -152,7 +156,8 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   if 'info' in base:  # The base's record: a double image's mixing weight.
     outputs['info'] = base['info']
   if family.restores_views:
-    mixture01 = image_range.u8_to_unit(hints.views_image(image, hint))
+    views_from = hints.views_image(image, hint)
+    mixture01 = image_range.to_unit(views_from)
     disparities = outputs['disparity_left'], outputs['disparity_right']
     transfer = family.restore(mixture01, name, *disparities)
     weight = REFINED_VIEW_WEIGHT
@@ -161,7 +166,8 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
     checked = transfer['consistent_left'], transfer['consistent_right']
     restored = family.restore(mixture01, name, *disparities, *prior, consistent=checked,
                               colour_line=True)
-    outputs.update({k: image_range.unit_to_u8(restored[k]) for k in ('left', 'right')})
+    outputs.update({k: image_range.unit_to(restored[k], views_from.dtype)
+                    for k in ('left', 'right')})
     outputs['consistent_left'] = restored['consistent_left']  # For the next frame's prior.
   return outputs
 
@@ -191,10 +197,10 @@ def sgbm_unmix(image: np.ndarray, name: str, search: Tuple[int, int],
   method's, from the hint's stored_image where it has one); a video hint's prior is not
   used."""
   d_left, d_right = sgbm.match_anaglyph(image, name, *search)
-  restored = families.of(name).restore(image_range.u8_to_unit(hints.views_image(image, hint)),
-                                       name, d_left, d_right)
-  return {'left': image_range.unit_to_u8(restored['left']),
-          'right': image_range.unit_to_u8(restored['right']),
+  views_from = hints.views_image(image, hint)
+  restored = families.of(name).restore(image_range.to_unit(views_from), name, d_left, d_right)
+  return {'left': image_range.unit_to(restored['left'], views_from.dtype),
+          'right': image_range.unit_to(restored['right'], views_from.dtype),
           'disparity_left': d_left, 'disparity_right': d_right,
           'consistent_left': restored['consistent_left'],
           'info': {'matcher': 'opencv_stereo_sgbm'}}
@@ -233,9 +239,13 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   `solve(image, name, range, hint)` is the method's step 3; `swap_eyes`: one of
   `eye_order.SWAP_EYES`. A `hint`'s mixture, eye order and range (a video shot's) replace
   steps 1 and 2; `solve` may use its prior; `mixing_weight` (double images) goes to the
-  hint unless it has its own."""
+  hint unless it has its own. A uint16 `image` (a 16-bit file) is detected and matched at
+  8 bits (`image_range.eight_bits`); where the encoding restores its views they come from
+  it, as uint16 (the hint's stored_image), else at 8 bits."""
   start = time.perf_counter()
   hint = hint or hints.FrameHint()
+  deep = image if image.dtype == np.uint16 else None  # 16 bits: views restored from it.
+  image = image_range.eight_bits(image)
   if hint.mixing_weight is None and mixing_weight is not None:
     hint = dataclasses.replace(hint, mixing_weight=mixing_weight)
   if hint.mixture is not None:
@@ -253,13 +263,16 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)
   if swapped:
     image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)
-  halved = hint.chroma_halved and families.of(name).restores_views
+    deep = None if deep is None else eye_order.mirror(deep)
+  restores = families.of(name).restores_views
+  halved = hint.chroma_halved and restores
   matched = chroma.colour_resolution_copy(image) if halved else image
   search = hint.disparity_range
   if search is None:
     search = estimate_range(matched, name, requested_range, default_range(name), hint, plan)
+  stored = deep if deep is not None and restores else image if halved else None
   outputs = solve(matched, name, search,
-                  dataclasses.replace(hint, stored_image=image) if halved else hint)
+                  hint if stored is None else dataclasses.replace(hint, stored_image=stored))
   if isinstance(requested_range, tuple) and hint.disparity_range is None:
     _warn_at_limits(outputs['disparity_left'], search)  # Before the eyes are turned back.
   if swapped:

@@ -25,11 +25,12 @@ MAX_SIDE = 32767
 
 
 def as_rgb(image) -> np.ndarray:
-  """A uint8 mixture as [H, W, 3]; gray [H, W] / [H, W, 1] is replicated to RGB and an
-  alpha channel dropped (gray + alpha [H, W, 2], RGBA [H, W, 4]), as image files are read."""
+  """A uint8 (or 16-bit uint16) mixture as [H, W, 3]; gray [H, W] / [H, W, 1] is replicated
+  to RGB and an alpha channel dropped (gray + alpha [H, W, 2], RGBA [H, W, 4]), as image
+  files are read."""
   image = np.asarray(image)
-  if image.dtype != np.uint8:
-    raise ValueError(f'Unmixer expects a uint8 image, got {image.dtype}.')
+  if image.dtype not in (np.uint8, np.uint16):
+    raise ValueError(f'Unmixer expects a uint8 (or uint16) image, got {image.dtype}.')
   if image.ndim == 2:
     image = image[:, :, None]
   if image.ndim != 3 or image.shape[2] not in (1, 2, 3, 4):
@@ -100,7 +101,9 @@ class PredictorConfig:
 class Unmixer:
   """A predictor: `unmixer(mixture_u8)`, or `unmixer(left_u8, right_u8)` when takes_pair.
 
-  Called on a uint8 mixture [H, W, 3] it returns {'left', 'right': uint8 [H, W, 3],
+  Called on a uint8 mixture [H, W, 3] it returns {'left', 'right': uint8 [H, W, 3] (a
+  uint16 mixture is matched at 8 bits, its views restored and returned as uint16 where the
+  encoding restores them: `steps.run`),
   'disparity_left', 'disparity_right': float32 [H, W] signed pixels, 'info': what was done
   (`steps`)}; an 'oracle' returns the disparities of the clean pair. A video frame
   may be given a `hints.FrameHint` (`unmixer(frame, hint=hint)`: its shot's encoding,

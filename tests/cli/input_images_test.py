@@ -169,3 +169,21 @@ def test_the_header_says_what_image_io_says_of_the_stored_colour(tmp_path):
     assert input_images.header(path).chroma_halved == image_io.chroma_halved(path), name
   assert input_images.header(str(tmp_path / '420.jpg')).chroma_halved
   assert not input_images.header(str(tmp_path / 'a.png')).chroma_halved
+
+
+def test_a_16_bit_file_is_read_deep_on_request_and_a_loss_of_depth_is_said(tmp_path):
+  """`deep`: uint16 RGB and 'bit_depth' not lost; views that came back at 8 bits (a double
+  image's) are: `depth_lost`, then a note naming the file."""
+  bgr = np.random.default_rng(2).integers(0, 65536, (6, 8, 3)).astype(np.uint16)
+  path = str(tmp_path / 'scan.png')
+  cv2.imwrite(path, bgr)
+  deep, _, lost = input_images.read_upright(path, deep=True)
+  assert deep.dtype == np.uint16 and lost == ()
+  np.testing.assert_array_equal(deep, bgr[..., ::-1])
+  shallow, _, lost = input_images.read_upright(path)
+  assert shallow.dtype == np.uint8 and lost == ('bit_depth',)
+  assert input_images.depth_lost(deep, deep) == ()
+  assert input_images.depth_lost(deep, shallow) == ('bit_depth',)
+  assert input_images.depth_lost(shallow, shallow) == ()
+  notes = input_images.reading_notes(path, input_images.header(path), ('bit_depth',))
+  assert notes['bit_depth'].startswith(path) and 'written at 8 bits' in notes['bit_depth']

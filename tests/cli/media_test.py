@@ -8,6 +8,7 @@ import pytest
 
 from mixstereo_tf.cli import media
 from mixstereo_tf.data import disparity_io
+from mixstereo_tf.data import image_io
 
 
 def _views(height=4, width=6):
@@ -87,3 +88,17 @@ def test_output_options_formats_are_a_checked_tuple(tmp_path):
   assert written['files'][-1] == 'a.jps' and os.path.isfile(tmp_path / 'a.jps')
 
 
+
+
+def test_16_bit_views_are_16_bit_pngs_with_the_inputs_colour_profile(tmp_path):
+  from PIL import Image, ImageCms  # pylint: disable=import-outside-toplevel
+  profile = ImageCms.ImageCmsProfile(ImageCms.createProfile('sRGB')).tobytes()
+  view = np.random.default_rng(3).integers(0, 65536, (5, 7, 3)).astype(np.uint16)
+  path = str(tmp_path / 'v.png')
+  media.write_image(path, view, profile)
+  np.testing.assert_array_equal(cv2.imread(path, cv2.IMREAD_UNCHANGED)[..., ::-1], view)
+  with Image.open(path) as written:
+    assert written.info['icc_profile'] == profile
+  (tmp_path / 'v.jpg').write_bytes(b'\xff\xd8\xff\xd9')
+  with pytest.raises(ValueError, match=r'v.jpg is no PNG'):
+    image_io.add_png_icc(str(tmp_path / 'v.jpg'), profile)

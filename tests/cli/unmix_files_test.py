@@ -93,11 +93,11 @@ def test_an_inputs_colour_profile_is_kept_in_the_views(setup, tmp_path):
     assert 'icc_profile' not in written.info
 
 
-def test_an_inputs_depth_and_transparency_are_said_lost_in_its_info(setup, tmp_path):
+def test_an_inputs_depth_is_kept_in_its_views_and_transparency_said_lost(setup, tmp_path):
   rng = np.random.RandomState(4)
   bgra = rng.randint(0, 65536, (40, 50, 4)).astype(np.uint16)
   bgra[..., 3] = 65535
-  cv2.imwrite(str(tmp_path / 'scan16.png'), bgra)  # 16-bit, opaque: depth only.
+  cv2.imwrite(str(tmp_path / 'scan16.png'), bgra)  # 16-bit, opaque.
   bgra[:5, :5, 3] = 0
   cv2.imwrite(str(tmp_path / 'logo.png'), (bgra // 257).astype(np.uint8))  # 8-bit, clear.
   _image(tmp_path / 'plain.png')
@@ -108,10 +108,12 @@ def test_an_inputs_depth_and_transparency_are_said_lost_in_its_info(setup, tmp_p
   for name in ('scan16', 'logo', 'plain'):
     with open(tmp_path / 'out' / f'{name}_info.json', encoding='utf-8') as f:
       infos[name] = json.load(f)
-  assert '16-bit samples' in infos['scan16']['bit_depth']
-  assert 'scan16.png' in infos['scan16']['bit_depth'] and 'alpha' not in infos['scan16']
+  assert infos['scan16']['views_bit_depth'] == 16
+  assert not {'alpha', 'bit_depth'} & set(infos['scan16'])
+  view = cv2.imread(str(tmp_path / 'out' / 'scan16_left.png'), cv2.IMREAD_UNCHANGED)
+  np.testing.assert_array_equal(view[..., 2], bgra[..., 2])  # Its red, 16-bit samples.
   assert 'views are opaque' in infos['logo']['alpha'] and 'bit_depth' not in infos['logo']
-  assert not {'alpha', 'bit_depth'} & set(infos['plain'])
+  assert not {'alpha', 'bit_depth', 'views_bit_depth'} & set(infos['plain'])
   with Image.open(tmp_path / 'out' / 'logo_left.png') as view:
     assert view.mode == 'RGB'
 

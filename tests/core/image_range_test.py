@@ -47,5 +47,20 @@ def test_as_unit_float_checks_the_image():
     image_range.as_unit_float(np.zeros((2, 2)), 'mixture')
   with pytest.raises(ValueError, match='in \\[0, 1\\]'):
     image_range.as_unit_float(np.full((2, 2, 3), 2.0))
-  with pytest.raises(ValueError, match='uint8 or float'):
+  np.testing.assert_allclose(
+      image_range.as_unit_float(np.full((2, 2, 3), 65535, np.uint16)), 1.0)
+  with pytest.raises(ValueError, match='uint8, uint16 or float'):
     image_range.as_unit_float(np.zeros((2, 2, 3), np.int32))
+
+
+def test_16_bit_samples_convert_to_unit_to_8_bits_and_back():
+  values = np.array([0, 1, 128, 129, 257, 32896, 65278, 65535], np.uint16)
+  np.testing.assert_array_equal(image_range.eight_bits(values), [0, 0, 0, 1, 1, 128, 254, 255])
+  np.testing.assert_allclose(image_range.to_unit(values), values / 65535.0, rtol=1e-6)
+  np.testing.assert_array_equal(image_range.unit_to(image_range.to_unit(values), np.uint16),
+                                values)
+  np.testing.assert_array_equal(image_range.unit_to(np.array([-0.1, 0.5, 1.2]), np.uint16),
+                                [0, 32768, 65535])
+  eight = np.array([0, 7, 255], np.uint8)
+  assert image_range.eight_bits(eight).dtype == np.uint8
+  np.testing.assert_array_equal(image_range.unit_to(image_range.to_unit(eight), np.uint8), eight)

@@ -5,6 +5,7 @@ from absl import logging
 import numpy as np
 import pytest
 
+from mixstereo_tf.core import image_range
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import steps
 from tests.unmixing import chroma_test
@@ -60,3 +61,40 @@ def test_a_given_range_the_scene_reaches_past_is_warned_about(monkeypatch):
     predictors.build_unmixer(predictors.PredictorConfig(
         'classical', mixture='anaglyph', disparity_range=search))(lossless)
   assert len(warnings) == 1 and 'at the high limit of the range given, [0, 3]' in warnings[0]
+
+
+def _deep(image):
+  """A 16-bit copy of a uint8 image whose samples are not multiples of 257: 8-bit storage
+  could not hold them."""
+  fine = np.random.default_rng(5).integers(-128, 128, image.shape)
+  return np.clip(image.astype(np.int64) * 257 + fine, 0, 65535).astype(np.uint16)
+
+
+@pytest.mark.parametrize('config', [
+    dict(method='classical'), dict(method='sgbm'), dict(method='model'),
+    dict(method='model', pretrained='anaglyph'), dict(method='classical', swap_eyes=True)])
+def test_a_16_bit_anaglyph_is_matched_at_8_bits_and_its_views_restored_at_16(config):
+  """Disparities as those of its 8-bit copy; the channels each view copies are the input's
+  own 16-bit samples (the left view's red, the right view's green and blue)."""
+  deep = _deep(_anaglyph()[0])  # Swapped eyes: unmixed mirrored, the views swapped back.
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      mixture='anaglyph', disparity_range=(0, 20), **config))
+  ours, eight = unmixer(deep), unmixer(image_range.eight_bits(deep))
+  np.testing.assert_array_equal(ours['disparity_left'], eight['disparity_left'])
+  assert ours['left'].dtype == ours['right'].dtype == np.uint16
+  assert eight['left'].dtype == np.uint8
+  for key in ('left', 'right'):
+    assert np.abs(image_range.eight_bits(ours[key]).astype(int) - eight[key]).max() <= 1
+  if not config.get('swap_eyes'):
+    np.testing.assert_array_equal(ours['left'][..., 0], deep[..., 0])
+    np.testing.assert_array_equal(ours['right'][..., 1:], deep[..., 1:])
+
+
+def test_a_16_bit_double_image_gives_8_bit_views():
+  """A double image's layers come from the 8-bit copy: its views say so by their type."""
+  deep = _deep(_anaglyph('diplopia')[0])
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='diplopia', disparity_range=(1, 20)))
+  ours, eight = unmixer(deep), unmixer(image_range.eight_bits(deep))
+  assert ours['left'].dtype == np.uint8
+  np.testing.assert_array_equal(ours['left'], eight['left'])
