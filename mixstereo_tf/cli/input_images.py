@@ -21,6 +21,7 @@ from absl import logging
 import numpy as np
 from PIL import Image
 
+from mixstereo_tf.core import image_range
 from mixstereo_tf.data import image_io
 
 # EXIF orientation (tag 0x0112) -> the stored pixels as viewers show them (the TIFF / EXIF
@@ -115,19 +116,23 @@ def _refuse_other_images(path: str, found: ImageHeader) -> None:
                     path, found.pages)
 
 
-def read_upright(path: str, found: Optional[ImageHeader] = None, deep: bool = False
-                 ) -> Tuple[np.ndarray, int, Tuple[str, ...]]:
+def read_upright(path: str, found: Optional[ImageHeader] = None, deep: bool = False,
+                 alpha: bool = False) -> Tuple[np.ndarray, int, Tuple[str, ...]]:
   """(uint8 RGB [H, W, 3] as viewers show the file, its EXIF orientation, what reading it
   at 8 bits in RGB dropped: `image_io.dropped`'s 'bit_depth', 'alpha'): a phone's
   portrait photo of an anaglyph has its eyes side by side only once turned. Gray and
   alpha images are converted (`image_io.as_rgb8`); ValueError naming bad files, animated
   images and stereo pairs. `found`: the file's `header`, when already read. `deep`: a
-  16-bit file is read as uint16 RGB (`image_io.as_rgb`), and 'bit_depth' is not lost."""
+  16-bit file is read as uint16 RGB (`image_io.as_rgb`), and 'bit_depth' is not lost;
+  `alpha`: an alpha channel less than opaque somewhere is kept, last (RGBA), and 'alpha'
+  is not lost."""
   found = found or header(path)
   _refuse_other_images(path, found)
   raw = image_io.read_raw(path)
-  lost = tuple(key for key in image_io.dropped(raw) if not (deep and key == 'bit_depth'))
-  image = image_io.as_rgb(raw, path) if deep else image_io.as_rgb8(raw, path)
+  kept = ('bit_depth',) * deep + ('alpha',) * alpha
+  lost = tuple(key for key in image_io.dropped(raw) if key not in kept)
+  image = image_io.as_rgb(raw, path, alpha)
+  image = image if deep else image_range.eight_bits(image)
   del raw
   if found.orientation == 1 or os.path.splitext(path)[1].lower() in image_io.TIFF_EXTENSIONS:
     return image, found.orientation, lost  # TIFF decoders apply the tag (`read_raw`).

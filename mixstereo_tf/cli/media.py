@@ -55,21 +55,32 @@ def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
 
 
 def write_image(path: str, image: np.ndarray, icc_profile: Optional[bytes] = None) -> None:
-  """Writes a uint8 RGB image (format from the extension; uint16 RGB: a 16-bit PNG), with
-  `icc_profile` (the input's colour space, `icc_profile_of`) embedded when given."""
+  """Writes a uint8 RGB or RGBA image (format from the extension; uint16: a 16-bit PNG),
+  with `icc_profile` (the input's colour space, `icc_profile_of`) embedded when given."""
+  bgr = np.ascontiguousarray(image[:, :, [2, 1, 0, 3][:image.shape[2]]])  # OpenCV's order.
   if image.dtype == np.uint16:  # Pillow writes no 16-bit RGB: OpenCV, then the profile.
-    if not image_io.write_with_opencv(path, np.ascontiguousarray(image[:, :, ::-1])):
+    if not image_io.write_with_opencv(path, bgr):
       raise ValueError(f'Cannot write image file: {path}')
     if icc_profile:
       image_io.add_png_icc(path, icc_profile)
   elif icc_profile:
     try:
-      Image.fromarray(np.ascontiguousarray(image, np.uint8), 'RGB').save(
-          path, icc_profile=icc_profile)
+      Image.fromarray(np.ascontiguousarray(image, np.uint8),
+                      'RGBA' if image.shape[2] == 4 else 'RGB').save(path, icc_profile=icc_profile)
     except (OSError, ValueError, KeyError) as e:
       raise ValueError(f'Cannot write image file: {path} ({e})') from None
-  elif not image_io.write_with_opencv(path, np.ascontiguousarray(image[:, :, ::-1])):
+  elif not image_io.write_with_opencv(path, bgr):
     raise ValueError(f'Cannot write image file: {path}')
+
+
+def with_alpha(view: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+  """An RGB view [H, W, 3] as RGBA with `alpha` [H, W] (uint8 or uint16) at the view's
+  depth: the input's transparency, pixel for pixel, in both views."""
+  if view.dtype != np.uint16:
+    alpha = image_range.eight_bits(alpha)  # A 16-bit double image's 8-bit views.
+  elif alpha.dtype != np.uint16:
+    alpha = alpha.astype(np.uint16) * 257
+  return np.concatenate([view, alpha[..., None]], axis=2)
 
 
 def compose(left: np.ndarray, right: np.ndarray,
@@ -129,16 +140,17 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
   """Writes one image's results (mixstereo_tf/cli/unmix_files.py).
 
   Args:
-    outputs: {'left', 'right': uint8 [H, W, 3] (uint16: written as 16-bit PNGs, the
-      formats from their 8-bit copies), 'disparity_left': [H, W] signed pixels}.
+    outputs: {'left', 'right': uint8 [H, W, 3] (uint16: written as 16-bit PNGs; RGBA
+      [H, W, 4]: with transparency; the formats from their 8-bit RGB copies),
+      'disparity_left': [H, W] signed pixels}.
     output_dir: existing folder.
     name: the file-name prefix.
     layout: one of LAYOUTS.
     max_display_disparity: a fixed colour-map range 0..this; None: the range found.
     formats: `stereo_formats.FORMATS` names also written (depth images span the colour
       map's range).
-    mixture: the input image, uint8 (or uint16) RGB [H, W, 3] (the 'html' viewer page
-      needs it).
+    mixture: the input image, uint8 (or uint16) RGB [H, W, 3] (or RGBA; the 'html'
+      viewer page needs it).
     icc_profile: the input's ICC profile (`icc_profile_of`), embedded in the views and the
       formats drawn from them; the disparity maps carry none.
 
@@ -167,8 +179,8 @@ def write_image_outputs(outputs: Dict[str, np.ndarray], output_dir: str, name: s
                               'KITTI-style uint16 PNG holds; see the .npy')
   paths.append(os.path.join(output_dir, f'{name}_disparity.npy'))
   np.save(paths[-1], disparity)
-  left, right = (image_range.eight_bits(outputs[key]) for key in ('left', 'right'))
-  mixture = None if mixture is None else image_range.eight_bits(mixture)
+  left, right = (image_range.eight_bits(outputs[key][..., :3]) for key in ('left', 'right'))
+  mixture = None if mixture is None else image_range.eight_bits(mixture[..., :3])
   paths.extend(stereo_formats.write_formats(stereo_formats.StereoResult(
       left, right, disparity, colour, (low, high), mixture, icc_profile),
       os.path.join(output_dir, name), formats))

@@ -4,7 +4,8 @@ Images are read as viewers show them (EXIF orientation applied: `input_images.re
 Outputs per input `<name>` in the output folder, where `<name>` is the file stem, or stem
 + '_' + extension when inputs share a stem (`input_listing.output_names`): the views
 (`<name>_left.png` and `<name>_right.png` for the 'separate' layout, else
-`<name>_<layout>.png`), the colour-mapped left disparity `<name>_disparity.png` (over the
+`<name>_<layout>.png`; 16-bit from a 16-bit anaglyph, RGBA from an image with
+transparency), the colour-mapped left disparity `<name>_disparity.png` (over the
 range found, or a fixed one), KITTI-style `<name>_disparity16.png` (uint16, d * 256; only
 when every disparity lies in 0..255.996 px) and float32 signed pixels
 `<name>_disparity.npy`, the stereo formats asked for (`OutputOptions.formats`,
@@ -165,12 +166,15 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
   found = input_images.header(item.path)
-  image, orientation, lost = input_images.read_upright(item.path, found, deep=True)
+  image, orientation, lost = input_images.read_upright(item.path, found, True, True)
   stored = hints.stored(found.chroma_halved)  # A 4:2:0 JPEG (unmixing/chroma).
   unmix_start = time.perf_counter()
-  outputs = unmixer(image, **stored)
+  outputs = unmixer(image, **stored)  # RGBA: unmixed without its alpha.
   report.unmix_seconds += time.perf_counter() - unmix_start
   lost += input_images.depth_lost(image, outputs['left'])
+  if image.shape[2] == 4:  # Transparency kept: the views carry the input's alpha.
+    outputs = dict(outputs, **{key: media.with_alpha(outputs[key], image[..., 3])
+                               for key in ('left', 'right')})
   icc_profile = found.icc_profile
   info_file.begin_outputs(output_dir, item)
   written = media.write_image_outputs(outputs, output_dir, item.name, layout,
@@ -181,6 +185,8 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
     written['exif_orientation'] = orientation  # Applied: the outputs are upright.
   if outputs['left'].dtype == np.uint16:
     written['views_bit_depth'] = 16  # The view PNGs; the formats and maps have 8 bits.
+  if image.shape[2] == 4:
+    written['views_alpha'] = "the input's transparency, pixel for pixel, in both views"
   written.update(input_images.reading_notes(item.path, found, lost))
   info_file.write_info(output_dir, item, dict(outputs.get('info', {}), **written), request)
   return 1

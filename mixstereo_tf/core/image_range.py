@@ -10,19 +10,29 @@ Three ranges are in use (docs/DESIGN.md):
 Every function takes a NumPy array (or anything `np.asarray` accepts) or a `tf.Tensor`
 and returns the same kind. Float results are float32 for uint8 inputs and keep the input's
 float dtype otherwise. Conversions to uint8 round half to even and clip to 0..255.
+TensorFlow is not imported here: a tensor exists only once its caller has imported it, so
+the image readers (`data.image_io`) stay light.
 """
 
+import sys
+
 import numpy as np
-import tensorflow as tf
 
 
 def _is_tensor(value) -> bool:
-  return tf.is_tensor(value)
+  tf = sys.modules.get('tensorflow')
+  return tf is not None and tf.is_tensor(value)
+
+
+def _tf():
+  """TensorFlow, already imported (`_is_tensor` was true)."""
+  return sys.modules['tensorflow']
 
 
 def u8_to_unit(image):
   """uint8 0..255 -> float32 [0, 1] (value / 255)."""
   if _is_tensor(image):
+    tf = _tf()
     return tf.cast(image, tf.float32) / 255.0
   return np.asarray(image).astype(np.float32) / np.float32(255.0)
 
@@ -55,6 +65,7 @@ def unit_to(image, dtype) -> np.ndarray:
 def u8_to_signed(image):
   """uint8 0..255 -> float32 [-1, 1] (value / 127.5 - 1)."""
   if _is_tensor(image):
+    tf = _tf()
     return tf.cast(image, tf.float32) / 127.5 - 1.0
   return np.asarray(image).astype(np.float32) / np.float32(127.5) - np.float32(1.0)
 
@@ -72,6 +83,7 @@ def signed_to_unit(image):
 def unit_to_u8(image):
   """[0, 1] -> uint8: round(x * 255), clipped to 0..255."""
   if _is_tensor(image):
+    tf = _tf()
     return tf.cast(tf.round(tf.clip_by_value(image * 255.0, 0.0, 255.0)), tf.uint8)
   scaled = np.asarray(np.rint(np.asarray(image) * 255.0))
   # Bounds of the array's own type: NumPy's clip is several times slower with int bounds.
@@ -85,6 +97,7 @@ def signed_to_u8(image):
   NumPy inputs are computed in float64, so the rounding is that of the exact value.
   """
   if _is_tensor(image):
+    tf = _tf()
     return tf.cast(tf.round(tf.clip_by_value((image + 1.0) * 127.5, 0.0, 255.0)), tf.uint8)
   scaled = np.add(image, 1.0, dtype=np.float64)  # One new array, then in place.
   scaled *= 127.5

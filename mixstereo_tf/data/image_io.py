@@ -130,18 +130,21 @@ def as_rgb8(array: np.ndarray, path: str) -> np.ndarray:
   return image_range.eight_bits(as_rgb(array, path))
 
 
-def as_rgb(array: np.ndarray, path: str) -> np.ndarray:
-  """`as_rgb8` at the array's own depth: uint8 or uint16 RGB `[H, W, 3]`."""
+def as_rgb(array: np.ndarray, path: str, alpha: bool = False) -> np.ndarray:
+  """`as_rgb8` at the array's own depth: uint8 or uint16 RGB `[H, W, 3]`; with `alpha`, an
+  image whose alpha `dropped` would name is RGBA `[H, W, 4]` (its alpha last)."""
   if array.dtype not in (np.uint8, np.uint16):
     raise ValueError(f'Unsupported image sample type {array.dtype} in {path}')
   if array.ndim == 2:
     array = array[:, :, None]
   channels = array.shape[2]
-  if channels in (1, 2):  # Gray (+ alpha): replicate the gray channel.
-    return np.repeat(array[:, :, :1], 3, axis=2)
-  if channels in (3, 4):  # BGR (+ alpha): drop alpha, reorder to RGB.
-    return np.ascontiguousarray(array[:, :, 2::-1])
-  raise ValueError(f'Unsupported channel count {channels} in {path}')
+  if channels not in (1, 2, 3, 4):
+    raise ValueError(f'Unsupported channel count {channels} in {path}')
+  # Gray (+ alpha): the gray channel replicated; BGR (+ alpha): reordered to RGB.
+  order = [0, 0, 0] if channels < 3 else [2, 1, 0]
+  if alpha and 'alpha' in dropped(array):
+    order.append(channels - 1)
+  return np.ascontiguousarray(array[:, :, order])
 
 
 def dropped(array: np.ndarray) -> Tuple[str, ...]:

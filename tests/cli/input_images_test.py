@@ -187,3 +187,17 @@ def test_a_16_bit_file_is_read_deep_on_request_and_a_loss_of_depth_is_said(tmp_p
   assert input_images.depth_lost(shallow, shallow) == ()
   notes = input_images.reading_notes(path, input_images.header(path), ('bit_depth',))
   assert notes['bit_depth'].startswith(path) and 'written at 8 bits' in notes['bit_depth']
+
+
+def test_an_alpha_channel_is_kept_on_request_where_it_is_not_opaque(tmp_path):
+  bgra = np.random.default_rng(3).integers(0, 256, (6, 8, 4)).astype(np.uint8)
+  bgra[..., 3] = 255
+  cv2.imwrite(str(tmp_path / 'opaque.png'), bgra)
+  bgra[0, 0, 3] = 10
+  cv2.imwrite(str(tmp_path / 'clear.png'), bgra)
+  image, _, lost = input_images.read_upright(str(tmp_path / 'clear.png'), alpha=True)
+  np.testing.assert_array_equal(image, bgra[..., [2, 1, 0, 3]])
+  assert lost == ()
+  assert input_images.read_upright(str(tmp_path / 'clear.png'))[2] == ('alpha',)
+  opaque, _, lost = input_images.read_upright(str(tmp_path / 'opaque.png'), alpha=True)
+  assert opaque.shape == (6, 8, 3) and lost == ()

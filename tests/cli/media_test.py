@@ -102,3 +102,22 @@ def test_16_bit_views_are_16_bit_pngs_with_the_inputs_colour_profile(tmp_path):
   (tmp_path / 'v.jpg').write_bytes(b'\xff\xd8\xff\xd9')
   with pytest.raises(ValueError, match=r'v.jpg is no PNG'):
     image_io.add_png_icc(str(tmp_path / 'v.jpg'), profile)
+
+
+def test_views_with_the_inputs_alpha_are_written_as_rgba_in_channel_order(tmp_path):
+  from PIL import Image, ImageCms  # pylint: disable=import-outside-toplevel
+  profile = ImageCms.ImageCmsProfile(ImageCms.createProfile('sRGB')).tobytes()
+  view = np.zeros((3, 4, 3), np.uint8)
+  view[..., 0] = 200  # Red.
+  alpha16 = np.full((3, 4), 65535, np.uint16)
+  alpha16[0, 0] = 0
+  rgba = media.with_alpha(view, alpha16)  # A 16-bit input's alpha on 8-bit views.
+  assert rgba.dtype == np.uint8 and rgba[0, 0].tolist() == [200, 0, 0, 0]
+  deep = media.with_alpha(view.astype(np.uint16) * 257, np.full((3, 4), 128, np.uint8))
+  assert deep.dtype == np.uint16 and deep[1, 1].tolist() == [51400, 0, 0, 32896]
+  for name, icc in (('plain.png', None), ('profiled.png', profile), ('deep.png', profile)):
+    media.write_image(str(tmp_path / name), deep if name == 'deep.png' else rgba, icc)
+    with Image.open(tmp_path / name) as written:
+      assert written.info.get('icc_profile') == icc
+    back = cv2.imread(str(tmp_path / name), cv2.IMREAD_UNCHANGED)[..., [2, 1, 0, 3]]
+    np.testing.assert_array_equal(back, deep if name == 'deep.png' else rgba)

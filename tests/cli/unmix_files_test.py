@@ -93,7 +93,7 @@ def test_an_inputs_colour_profile_is_kept_in_the_views(setup, tmp_path):
     assert 'icc_profile' not in written.info
 
 
-def test_an_inputs_depth_is_kept_in_its_views_and_transparency_said_lost(setup, tmp_path):
+def test_an_inputs_depth_and_transparency_are_kept_in_its_views(setup, tmp_path):
   rng = np.random.RandomState(4)
   bgra = rng.randint(0, 65536, (40, 50, 4)).astype(np.uint16)
   bgra[..., 3] = 65535
@@ -112,10 +112,15 @@ def test_an_inputs_depth_is_kept_in_its_views_and_transparency_said_lost(setup, 
   assert not {'alpha', 'bit_depth'} & set(infos['scan16'])
   view = cv2.imread(str(tmp_path / 'out' / 'scan16_left.png'), cv2.IMREAD_UNCHANGED)
   np.testing.assert_array_equal(view[..., 2], bgra[..., 2])  # Its red, 16-bit samples.
-  assert 'views are opaque' in infos['logo']['alpha'] and 'bit_depth' not in infos['logo']
-  assert not {'alpha', 'bit_depth', 'views_bit_depth'} & set(infos['plain'])
-  with Image.open(tmp_path / 'out' / 'logo_left.png') as view:
-    assert view.mode == 'RGB'
+  assert 'transparency' in infos['logo']['views_alpha']
+  assert not {'alpha', 'bit_depth'} & set(infos['logo'])
+  assert not {'alpha', 'bit_depth', 'views_bit_depth', 'views_alpha'} & set(infos['plain'])
+  for side in ('left', 'right'):
+    with Image.open(tmp_path / 'out' / f'logo_{side}.png') as view:
+      assert view.mode == 'RGBA'
+      np.testing.assert_array_equal(np.asarray(view)[..., 3], bgra[..., 3] // 257)
+  with Image.open(tmp_path / 'out' / 'scan16_left.png') as view:
+    assert view.mode != 'RGBA'  # Opaque everywhere: no alpha to keep.
 
 
 def test_a_rerun_into_the_same_folder_leaves_only_its_own_results(setup, tmp_path):
