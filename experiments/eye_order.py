@@ -16,6 +16,7 @@ colour anaglyph of the sets with ground truth, given order against swapped + swa
 """
 
 import csv
+import io
 import os
 import platform
 import time
@@ -26,6 +27,7 @@ from absl import flags
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import hints
 from mixstereo_tf.data import disparity_io
 from mixstereo_tf.data import image_io
 from mixstereo_tf.data import sources
@@ -36,12 +38,19 @@ from mixstereo_tf.unmixing import predictors
 
 import cv2
 import numpy as np
+import PIL.Image
 import skimage.data
 
 cli_flags.define_shared_dir()
 flags.DEFINE_string('eye_order_output', 'experiments/results/eye_order.md', 'Markdown report '
                     '(a .csv of every detection beside it).')
 flags.DEFINE_integer('eye_order_scenes', 16, 'Procedural scenes per split.')
+flags.DEFINE_enum('eye_order_storage', 'png', ['png', 'jpeg'], 'How each anaglyph is '
+                  'stored before detection: as made, or as a 4:2:0 JPEG (Pillow, quality 90; '
+                  'detected as such a file is, `chroma_halved`).')
+flags.DEFINE_bool('eye_order_colour_resolution', True, 'JPEG storage: the detection table '
+                  "at the colour's resolution (`eye_order.detect`'s chroma_halved; off: as "
+                  'before 2026-11-29). The end-to-end rows run the tools as they are.')
 FLAGS = flags.FLAGS
 
 ENCODINGS = ('anaglyph', 'half_color', 'dubois', 'gray')
@@ -101,6 +110,15 @@ def _aligned(pair):
   return realworld.window_align(pair, 0.3)
 
 
+def _stored(image):
+  """(the anaglyph as --eye_order_storage stores it, whether its colour is halved)."""
+  if FLAGS.eye_order_storage == 'png':
+    return image, False
+  buffer = io.BytesIO()
+  PIL.Image.fromarray(image).save(buffer, 'JPEG', quality=90)  # 4:2:0, libjpeg.
+  return np.asarray(PIL.Image.open(buffer).convert('RGB')), True
+
+
 def _detections(scenes):
   """One row per (scene, condition, encoding): the score and whether it was right."""
   rows = []
@@ -113,9 +131,11 @@ def _detections(scenes):
       left, right = (source['right'], source['left']) if swapped else (
           source['left'], source['right'])
       for name in ENCODINGS:
-        image = realworld.make_anaglyph({'left': left, 'right': right}, name, 'ours')
+        image, halved = _stored(realworld.make_anaglyph({'left': left, 'right': right}, name,
+                                                        'ours'))
         start = time.perf_counter()
-        found = eye_order.detect(image, name)
+        found = eye_order.detect(image, name, chroma_halved=halved and
+                                 FLAGS.eye_order_colour_resolution)
         rows.append(dict(set=group, scene=index, condition=condition, encoding=name,
                          score=round(found.score, 3), bands=found.bands,
                          correct=found.swapped == swapped,
@@ -158,10 +178,11 @@ def _end_to_end(scenes):
     pair = _reduced(pair)
     for swapped, asked in ((False, False), (True, False), (True, True), (True, 'auto')):
       left, right = (pair['right'], pair['left']) if swapped else (pair['left'], pair['right'])
-      image = realworld.make_anaglyph({'left': left, 'right': right}, 'anaglyph', 'ours')
+      image, halved = _stored(realworld.make_anaglyph({'left': left, 'right': right},
+                                                      'anaglyph', 'ours'))
       unmixer = predictors.build_unmixer(predictors.PredictorConfig(
           'classical', mixture='anaglyph', swap_eyes=asked))
-      out = unmixer(image)
+      out = unmixer(image, **hints.stored(halved))  # As the tools read such a file.
       bad = metrics.bad_pixel_rate(out['disparity_left'], pair['disparity_left'],
                                    pair['valid_left'], 1.0)
       lines.append(f"| {group} | {'swapped' if swapped else 'given'} | {asked} | "
@@ -176,8 +197,14 @@ def _report(train, held, end_to_end, seconds):
   lowest = min(r['score'] for r in train if not r['condition'].endswith('swapped'))
   found = [r['correct'] for r in train if r['condition'].endswith('swapped')]
   machine = ' '.join(filter(None, (platform.system(), platform.machine())))
-  command = 'python experiments/eye_order.py' + (
-      f' --shared_dir={FLAGS.shared_dir}' if FLAGS.shared_dir else '')
+  command = ' '.join(['python experiments/eye_order.py'] + [
+      f'--{name}={FLAGS[name].value}' for name in (
+          'shared_dir', 'eye_order_output', 'eye_order_storage',
+          'eye_order_colour_resolution') if not FLAGS[name].using_default_value])
+  storage = ('' if FLAGS.eye_order_storage == 'png' else
+             ' Every anaglyph stored as a 4:2:0 JPEG (Pillow, quality 90) and detected ' +
+             ('at the colour\'s resolution (`chroma_halved`).'
+              if FLAGS.eye_order_colour_resolution else 'at full resolution.'))
   return ['# Eye order: swapped anaglyphs detected', '',
           f'Written by `{command}` on {machine} ({os.cpu_count()} CPU cores) in '
           f'{seconds:.0f} s. `eye_order.detect` (module docstring): colour steps across the '
@@ -185,7 +212,7 @@ def _report(train, held, end_to_end, seconds):
           f'{config.width} px wide; swapped when the score (a z value) is below '
           f'-{config.threshold}. Cells: right / total; every condition x encoding of a set '
           'counts once per scene. Window-aligned: 30 % of the range behind the screen '
-          '(disparities of both signs).', '',
+          '(disparities of both signs).' + storage, '',
           f'Threshold: on {FLAGS.eye_order_scenes} procedural *training* scenes (other '
           f'textures) the lowest score of an original was {lowest:+.2f}; '
           f'{sum(found)} / {len(found)} swapped copies scored below -{config.threshold}. '

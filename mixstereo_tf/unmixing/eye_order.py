@@ -145,10 +145,14 @@ def z_score(votes: np.ndarray, cells: np.ndarray) -> float:
   return float(per_cell.sum() / spread) if spread > 0 else 0.0
 
 
-def detect(image: np.ndarray, name: str, config: EyeOrderConfig = EyeOrderConfig()
-           ) -> EyeOrder:
-  """Whether uint8 anaglyph `image` [H, W, 3] of encoding `name` has its eyes swapped."""
-  left, right = _eyes(image, name, config.width)
+def detect(image: np.ndarray, name: str, config: EyeOrderConfig = EyeOrderConfig(),
+           chroma_halved: bool = False) -> EyeOrder:
+  """Whether uint8 anaglyph `image` [H, W, 3] of encoding `name` has its eyes swapped.
+  `chroma_halved` (a 4:2:0 JPEG, `hints.FrameHint.chroma_halved`): analysed at most at
+  half its width, the colour's resolution, where the colour steps across a band's ends
+  are the eyes' own and not the luminance's, which mixes both."""
+  width = min(config.width, -(-image.shape[1] // 2)) if chroma_halved else config.width
+  left, right = _eyes(image, name, width)
   low, high = matcher.estimate_range(left, right)
   matched = matcher.match(left, right, low - 2, high + 2, matcher.MatcherConfig(strips=1))
   votes, cells = zip(
@@ -221,16 +225,17 @@ def unmirror(outputs: Dict[str, object],
 
 
 def decide(image: np.ndarray, name: str, asked, detectable: bool,
-           shot: Optional[bool] = None) -> Tuple[bool, Dict[str, object]]:
+           shot: Optional[bool] = None, chroma_halved: bool = False
+           ) -> Tuple[bool, Dict[str, object]]:
   """(swapped, info) for one image of encoding `name`: a video shot's decision (`shot`),
   else `asked` (SWAP_EYES; AUTO detects, on `detectable` encodings only: others keep the
-  order given). info: 'eye_order' ('as_given' or 'swapped') and, when detected,
-  'eye_order_score' (`EyeOrder.score`)."""
+  order given; `chroma_halved` as `detect`'s). info: 'eye_order' ('as_given' or
+  'swapped') and, when detected, 'eye_order_score' (`EyeOrder.score`)."""
   info = {}
   if shot is not None:
     swapped = shot
   elif asked == AUTO and detectable:
-    found = detect(image, name)
+    found = detect(image, name, chroma_halved=chroma_halved)
     swapped, info['eye_order_score'] = found.swapped, round(found.score, 2)
   else:
     swapped = asked not in (False, AUTO)

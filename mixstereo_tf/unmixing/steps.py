@@ -214,7 +214,8 @@ def _eye_order(image: np.ndarray, name: str, swap_eyes,
     ValueError: swapped eyes for a single view (monocular).
   """
   family = families.of(name)
-  swapped, info = eye_order.decide(image, name, swap_eyes, family.detectable, hint.swap_eyes)
+  swapped, info = eye_order.decide(image, name, swap_eyes, family.detectable, hint.swap_eyes,
+                                   hint.chroma_halved)
   if swapped and family.input_is_left:
     raise ValueError(f'PredictorConfig.swap_eyes: a {name!r} input is one view; it has no '
                      'eyes to swap.')
