@@ -2,6 +2,8 @@
 
 import os
 import struct
+import subprocess
+import sys
 import zlib
 
 import numpy as np
@@ -151,3 +153,13 @@ def test_dropped_names_what_reading_at_8_bits_in_rgb_loses(dtype, channels, alph
   raw = array[..., 0] if channels == 1 else array
   assert image_io.dropped(raw) == expected
   assert image_io.as_rgb8(raw, 'x.png').shape == (3, 4, 3)
+
+
+def test_reading_images_does_not_import_tensorflow():
+  """The readers (and `core.image_range`'s 16-bit conversions they use) stay light."""
+  code = ('import sys\nfrom mixstereo_tf.cli import input_images\n'
+          'from mixstereo_tf.data import image_io\n'
+          "print('tensorflow' in sys.modules)")
+  result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          timeout=120, check=True)
+  assert result.stdout.strip() == 'False'
