@@ -59,8 +59,9 @@ def unmix_anaglyph(mixture, mixture_name: str,
       `mixture`.
 
   Returns:
-    'left', 'right': uint8 [H, W, 3] (uint16 from a uint16 `views_from` or `mixture`); 'disparity_left', 'disparity_right': float32
-    [H, W], signed pixels (left x matches right x - d_L; right x matches left x + d_R);
+    'left', 'right': uint8 [H, W, 3] (uint16 from a uint16 `views_from` or `mixture`);
+    'disparity_left', 'disparity_right': float32 [H, W], signed pixels (left x matches
+    right x - d_L; right x matches left x + d_R);
     'consistent_left': bool [H, W], the left-right check before filling;
     'disparity_range': the (min, max) searched.
 

@@ -57,20 +57,18 @@ def write_disparity_png16(path: str, disparity: np.ndarray) -> None:
 def write_image(path: str, image: np.ndarray, icc_profile: Optional[bytes] = None) -> None:
   """Writes a uint8 RGB or RGBA image (format from the extension; uint16: a 16-bit PNG),
   with `icc_profile` (the input's colour space, `icc_profile_of`) embedded when given."""
-  bgr = np.ascontiguousarray(image[:, :, [2, 1, 0, 3][:image.shape[2]]])  # OpenCV's order.
-  if image.dtype == np.uint16:  # Pillow writes no 16-bit RGB: OpenCV, then the profile.
-    if not image_io.write_with_opencv(path, bgr):
-      raise ValueError(f'Cannot write image file: {path}')
-    if icc_profile:
-      image_io.add_png_icc(path, icc_profile)
-  elif icc_profile:
+  if icc_profile and image.dtype != np.uint16:
     try:
       Image.fromarray(np.ascontiguousarray(image, np.uint8),
                       'RGBA' if image.shape[2] == 4 else 'RGB').save(path, icc_profile=icc_profile)
     except (OSError, ValueError, KeyError) as e:
       raise ValueError(f'Cannot write image file: {path} ({e})') from None
-  elif not image_io.write_with_opencv(path, bgr):
+    return
+  bgr = np.ascontiguousarray(image[:, :, [2, 1, 0, 3][:image.shape[2]]])  # OpenCV's order.
+  if not image_io.write_with_opencv(path, bgr):
     raise ValueError(f'Cannot write image file: {path}')
+  if icc_profile:  # Pillow writes no 16-bit RGB: OpenCV's PNG, then the profile.
+    image_io.add_png_icc(path, icc_profile)
 
 
 def with_alpha(view: np.ndarray, alpha: np.ndarray) -> np.ndarray:
