@@ -84,8 +84,7 @@ def unmix_anaglyph(mixture, mixture_name: str,
     image = image_range.as_unit_float(views_from, 'views_from')
   restored = views.restore_views(image, mixture_name, matched['disparity_left'],
                                  matched['disparity_right'], config=config.restore)
-  return {'left': image_range.unit_to(restored['left'], depth),
-          'right': image_range.unit_to(restored['right'], depth),
+  return {**views.at_depth(restored, depth),
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
           'consistent_left': matched['consistent_left'],

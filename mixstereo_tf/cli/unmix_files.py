@@ -166,7 +166,7 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
   """Unmixes one image and writes its outputs (with `formats`) and `<name>_info.json`;
   returns 1 (frame)."""
   found = input_images.header(item.path)
-  image, orientation, lost = input_images.read_upright(item.path, found, True, True)
+  image, orientation, lost = input_images.read_upright(item.path, found, deep=True, alpha=True)
   stored = hints.stored(found.chroma_halved)  # A 4:2:0 JPEG (unmixing/chroma).
   unmix_start = time.perf_counter()
   outputs = unmixer(image, **stored)  # RGBA: unmixed without its alpha.

@@ -34,6 +34,7 @@ from typing import Dict, Optional, Tuple
 import cv2
 import numpy as np
 
+from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.restoration import colour_transfer
 from mixstereo_tf.restoration import kernel
@@ -268,3 +269,9 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
                    for view in (left, right))
   return {'left': left, 'right': right, 'consistent_left': consistent[0],
           'consistent_right': consistent[1]}
+
+
+def at_depth(restored: Dict[str, np.ndarray], dtype) -> Dict[str, np.ndarray]:
+  """`restore_views`' 'left' and 'right' ([0, 1]) as `dtype`: uint8, or uint16 for views
+  restored from a 16-bit image (`image_range.unit_to`)."""
+  return {key: image_range.unit_to(restored[key], dtype) for key in ('left', 'right')}

@@ -43,6 +43,7 @@ from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.models import matching_features
+from mixstereo_tf.restoration import views
 from mixstereo_tf.unmixing import families
 
 _KEYS = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
@@ -176,8 +177,7 @@ def learned_unmix(descriptors: Descriptors, image: np.ndarray, name: str,
   views_from = hints.views_image(image, hint)
   restored = family.restore(image_range.to_unit(views_from), name, matched['disparity_left'],
                             matched['disparity_right'])
-  return {'left': image_range.unit_to(restored['left'], views_from.dtype),  # As _KEYS.
-          'right': image_range.unit_to(restored['right'], views_from.dtype),
+  return {**views.at_depth(restored, views_from.dtype),  # As _KEYS.
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
           'consistent_left': matched['consistent_left']}

@@ -38,6 +38,7 @@ from mixstereo_tf.classical import sgbm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.models import refiner
+from mixstereo_tf.restoration import views
 from mixstereo_tf.unmixing import chroma
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import eye_order
@@ -112,8 +113,7 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
         outputs['disparity_left'], outputs['disparity_right'],
         image_range.u8_to_unit(outputs['left']),
         image_range.u8_to_unit(outputs['right']))
-    outputs.update({k: image_range.unit_to(restored[k], views_from.dtype)
-                    for k in ('left', 'right')})
+    outputs.update(views.at_depth(restored, views_from.dtype))
   outputs['info'] = {'shift': chosen.shift, 'scale': round(chosen.scale, 4)}
   return outputs
 
@@ -166,8 +166,7 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
     checked = transfer['consistent_left'], transfer['consistent_right']
     restored = family.restore(mixture01, name, *disparities, *prior, consistent=checked,
                               colour_line=True)
-    outputs.update({k: image_range.unit_to(restored[k], views_from.dtype)
-                    for k in ('left', 'right')})
+    outputs.update(views.at_depth(restored, views_from.dtype))
     outputs['consistent_left'] = restored['consistent_left']  # For the next frame's prior.
   return outputs
 
@@ -199,8 +198,7 @@ def sgbm_unmix(image: np.ndarray, name: str, search: Tuple[int, int],
   d_left, d_right = sgbm.match_anaglyph(image, name, *search)
   views_from = hints.views_image(image, hint)
   restored = families.of(name).restore(image_range.to_unit(views_from), name, d_left, d_right)
-  return {'left': image_range.unit_to(restored['left'], views_from.dtype),
-          'right': image_range.unit_to(restored['right'], views_from.dtype),
+  return {**views.at_depth(restored, views_from.dtype),
           'disparity_left': d_left, 'disparity_right': d_right,
           'consistent_left': restored['consistent_left'],
           'info': {'matcher': 'opencv_stereo_sgbm'}}
