@@ -9,7 +9,8 @@ learned stages train on, never an evaluation scene) under drawn disparity fields
 range 96, positive disparities as double images are ordered), mixed as I = (L + R) / 2
 and rounded to 8 bits. Each variant is the shipped `DiplopiaConfig` with some fields
 replaced (`field=value`, joined by `@`; `p1` and `p2` are those of its SGM, the fields of
-`diplopia_layers.LayerConfig` those of its layer solve, e.g. `cg_tolerance`), run by
+`diplopia_layers.LayerConfig` those of its layer solve, e.g. `cg_tolerance`, and
+`cepstrum_` + a field of `diplopia_cepstrum.CepstrumConfig` its echo score's), run by
 `diplopia.unmix_diplopia` over [1, true maximum + 3]. Scores: bad-1 over the visible
 pixels with a true disparity of at least 1 px, both views' RGB PSNR, and the seconds of one
 pair's `unmix_diplopia` (one run on the machine at hand).
@@ -27,6 +28,7 @@ import numpy as np
 
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_cepstrum
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.data import photo_warps
 
@@ -43,6 +45,7 @@ FLAGS = flags.FLAGS
 
 WARP = photo_warps.WarpConfig(height=256, width=512, max_disparity=96, window_probability=0.0)
 MATCHING_FIELDS = ('p1', 'p2')
+CEPSTRUM_PREFIX = 'cepstrum_'  # cepstrum_weight=1.5: CepstrumConfig(weight=1.5).
 
 
 def parse_variant(item: str) -> Tuple[str, diplopia.DiplopiaConfig]:
@@ -56,14 +59,19 @@ def parse_variant(item: str) -> Tuple[str, diplopia.DiplopiaConfig]:
     raise ValueError(f'--diplopia_variants: {item!r} is not label=field=value[@...].')
   base = diplopia.DiplopiaConfig()
   layer_fields = validation.numeric_fields(diplopia_layers.LayerConfig)
+  cepstrum_fields = {CEPSTRUM_PREFIX + field: kind for field, kind in
+                     validation.numeric_fields(diplopia_cepstrum.CepstrumConfig).items()}
   types = dict(validation.numeric_fields(diplopia.DiplopiaConfig), **layer_fields,
-               **{field: int for field in MATCHING_FIELDS})
+               **cepstrum_fields, **{field: int for field in MATCHING_FIELDS})
   values = validation.field_values('--diplopia_variants', item, rest.split('@'), types)
   matching = {field: values.pop(field) for field in MATCHING_FIELDS if field in values}
   layers = {field: values.pop(field) for field in layer_fields if field in values}
+  cepstrum = {field[len(CEPSTRUM_PREFIX):]: values.pop(field) for field in cepstrum_fields
+              if field in values}
   return label, dataclasses.replace(
       base, matching=dataclasses.replace(base.matching, **matching),
-      layers=dataclasses.replace(base.layers, **layers), **values)
+      layers=dataclasses.replace(base.layers, **layers),
+      cepstrum=dataclasses.replace(base.cepstrum, **cepstrum), **values)
 
 
 def evaluate(variants, atlas, count: int) -> Dict[str, List[Dict[str, float]]]:

@@ -191,6 +191,8 @@ def test_diplopia_validation_variants_parse_and_bad_ones_name_the_flag():
   _, config = diplopia_validation.parse_variant('loose=cg_tolerance=0.001@smoothness=0.02')
   assert (config.layers.cg_tolerance, config.layers.smoothness) == (0.001, 0.02)
   assert config.layers.fidelity == diplopia_validation.diplopia.DiplopiaConfig().layers.fidelity
+  _, config = diplopia_validation.parse_variant('echo=cepstrum_weight=1.5@cepstrum_step=4')
+  assert (config.cepstrum.weight, config.cepstrum.step, config.cepstrum.rows) == (1.5, 4, 8)
   for bad in ('nolabel', 'a=', 'a=matching=3', 'a=window_radius=x', 'a=p1', 'a=layers=1'):
     with pytest.raises(ValueError, match='--diplopia_variants'):
       diplopia_validation.parse_variant(bad)

@@ -12,9 +12,10 @@ one linear equation per pixel in the unknown left view. Steps:
      images peaks at lag 1 instead).
   2. Per-pixel shifts: I(x) and I(x - d_L(x)) share the component L(x), so SGM on a ZNCC
      volume of the mixture against itself (`diplopia_costs.self_matching_volume`, lags from
-     `min_disparity` >= 1 up; in a wide range the lags below `min_lag` penalised) gives
-     d_L, the volume's diagonal search d_R; then the left-right check and filling of
-     `sgm` (`parallel_sgm.match_volume`). Images wider than `max_width` are matched on a
+     `min_disparity` >= 1 up; in a wide range the lags below `min_lag` penalised; plus a
+     regional echo score from the local power cepstrum, `diplopia_cepstrum`) gives d_L,
+     the volume's diagonal search d_R; then the left-right check and filling of `sgm`
+     (`parallel_sgm.match_volume`). Images wider than `max_width` are matched on a
      reduced copy (`working_scale`).
   3. Layers: a regularised least squares for L given d_R, then R = L sampled at x + d_R
      (`diplopia_layers.separate_layers`, weight a), at full size.
@@ -28,6 +29,7 @@ from typing import Callable, Dict, Optional, Tuple, Union
 
 import numpy as np
 
+from mixstereo_tf.classical import diplopia_cepstrum
 from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import parallel_sgm
@@ -62,6 +64,8 @@ class DiplopiaConfig:
       1-3 px the windows compare neighbouring pixels, which blur and noise correlate
       whatever the echo. 4 and 8, chosen on validation and on the temporal clip
       (LEARNED_DIPLOPIA.md).
+    cepstrum: the regional echo score added to the costs (`diplopia_cepstrum`, since
+      2026-11-29: validation bad-1 30.4 -> 24.4%; weight 0 turns it off).
     max_width: the self-matching (costs, SGM, the weight) runs on a copy reduced
       ceil(W / max_width) times (`working_scale`; 0: never), the layers at full size. 1280,
       chosen on large validation double images (docs/LEARNED_DIPLOPIA.md "Large images":
@@ -81,6 +85,7 @@ class DiplopiaConfig:
   prior_cap: int = 16
   min_lag: int = 4
   small_lag_penalty: int = 8
+  cepstrum: diplopia_cepstrum.CepstrumConfig = diplopia_cepstrum.CepstrumConfig()
   max_width: int = 1280
   max_float_mib: int = 1024
   max_strip_mib: int = 512
@@ -141,6 +146,9 @@ def _self_match(image, config, weight, costs, prior, prior_window):
       matching, min_disparity=copy.search[0], max_disparity=copy.search[1]))
   volume = (costs or diplopia_costs.zncc_costs)(copy.image, config)
   diplopia_costs.penalise_small_lags(volume, config)
+  if config.cepstrum.weight:
+    diplopia_cepstrum.add_echo_costs(volume, diplopia_costs.gray_255(copy.image),
+                                     config.matching.min_disparity, config.cepstrum)
   if copy.prior is not None:
     diplopia_costs.add_prior(volume, config, copy.prior, prior_window or (1, 2))
   matched = parallel_sgm.match_volume(volume, config.matching,

@@ -88,6 +88,10 @@ def learned_unmix(echo: Echo, image: np.ndarray, name: str, search: Tuple[int, i
   del name  # One encoding: the double image.
   hint = hint or hints.FrameHint()
   classical = diplopia.DiplopiaConfig()
+  # Without the classical matcher's echo score (2026-11-29): its weight is in ZNCC cost
+  # units, and this stage was trained and measured without it.
+  classical = dataclasses.replace(classical, cepstrum=dataclasses.replace(
+      classical.cepstrum, weight=0.0))
   p1, p2 = config.penalties
   matching = dataclasses.replace(classical.matching, p1=int(p1), p2=int(p2))
   out = diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
