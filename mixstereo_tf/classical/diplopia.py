@@ -65,7 +65,7 @@ class DiplopiaConfig:
       whatever the echo. 4 and 8, chosen on validation and on the temporal clip
       (LEARNED_DIPLOPIA.md).
     cepstrum: the regional echo score added to the costs (`diplopia_cepstrum`, since
-      2026-11-29: validation bad-1 30.4 -> 24.4%; weight 0 turns it off).
+      2026-11-29: validation bad-1 30.4 -> 24.3%; weight 0 turns it off).
     max_width: the self-matching (costs, SGM, the weight) runs on a copy reduced
       ceil(W / max_width) times (`working_scale`; 0: never), the layers at full size. 1280,
       chosen on large validation double images (docs/LEARNED_DIPLOPIA.md "Large images":

@@ -42,16 +42,17 @@ class CepstrumConfig:
 
   Attributes:
     weight: cost units per standardised score unit (0: off). 1.5: validation bad-1 30.4
-      -> 24.4% (1: 24.4%, 2: 24.8%; with noise on each view 48.4 -> 38.8%).
+      -> 24.3% (1: 24.4%, 2: 24.6%; with noise on each view, scratch, 48.4 -> 38.8%).
     clip: standardised scores are clipped to [-clip, clip] (so a lag costs at most
       2 x clip x weight more).
     rahmonic: the share of the score at 2d taken from the score at d (validation bad-1
-      24.4% at 1, 25.8% at 0).
+      24.3% at 1, 25.8% at 0).
     rows, window: the window, rows x columns; the window grows to the power of two that
       holds twice the largest lag (the cepstrum of n samples resolves quefrencies up to
-      n / 2).
-    row_step, step: the grid's spacing, rows and columns (step 16: the same validation
-      bad-1 as 8, 24.3%, at half the transforms; row_step 8: 24.6%).
+      n / 2), at most half the image's width (`window_width`). 4 rows: 24.2%; a window
+      of at least 256: 25.1%.
+    row_step, step: the grid's spacing, rows and columns (step 8: 24.4% for twice the
+      transforms; row_step 8: 24.5%).
   """
   weight: float = 1.5
   clip: float = 4.0
@@ -70,12 +71,14 @@ class CepstrumConfig:
                        f'{self.window}, row_step {self.row_step}, step {self.step}.')
 
 
-def window_width(config: CepstrumConfig, max_lag: int) -> int:
-  """The window's columns: config.window, doubled until it holds 2 x max_lag + 4."""
+def window_width(config: CepstrumConfig, max_lag: int, image_width: int) -> int:
+  """The window's columns: config.window, doubled until it holds 2 x max_lag + 4, but at
+  most half the image's width (even; at least config.window / 2): a wider window sees
+  mostly the reflected padding, whose mirror images read as echoes."""
   width = config.window
   while width < 2 * max_lag + 4:
     width *= 2
-  return width
+  return min(width, max(config.window // 2, 2 * (image_width // 4)))
 
 
 def echo_scores(gray: np.ndarray, low: int, high: int, config: CepstrumConfig) -> np.ndarray:
@@ -90,25 +93,30 @@ def echo_scores(gray: np.ndarray, low: int, high: int, config: CepstrumConfig) -
     float32 [ceil(H / row_step), ceil(W / step), high - low + 1]: at grid point (i, j),
     centred on pixel (i row_step, j step), lag low + k's score less its level, in units
     of its spread (the median and the median absolute deviation over the grid, each a
-    running median over LAG_SPAN lags; higher: more of an echo).
+    running median over LAG_SPAN lags; higher: more of an echo); 0 (no evidence either
+    way) for lags above what the window resolves (`window_width`: half its width - 2).
   """
   gray = np.asarray(gray, np.float32)
-  size = window_width(config, high)
+  size = window_width(config, high, gray.shape[1])
   detail = gray - cv2.GaussianBlur(gray, (0, 0), BLUR_SIGMA)  # Spectra without their DC.
   padded = np.pad(detail, ((config.rows // 2, config.rows // 2), (size // 2, size // 2)),
                   mode='reflect')
   # Every row's windows (a view), each transformed once and shared by the bands it is in.
   windows = np.lib.stride_tricks.sliding_window_view(padded, size, axis=1)[
       :, :gray.shape[1]:config.step]
-  lags = np.arange(low, high + 1)
+  lags = np.arange(low, min(high, size // 2 - 2) + 1)
   grid_rows = range(0, gray.shape[0], config.row_step)
-  scores = np.empty((len(grid_rows), windows.shape[1], len(lags)), np.float32)
+  scores = np.zeros((len(grid_rows), windows.shape[1], high - low + 1), np.float32)
+  if not len(lags):
+    return scores
   for first in range(0, len(grid_rows), CHUNK_ROWS):
     ys = np.asarray(grid_rows[first:first + CHUNK_ROWS])
-    scores[first:first + len(ys)] = _cepstra(windows, ys, size, lags, config)
-  baseline = _along_lags(np.median(scores, axis=(0, 1)))
-  spread = _along_lags(np.median(np.abs(scores - baseline), axis=(0, 1))) + 1e-9
-  return ((scores - baseline) / spread).astype(np.float32)
+    scores[first:first + len(ys), :, :len(lags)] = _cepstra(windows, ys, size, lags, config)
+  resolved = scores[..., :len(lags)]
+  baseline = _along_lags(np.median(resolved, axis=(0, 1)))
+  spread = _along_lags(np.median(np.abs(resolved - baseline), axis=(0, 1))) + 1e-9
+  resolved[...] = (resolved - baseline) / spread
+  return scores
 
 
 def _cepstra(windows: np.ndarray, ys: np.ndarray, size: int, lags: np.ndarray,
