@@ -33,6 +33,10 @@ from mixstereo_tf.core import workers
 BLUR_SIGMA = 16.0  # px: what is subtracted before the spectra (the scratch study's choice).
 LAG_SPAN = 9  # Lags of the running median that sets each lag's level and spread.
 CHUNK_ROWS = 16  # Grid rows transformed together (memory: their rows' spectra).
+# The widest window, a share of the image's width: on the refiner's validation examples
+# (`experiments/refiner_validation.py`, 160 x 320 and 320 x 640) bad-1 summed over the 80
+# was lowest at 0.75 (1 / none: +0.06%, 0.5: +0.5%); docs/LEARNED_DIPLOPIA.md.
+MAX_WIDTH_SHARE = 0.75
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,10 +53,12 @@ class CepstrumConfig:
       24.3% at 1, 25.8% at 0).
     rows, window: the window, rows x columns; the window grows to the power of two that
       holds twice the largest lag (the cepstrum of n samples resolves quefrencies up to
-      n / 2), at most half the image's width (`window_width`). 4 rows: 24.2%; a window
+      n / 2), at most 3/4 of the image's width (`window_width`). 4 rows: 24.2%; a window
       of at least 256: 25.1%.
     row_step, step: the grid's spacing, rows and columns (step 8: 24.4% for twice the
       transforms; row_step 8: 24.5%).
+    with_prior: also on video frames with a temporal prior (False: a shot's later frames
+      inherit the echo choice through the prior and skip the score's time).
   """
   weight: float = 1.5
   clip: float = 4.0
@@ -61,6 +67,7 @@ class CepstrumConfig:
   window: int = 128
   row_step: int = 4
   step: int = 16
+  with_prior: bool = False
 
   def __post_init__(self):
     if self.weight < 0 or self.clip <= 0 or self.rahmonic < 0:
@@ -73,12 +80,13 @@ class CepstrumConfig:
 
 def window_width(config: CepstrumConfig, max_lag: int, image_width: int) -> int:
   """The window's columns: config.window, doubled until it holds 2 x max_lag + 4, but at
-  most half the image's width (even; at least config.window / 2): a wider window sees
-  mostly the reflected padding, whose mirror images read as echoes."""
+  most MAX_WIDTH_SHARE of the image's width (even; at least config.window / 2): a window
+  as wide as the image sees mostly the reflected padding, whose mirror images read as
+  echoes."""
   width = config.window
   while width < 2 * max_lag + 4:
     width *= 2
-  return min(width, max(config.window // 2, 2 * (image_width // 4)))
+  return min(width, max(config.window // 2, 2 * int(MAX_WIDTH_SHARE * image_width / 2)))
 
 
 def echo_scores(gray: np.ndarray, low: int, high: int, config: CepstrumConfig) -> np.ndarray:

@@ -47,22 +47,23 @@ def test_scores_of_an_image_without_echo_are_standardised():
   assert 0.6 < spread.min() and spread.max() < 1.6  # 0.74, 1.40.
 
 
-def test_the_window_grows_to_hold_twice_the_largest_lag_within_half_the_image():
+def test_the_window_grows_to_hold_twice_the_largest_lag_within_the_image():
   assert diplopia_cepstrum.window_width(CONFIG, 10, 4000) == 128
   assert diplopia_cepstrum.window_width(CONFIG, 62, 4000) == 128
   assert diplopia_cepstrum.window_width(CONFIG, 63, 4000) == 256
   assert diplopia_cepstrum.window_width(CONFIG, 300, 4000) == 1024
-  assert diplopia_cepstrum.window_width(CONFIG, 300, 2002) == 1000  # Half, even.
-  assert diplopia_cepstrum.window_width(CONFIG, 96, 256) == 128  # Half of 256.
+  assert diplopia_cepstrum.window_width(CONFIG, 300, 1200) == 900  # 3/4 of it, even.
+  assert diplopia_cepstrum.window_width(CONFIG, 96, 256) == 192
   assert diplopia_cepstrum.window_width(CONFIG, 96, 70) == 64  # At least window / 2.
 
 
 def test_lags_the_window_cannot_resolve_score_zero():
-  # 256 px wide: a 128-px window resolves lags up to 62; 63..96 get no evidence.
-  texture = np.random.default_rng(7).uniform(0, 255, (40, 256 + 20))
-  scores = diplopia_cepstrum.echo_scores(_echo(texture, 20), 2, 96, CONFIG)
-  assert scores.shape[-1] == 95 and (scores[..., 61:] == 0).all()
-  assert np.mean(2 + np.argmax(scores, axis=-1) == 20) > 0.9
+  # 128 px wide: a 96-px window resolves lags up to 46; 47..60 get no evidence.
+  texture = np.random.default_rng(7).uniform(0, 255, (40, 128 + 12))
+  scores = diplopia_cepstrum.echo_scores(_echo(texture, 12), 2, 60, CONFIG)
+  assert scores.shape[-1] == 59 and (scores[..., 45:] == 0).all()
+  assert not (scores[..., :45] == 0).all(axis=(0, 1)).any()
+  assert np.mean(2 + np.argmax(scores, axis=-1) == 12) > 0.9
 
 
 def test_added_costs_are_the_bilinear_grid_rounded_and_saturating():
@@ -127,3 +128,16 @@ def test_the_echo_score_rights_the_matcher_on_a_smooth_double_image():
       image, (1, 30), config)['disparity_left'][inner] - 14) <= 1)
   assert right(diplopia.DiplopiaConfig()) > 0.75  # 0.81 when written.
   assert right(off) < 0.65  # 0.60: ZNCC alone loses the echo at 40% of the pixels.
+
+
+@pytest.mark.parametrize('with_prior, calls', [(False, 1), (True, 2)])
+def test_video_frames_with_a_prior_skip_it_unless_asked(monkeypatch, with_prior, calls):
+  seen = []
+  real = diplopia_cepstrum.add_echo_costs
+  monkeypatch.setattr(diplopia_cepstrum, 'add_echo_costs',
+                      lambda *args: seen.append(1) or real(*args))
+  image = np.random.default_rng(8).integers(0, 256, (24, 64, 3), dtype=np.uint8)
+  config = diplopia.DiplopiaConfig(cepstrum=dataclasses.replace(CONFIG, with_prior=with_prior))
+  diplopia.unmix_diplopia(image, (1, 12), config)  # A still (a shot's first frame).
+  diplopia.unmix_diplopia(image, (1, 12), config, prior=np.full((24, 64), 5.0, np.float32))
+  assert len(seen) == calls
