@@ -28,7 +28,6 @@ import numpy as np
 from mixstereo_tf.cli import startup  # pylint: disable=unused-import
 from mixstereo_tf.classical import diplopia
 from mixstereo_tf.data import photo_warps
-from mixstereo_tf.data import texture_atlas
 
 from experiments import markdown
 from experiments import validation  # --photo_dir, the pairs, their scores.
@@ -89,7 +88,7 @@ def evaluate(atlas, size, count: int):
 def main(argv):
   del argv
   start = time.perf_counter()
-  atlas = texture_atlas.load_texture_dir(FLAGS.photo_dir, long_side=ATLAS_LONG_SIDE)
+  atlas = validation.required_atlas(long_side=ATLAS_LONG_SIDE)
   shipped = diplopia.DiplopiaConfig().max_width
   lines = ['| size | reduced f times (matched width) | bad-1 | bad-3 | views L / R (dB) | '
            'seconds a pair |', '| --- | --- | --- | --- | --- | --- |']

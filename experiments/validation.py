@@ -47,11 +47,12 @@ def noisy(pair, seed):
   return out
 
 
-def required_atlas() -> texture_atlas.TextureAtlas:
-  """The photographs of --photo_dir; a usage error naming the flag when it is empty."""
+def required_atlas(**load) -> texture_atlas.TextureAtlas:
+  """The photographs of --photo_dir (`load`: keywords of `texture_atlas.load_texture_dir`);
+  a usage error naming the flag when it is empty."""
   if not FLAGS.photo_dir:
     raise app.UsageError('--photo_dir is required (experiments/get_photos.sh).')
-  return texture_atlas.load_texture_dir(FLAGS.photo_dir)
+  return texture_atlas.load_texture_dir(FLAGS.photo_dir, **load)
 
 
 def parse_all(items: Sequence[str], parse: Callable[[str], Parsed]) -> List[Parsed]:
