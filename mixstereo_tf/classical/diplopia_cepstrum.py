@@ -33,10 +33,11 @@ from mixstereo_tf.core import workers
 BLUR_SIGMA = 16.0  # px: what is subtracted before the spectra (the scratch study's choice).
 LAG_SPAN = 9  # Lags of the running median that sets each lag's level and spread.
 CHUNK_ROWS = 16  # Grid rows transformed together (memory: their rows' spectra).
-# The widest window, a share of the image's width: on the refiner's validation examples
-# (`experiments/refiner_validation.py`, 160 x 320 and 320 x 640) bad-1 summed over the 80
-# was lowest at 0.75 (1 / none: +0.06%, 0.5: +0.5%); docs/LEARNED_DIPLOPIA.md.
-MAX_WIDTH_SHARE = 0.75
+# The widest window, a share of the image's width, chosen on two validation sets
+# (docs/LEARNED_DIPLOPIA.md): the temporal clip (320 x 180; the default per shot, bad-1
+# 42.1% at 0.5, 46.4% at 0.75) and the refiner's validation examples (160 x 320 and
+# 320 x 640; mean classical bad-1 51.9% at 0.5, 51.7% at 0.75 and at 1).
+MAX_WIDTH_SHARE = 0.5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,7 +54,7 @@ class CepstrumConfig:
       24.3% at 1, 25.8% at 0).
     rows, window: the window, rows x columns; the window grows to the power of two that
       holds twice the largest lag (the cepstrum of n samples resolves quefrencies up to
-      n / 2), at most 3/4 of the image's width (`window_width`). 4 rows: 24.2%; a window
+      n / 2), at most half the image's width (`window_width`). 4 rows: 24.2%; a window
       of at least 256: 25.1%.
     row_step, step: the grid's spacing, rows and columns (step 8: 24.4% for twice the
       transforms; row_step 8: 24.5%).

@@ -202,7 +202,7 @@ def test_a_prior_holds_the_echo_that_noise_hides():
   alone = diplopia.unmix_diplopia(image, (1, 30))
   held = diplopia.unmix_diplopia(image, (1, 30),
                                  prior=np.full((height, width), float(lag), np.float32))
-  assert found(alone) < 0.3  # 0.11 on 2 cores.
+  assert found(alone) < 0.5  # 0.30 on 2 cores (0.11 before the echo score of 2026-11-29).
   assert found(held) > 0.95  # 0.99.
 
 

@@ -52,14 +52,14 @@ def test_the_window_grows_to_hold_twice_the_largest_lag_within_the_image():
   assert diplopia_cepstrum.window_width(CONFIG, 62, 4000) == 128
   assert diplopia_cepstrum.window_width(CONFIG, 63, 4000) == 256
   assert diplopia_cepstrum.window_width(CONFIG, 300, 4000) == 1024
-  assert diplopia_cepstrum.window_width(CONFIG, 300, 1200) == 900  # 3/4 of it, even.
-  assert diplopia_cepstrum.window_width(CONFIG, 96, 256) == 192
+  assert diplopia_cepstrum.window_width(CONFIG, 300, 1202) == 600  # Half of it, even.
+  assert diplopia_cepstrum.window_width(CONFIG, 96, 256) == 128
   assert diplopia_cepstrum.window_width(CONFIG, 96, 70) == 64  # At least window / 2.
 
 
 def test_lags_the_window_cannot_resolve_score_zero():
-  # 128 px wide: a 96-px window resolves lags up to 46; 47..60 get no evidence.
-  texture = np.random.default_rng(7).uniform(0, 255, (40, 128 + 12))
+  # 192 px wide: a 96-px window resolves lags up to 46; 47..60 get no evidence.
+  texture = np.random.default_rng(7).uniform(0, 255, (40, 192 + 12))
   scores = diplopia_cepstrum.echo_scores(_echo(texture, 12), 2, 60, CONFIG)
   assert scores.shape[-1] == 59 and (scores[..., 45:] == 0).all()
   assert not (scores[..., :45] == 0).all(axis=(0, 1)).any()

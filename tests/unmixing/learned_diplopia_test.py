@@ -5,6 +5,7 @@ import pytest
 import tensorflow as tf
 
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_cepstrum
 from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import hints
@@ -89,6 +90,7 @@ def test_the_stage_aggregates_with_its_own_penalties_not_the_classical_ones():
                                         diplopia.DiplopiaConfig().matching.p2, False)):
     classical = diplopia.DiplopiaConfig()
     run = diplopia.DiplopiaConfig(matching=sgm.SgmConfig(
-        min_disparity=1, max_disparity=classical.matching.max_disparity, p1=p1, p2=p2))
+        min_disparity=1, max_disparity=classical.matching.max_disparity, p1=p1, p2=p2),
+        cepstrum=diplopia_cepstrum.CepstrumConfig(weight=0))  # The stage runs without it.
     reference = diplopia.unmix_diplopia(image, (1, 12), run, costs=costs)
     assert np.array_equal(out['disparity_left'], reference['disparity_left']) == same
