@@ -13,10 +13,12 @@ Not in the paper (its diplopia path is learned end to end); chosen on validation
 images, docs/LEARNED_DIPLOPIA.md ("A regional echo score").
 
 Scores are computed on a coarse grid (windows `rows` x `window` px every `row_step` rows
-and `step` columns), standardised per lag over the image (median and median absolute
-deviation, as the ZNCC costs are corrected per lag for self-similarity), and each lag's
-cost gets weight x (clip - clip(score)) units, bilinearly interpolated between the grid
-points.
+and `step` columns), standardised per lag (the median and the median absolute deviation
+over the grid, each smoothed by a running median over the lags, so that an echo shared by
+the whole image keeps its score; the ZNCC costs are likewise corrected per lag for
+self-similarity), and each lag's cost gets weight x (clip - clip(score)) units, bilinearly
+interpolated between the grid points. Video frames with a temporal prior skip it
+(`CepstrumConfig.with_prior`).
 """
 
 import dataclasses
