@@ -146,7 +146,7 @@ def _self_match(image, config, weight, costs, prior, prior_window):
       matching, min_disparity=copy.search[0], max_disparity=copy.search[1]))
   volume = (costs or diplopia_costs.zncc_costs)(copy.image, config)
   diplopia_costs.penalise_small_lags(volume, config)
-  if config.cepstrum.weight and (copy.prior is None or config.cepstrum.with_prior):
+  if copy.prior is None or config.cepstrum.with_prior:  # Its weight 0: add_echo_costs skips.
     diplopia_cepstrum.add_echo_costs(volume, diplopia_costs.gray_255(copy.image),
                                      config.matching.min_disparity, config.cepstrum)
   if copy.prior is not None:

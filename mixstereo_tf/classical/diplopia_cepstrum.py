@@ -134,13 +134,12 @@ def _cepstra(windows: np.ndarray, ys: np.ndarray, size: int, lags: np.ndarray,
              config: CepstrumConfig) -> np.ndarray:
   """float32 [len(ys), columns, lags] rahmonic-corrected power cepstra of the bands of
   config.rows padded rows starting at `ys` (`windows`: [rows, columns, size] views)."""
-  top = ys[0]
+  top, threads = ys[0], workers.usable_cpus(0)
   rows = windows[top:ys[-1] + config.rows] * np.hanning(size).astype(np.float32)
-  power = np.abs(scipy.fft.rfft(rows, axis=-1, workers=workers.usable_cpus(0))) ** 2
+  power = np.abs(scipy.fft.rfft(rows, axis=-1, workers=threads)) ** 2
   band = sum(power[ys - top + r] for r in range(config.rows)) / config.rows
   floor = 1e-3 * band.mean(axis=-1, keepdims=True) + 1e-9
-  cepstrum = scipy.fft.irfft(np.log(band + floor), n=size, axis=-1,
-                             workers=workers.usable_cpus(0))
+  cepstrum = scipy.fft.irfft(np.log(band + floor), n=size, axis=-1, workers=threads)
   doubled = 2 * lags <= size // 2
   rahmonic = np.where(doubled, config.rahmonic, 0.0).astype(np.float32)
   return cepstrum[..., lags] - rahmonic * cepstrum[..., np.minimum(2 * lags, size // 2)]

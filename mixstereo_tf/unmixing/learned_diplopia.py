@@ -22,6 +22,7 @@ import numpy as np
 import tensorflow as tf
 
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_cepstrum
 from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import feature_costs
 from mixstereo_tf.core import hints
@@ -87,11 +88,9 @@ def learned_unmix(echo: Echo, image: np.ndarray, name: str, search: Tuple[int, i
   mixing weight used (`hint.mixing_weight`: None 1/2, 'auto' estimated, or given)."""
   del name  # One encoding: the double image.
   hint = hint or hints.FrameHint()
-  classical = diplopia.DiplopiaConfig()
   # Without the classical matcher's echo score (2026-11-29): its weight is in ZNCC cost
   # units, and this stage was trained and measured without it.
-  classical = dataclasses.replace(classical, cepstrum=dataclasses.replace(
-      classical.cepstrum, weight=0.0))
+  classical = diplopia.DiplopiaConfig(cepstrum=diplopia_cepstrum.CepstrumConfig(weight=0.0))
   p1, p2 = config.penalties
   matching = dataclasses.replace(classical.matching, p1=int(p1), p2=int(p2))
   out = diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
