@@ -203,9 +203,9 @@ def unmix_item(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outpu
   """
   request = info_file.describe(options)
   if item.is_video:
-    opened = video_files.opening(unmixer, item.path)
+    opened = video_files.opening(unmixer, item.path, options.temporal_config)
     display = ((0.0, float(options.max_display_disparity)) if options.max_display_disparity
-               else video_files.display_range(unmixer, opened))
+               else video_files.display_range(unmixer, opened.info))
     return video_files.unmix_video(
         unmixer, item, output_dir, options.layout, display,
         options.settings or video_files.default_settings(unmixer), options.video_config,

@@ -19,7 +19,6 @@ from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
-from mixstereo_tf.core import hints
 from mixstereo_tf.unmixing import mixture_choice
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import frame_pipeline
@@ -83,6 +82,29 @@ def record_shot(shots: List[Dict[str, object]], frame: int, info: Dict[str, obje
     shots.append(entry)
 
 
+@dataclasses.dataclass(frozen=True)
+class Opening:
+  """The frame `opening` unmixed: its index in the video, and the call, which the frame
+  pipeline reuses for that frame where its hint is the same (`frame_pipeline.Unmixed`)."""
+  index: int
+  unmixed: frame_pipeline.Unmixed
+
+  @property
+  def info(self) -> Dict[str, object]:
+    """The frame's info (mixture, disparity range, ...)."""
+    return self.unmixed.outputs.get('info', {})
+
+  def at(self, index: int) -> Optional[frame_pipeline.Unmixed]:
+    """The call, for the video's frame `index` when it is this one."""
+    return self.unmixed if index == self.index else None
+
+
+def frame_fields(chroma_halved: bool) -> Dict[str, object]:
+  """The hint fields of every video frame: a video writes the views and the left
+  disparity (the right one is unread), and how its colour was stored."""
+  return {'unread': 'disparity_right', 'chroma_halved': chroma_halved}
+
+
 def _drawn_when_done(pending, state: Dict[str, object], layout: str,
                      display: Tuple[float, float], drawn: Tuple[str, ...],
                      starts_shot: bool) -> Callable[[], Dict[str, object]]:
@@ -109,17 +131,17 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
                 video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
                 report, temporal_config: temporal.TemporalConfig,
                 formats: Tuple[str, ...] = (), request: Optional[Dict] = None,
-                opened: Optional[Dict[str, object]] = None) -> int:
+                opened: Optional[Opening] = None) -> int:
   """Unmixes every frame of a video into layout, disparity and `formats` videos
   (resumable, `video.jobs`; side by side and top-bottom tagged so), writes
-  `<name>_info.json` (with `request`; `opened`, the `opening` frame's info, when this run
-  resumed) and returns the frames unmixed in this run; `report` gains the seconds
+  `<name>_info.json` (with `request`; `opened`'s info, the `opening` frame's, when this
+  run resumed) and returns the frames unmixed in this run; `report` gains the seconds
   spent unmixing. Frames go through a `temporal.VideoState` (shots; frames with no
-  anaglyph found read as `opened`'s encoding until a shot finds one) and `frame_pipeline`;
-  their images are drawn and written in order on the writer's thread."""
+  anaglyph found read as `opened`'s encoding until a shot finds one) and `frame_pipeline`
+  (`opened`'s frame not unmixed again), then drawn and written on the writer's thread."""
   start = time.perf_counter()
-  opened = opened or {}
-  shots = temporal.VideoState(temporal_config, opened.get('mixture'))
+  known = opened.info if opened else {}
+  shots = temporal.VideoState(temporal_config, known.get('mixture'))
   outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
   state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None, 'shots': []}
   pipeline = frame_pipeline.FramePipeline(unmixer, shots)
@@ -132,9 +154,9 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
   def render(frame):
     unmix_start = time.perf_counter()
     index = state['done'] + shots.frames  # This run's frames begun before this one.
-    # A video writes the views and the left disparity: the right one is not read.
-    pending = pipeline.submit(frame, cut=index % video_config.segment_frames == 0,
-                              unread='disparity_right', chroma_halved=state['chroma_halved'])
+    fields = frame_fields(state['chroma_halved'])
+    pending = pipeline.submit(frame, index % video_config.segment_frames == 0,
+                              opened and opened.at(index), **fields)
     report.unmix_seconds += time.perf_counter() - unmix_start
     return _drawn_when_done(pending, state, layout, display, drawn, shots.started_shot())
 
@@ -154,7 +176,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
       state['bar'].close()
   info = done['info']
   info_file.write_info(output_dir, item, dict(
-      state['info'] or opened, frames=done['frames'], resumed_frames=done['resumed_frames'],
+      state['info'] or known, frames=done['frames'], resumed_frames=done['resumed_frames'],
       frame_rate=str(info.frame_rate), rotation=info.rotation, turned_upright=info.turned,
       display_range=[round(v, 3) for v in display], temporal=temporal_config.enabled,
       scene_cuts=[state['done'] + index for index in shots.cuts],
@@ -171,24 +193,29 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
 SCAN_FRAMES, SCAN_STRIDE = 1500, 5
 
 
-def opening(unmixer: predictors.Unmixer, path: str) -> Dict[str, object]:
-  """The info of unmixing a video's first frame, or with `unmixer.mixture` 'auto' its
-  first frame in which detection finds an anaglyph (`SCAN_STRIDE`, `SCAN_FRAMES`): the
-  black frames, fades or titles before it are read as its encoding
+def opening(unmixer: predictors.Unmixer, path: str,
+            temporal_config: temporal.TemporalConfig = temporal.TemporalConfig()) -> Opening:
+  """A video's first frame unmixed as the first frame of its shot (the hint the frame
+  pipeline gives it, which then takes these outputs), or with `unmixer.mixture` 'auto'
+  its first frame in which detection finds an anaglyph (`SCAN_STRIDE`, `SCAN_FRAMES`):
+  the black frames, fades or titles before it are read as its encoding
   (`temporal.VideoState.fallback_mixture`).
 
   Raises:
     ValueError: no frame of those scanned shows an anaglyph, naming the video.
   """
   info, frames = streams.open_video(path)
-  stored = hints.stored(info.chroma_halved)
   last = None
   try:
     for index, frame in enumerate(frames):
       if index % SCAN_STRIDE and unmixer.mixture == mixture_choice.AUTO:
         continue
+      hint = dataclasses.replace(
+          temporal.VideoState(temporal_config).begin(frame.image, cut=True),
+          **frame_fields(info.chroma_halved))
       try:
-        return unmixer(frame.image, **stored).get('info', {})
+        return Opening(index, frame_pipeline.Unmixed(frame.image, hint,
+                                                     unmixer(frame.image, hint=hint)))
       except mixture_choice.NoAnaglyphError as e:
         if index + SCAN_STRIDE >= SCAN_FRAMES:
           raise ValueError(f'No frame of the first {SCAN_FRAMES} of {path} looks like an '

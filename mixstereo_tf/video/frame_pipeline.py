@@ -15,7 +15,9 @@ whose decisions the next frame needs, and frames of a shot whose encoding is not
 `hints.FrameHint.may_be`) are waited for whole, and their outputs are the prior. Run one
 at a time with these priors, the outputs are the same (tests). With temporal consistency
 off (`--notemporal`: every frame decided alone) the next frame needs nothing of this one
-and starts at once; at most two frames are in flight either way.
+and starts at once; at most two frames are in flight either way. A frame the unmixer
+already ran on with the very hint the pipeline gives it (`Unmixed`: a video's opening
+frame, `cli.video_files.opening`) is not unmixed again.
 
     pipeline = FramePipeline(unmixer, temporal.VideoState(config))
     for image in frames:
@@ -27,14 +29,40 @@ and starts at once; at most two frames are in flight either way.
 import concurrent.futures
 import dataclasses
 import threading
-from typing import Callable, Dict
+from typing import Callable, Dict, Optional
 
 import numpy as np
 
+from mixstereo_tf.core import hints
 from mixstereo_tf.video import temporal
 
 # Frames in flight: one being restored, the next being matched.
 _FRAMES = 2
+
+
+@dataclasses.dataclass(frozen=True)
+class Unmixed:
+  """`outputs` of `unmixer(image, hint=hint)`, run before the pipeline started."""
+  image: np.ndarray
+  hint: hints.FrameHint
+  outputs: Dict[str, object]
+
+  def serves(self, image: np.ndarray, hint: hints.FrameHint) -> bool:
+    """Whether `outputs` are those of `image` unmixed with `hint`: the same pixels and
+    the same hint, its fallback_mixture aside (only a frame in which detection finds no
+    anaglyph reads it, and these outputs came from a frame in which it found one or
+    from a named encoding). Hints holding arrays or callbacks (a prior, on_disparity,
+    a stored image: never a shot's first frame's) serve nothing."""
+    if self.image.shape != image.shape or not np.array_equal(self.image, image):
+      return False
+    for field in dataclasses.fields(hints.FrameHint):
+      if field.name == 'fallback_mixture':
+        continue
+      values = getattr(self.hint, field.name), getattr(hint, field.name)
+      if any(isinstance(v, np.ndarray) or callable(v) for v in values) or (
+          values[0] != values[1]):
+        return False
+    return True
 
 
 class FramePipeline:
@@ -52,17 +80,23 @@ class FramePipeline:
         _FRAMES, thread_name_prefix='mixstereo-frames')
     self._slots = threading.Semaphore(_FRAMES)
 
-  def submit(self, image: np.ndarray, cut: bool = False,
+  def submit(self, image: np.ndarray, cut: bool = False, unmixed: Optional[Unmixed] = None,
              **hint_fields) -> concurrent.futures.Future:
     """Starts unmixing `image` (`state.begin(image, cut)`'s hint, with `hint_fields`
     replaced) and returns its Future once the next frame may start: when its disparities
     are reported (`hints.FrameHint.on_disparity`) or it is done; with the state's temporal
     consistency off (every frame alone) as soon as fewer than two frames are in flight.
+    Where `unmixed` serves this image and hint, its outputs are the frame's, done.
 
     Raises:
       The frame's own error when it failed before reporting its disparities.
     """
     hint = dataclasses.replace(self.state.begin(image, cut=cut), **hint_fields)
+    if unmixed is not None and unmixed.serves(image, hint):
+      self.state.end(unmixed.outputs)
+      done = concurrent.futures.Future()
+      done.set_result(unmixed.outputs)
+      return done
     ready, told = threading.Event(), []
     # The shot's decisions are made (never so with temporal consistency off, nor while
     # its encoding may still change): only the prior is new.

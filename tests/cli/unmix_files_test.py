@@ -421,7 +421,9 @@ def test_half_resolution_colour_of_a_jpeg_or_video_reaches_the_unmixer(tmp_path)
   streams_test.make_video(tmp_path / 'clip.mp4', [streams_test.pattern(i) for i in range(2)])
   for name in ('web.jpg', 'full.jpg', 'plain.png', 'clip.mp4'):
     unmix_files.unmix_inputs(unmixer, str(tmp_path / name), str(tmp_path / 'out'))
-  assert halved == [True, False, False, True, True, True]  # The video: opening frame, 2 frames.
+  # The video: its 2 frames, the first unmixed once (`video_files.opening`, its outputs
+  # taken by the frame pipeline).
+  assert halved == [True, False, False, True, True]
 
 
 def test_a_cut_video_is_written_as_far_as_it_decodes_and_says_so(tmp_path):
@@ -492,8 +494,9 @@ def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_pa
 
   report = unmix_files.unmix_inputs(dataclasses.replace(unmixer, fn=unmix), source,
                                     str(tmp_path / 'out'), media.OutputOptions('sbs'))
-  # First the colour maps' range from the first frame alone, then the frames.
-  assert report.frames == 3 and seen == [None] + ['disparity_right'] * 3
+  # Each frame once: the first for the colour maps' range, as the first of its shot (its
+  # outputs taken by the frame pipeline), then the others.
+  assert report.frames == 3 and seen == ['disparity_right'] * 3
   # The colour maps span that range (0..8 px here), not the method's largest disparity.
   info = json.loads((tmp_path / 'out' / 'clip_info.json').read_text())
   assert info['display_range'] == [0.0, 8.0] and unmixer.max_disparity != 8.0

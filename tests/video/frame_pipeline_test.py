@@ -103,6 +103,31 @@ def test_a_frame_failing_before_its_disparities_raises_from_submit():
       pipeline.submit(_frame(3))
 
 
+def test_a_frame_already_unmixed_with_its_hint_is_not_unmixed_again():
+  """A video's opening frame (`cli.video_files.opening`): its outputs are the frame's and
+  the next frame's prior, without a second call; a different image or hint is unmixed."""
+  unmixer = _Recorder(3)
+  for release in unmixer.release:
+    release.set()
+  state = temporal.VideoState()
+  hint = dataclasses.replace(temporal.VideoState().begin(_frame(0), cut=True),
+                             unread='disparity_right')
+  known = {'disparity_left': np.full((H, W), 7.0, np.float32), 'info': {
+      'mixture': 'anaglyph', 'disparity_range': [0, 9]}}
+  unmixed = frame_pipeline.Unmixed(_frame(0), hint, known)
+  with frame_pipeline.FramePipeline(unmixer, state) as pipeline:
+    first = pipeline.submit(_frame(0), cut=True, unmixed=unmixed, unread='disparity_right',
+                            fallback_mixture='anaglyph')  # Read by no frame with one.
+    second = pipeline.submit(_frame(1), unmixed=unmixed, unread='disparity_right')
+    assert first.result() is known and second.result()['disparity_left'][0, 0] == 1
+  assert len(unmixer.hints) == 1 and (unmixer.hints[0].prior == 7).all()
+  assert unmixer.hints[0].mixture == 'anaglyph'
+  assert unmixed.serves(_frame(0), dataclasses.replace(hint, fallback_mixture='gray'))
+  assert not unmixed.serves(_frame(1), hint)
+  assert not unmixed.serves(_frame(0), dataclasses.replace(hint, unread=None))
+  assert not unmixed.serves(_frame(0), dataclasses.replace(hint, prior=np.zeros((H, W))))
+
+
 def _one_at_a_time(unmixer, frames, config):
   """Each frame whole before the next starts; the next frame's prior is what this frame
   reported through on_disparity (its outputs where it reported nothing: a shot's first)."""
