@@ -4,7 +4,7 @@ method, in one run (BENCHMARKS.md section 18): a 1280x720 anaglyph video end to 
 and a 4000x3000 photo (`photo_12mp.py`: wall seconds, CPU seconds, peak resident memory),
 each measurement in its own process.
 
-    python -m experiments.benchmark_learned [--before_checkout=DIR]
+    python -m experiments.benchmark_learned [--before_checkout=DIR] [--nolearned_photos]
 
 With --before_checkout (a checkout of an earlier commit, e.g. `git worktree add DIR REV`)
 each row's video is also run in that checkout (its package and experiments) in the same
@@ -21,6 +21,8 @@ from absl import flags
 from experiments import benchmark_video
 from experiments import checkouts  # Defines --before_checkout.
 
+flags.DEFINE_bool('learned_photos', True, 'Also each row\'s 4000x3000 photo (minutes a '
+                  'row); --nolearned_photos: the videos alone.')
 FLAGS = flags.FLAGS
 
 ROWS = ('classical', 'refiner', 'model')
@@ -59,8 +61,8 @@ def main(argv):
     if FLAGS.before_checkout:
       lines.append(f'| {method}, before | ' + ' | '.join(
           _cells(_video(method, FLAGS.before_checkout))) + ' | |')
-    lines.append(f'| {method} | ' + ' | '.join(_cells(_video(method))) +
-                 f' | {_photo(method)} |')
+    photo = _photo(method) if FLAGS.learned_photos else 'not run'
+    lines.append(f'| {method} | ' + ' | '.join(_cells(_video(method))) + f' | {photo} |')
   print(f'load average at start {load[0]:.2f}, at end {os.getloadavg()[0]:.2f}')
   print('\n'.join(lines))
 
