@@ -46,8 +46,8 @@ class Unmixed:
   pixel x + disparity_right[y, x].
 
   Attributes:
-    left: uint8 [H, W, 3] left view; uint16 for a 16-bit anaglyph (a uint16 array or a
-      16-bit file: matched at 8 bits, its views restored at 16).
+    left: uint8 [H, W, 3] left view; uint16 for a 16-bit anaglyph or double image (a
+      uint16 array or a 16-bit file: matched at 8 bits, its views made at 16).
     right: the right view, as left.
     disparity: float32 [H, W] disparity of the left view.
     disparity_right: float32 [H, W] disparity of the right view.

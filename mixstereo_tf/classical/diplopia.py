@@ -123,7 +123,8 @@ def global_shift(gray: np.ndarray, min_lag: int = 2, max_lag: int = 128) -> int:
     raise ValueError(f'Need 1 <= min_lag <= max_lag < width, got {min_lag}, {max_lag} for '
                      f'width {width}.')
   power = (np.abs(np.fft.rfft(rows, n=2 * width, axis=1)) ** 2).mean(axis=0)
-  cepstrum = np.fft.irfft(np.log(power + 1e-6 * power.max()))
+  # The floor: rows without any change (a blank image, a vertical gradient) have no power.
+  cepstrum = np.fft.irfft(np.log(power + max(1e-6 * power.max(), 1e-30)))
   return int(min_lag + np.argmax(cepstrum[min_lag:max_lag + 1]))
 
 
@@ -161,13 +162,27 @@ def _self_match(image, config, weight, costs, prior, prior_window):
           for key in ('disparity_left', 'disparity_right')}, weight
 
 
+def _searching(config: DiplopiaConfig, disparity_range: Optional[Tuple[int, int]]
+               ) -> DiplopiaConfig:
+  """`config` searching `disparity_range` (None: its own), or ValueError naming a range
+  that is not 1 <= min < max."""
+  if disparity_range is None:
+    return config
+  low, high = disparity_range
+  if not 1 <= low < high:
+    raise ValueError(f'A diplopia disparity range must satisfy 1 <= min < max (the views '
+                     f'of an average are ordered by positive disparity), got {low},{high}.')
+  return dataclasses.replace(config, matching=dataclasses.replace(
+      config.matching, min_disparity=int(low), max_disparity=int(high)))
+
+
 def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
                    config: Optional[DiplopiaConfig] = None,
                    weight: Union[None, float, str] = None,
                    costs: Optional[Costs] = None, prior: Optional[np.ndarray] = None,
                    prior_window: Optional[Tuple[int, int]] = None,
-                   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None
-                   ) -> Dict[str, object]:
+                   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None,
+                   views_image: Optional[np.ndarray] = None) -> Dict[str, object]:
   """Separates a double image I = a L + (1 - a) R into two views and disparities.
 
   Args:
@@ -186,31 +201,34 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
       prior_window: (radius, spread) of `search_windows.around_prior` (None: 1, 2).
     on_disparity: called with both disparities once they are matched, before the layers
       are solved (`hints.FrameHint.on_disparity`).
+    views_image: uint16 [H, W, 3], the mixture as stored where `mixture` is its 8-bit copy
+      (`image_range.eight_bits`): the layers are solved from it and returned as uint16;
+      None: from `mixture`.
 
   Returns:
-    'left', 'right': uint8 [H, W, 3]; 'disparity_left', 'disparity_right': float32
-    [H, W], pixels, positive; 'disparity_range': the (min, max) searched;
+    'left', 'right': uint8 [H, W, 3] (uint16 with a views_image); 'disparity_left',
+    'disparity_right': float32 [H, W], pixels, positive; 'disparity_range': the (min, max)
+    searched;
     'global_shift': int, the power-cepstrum peak, pixels; 'mixing_weight': the a used.
 
   Raises:
-    ValueError: a range with min < 1 or min >= max, or no lag of it within the image.
+    ValueError: a range with min < 1 or min >= max, no lag of it within the image, or a
+      views_image of another shape.
   """
-  config = config or DiplopiaConfig()
-  if disparity_range is not None:
-    low, high = disparity_range
-    if not 1 <= low < high:
-      raise ValueError(f'A diplopia disparity range must satisfy 1 <= min < max (the views '
-                       f'of an average are ordered by positive disparity), got {low},{high}.')
-    config = dataclasses.replace(config, matching=dataclasses.replace(
-        config.matching, min_disparity=int(low), max_disparity=int(high)))
+  config = _searching(config or DiplopiaConfig(), disparity_range)
   image = image_range.as_unit_float(mixture, 'mixture')
+  if views_image is not None and np.shape(views_image) != image.shape:
+    raise ValueError(f'views_image has shape {np.shape(views_image)}, the mixture '
+                     f'{image.shape}: it must be the same image, stored at 16 bits.')
   matched, weight = _self_match(image, config, weight, costs, prior, prior_window)
   if on_disparity is not None:
     on_disparity(dict(matched))
-  layers = diplopia_layers.separate_layers(image, matched['disparity_right'], config.layers,
-                                           weight)
-  return {'left': image_range.unit_to_u8(layers['left']),
-          'right': image_range.unit_to_u8(layers['right']),
+  depth = np.uint8 if views_image is None else np.asarray(views_image).dtype
+  layers = diplopia_layers.separate_layers(
+      image if views_image is None else image_range.as_unit_float(views_image, 'views_image'),
+      matched['disparity_right'], config.layers, weight)
+  return {'left': image_range.unit_to(layers['left'], depth),
+          'right': image_range.unit_to(layers['right'], depth),
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
           'disparity_range': (config.matching.min_disparity, config.matching.max_disparity),

@@ -156,15 +156,15 @@ def truncated_jpeg(path: str) -> bool:
 
 
 # What reading an image at 8 bits in RGB dropped (`image_io.dropped`) -> its info note.
-_DROPPED = {'bit_depth': ('stores 16-bit samples: its views were restored and written at 8 '
-                          'bits (only anaglyph views are restored at 16)'),
+_DROPPED = {'bit_depth': ('stores 16-bit samples: its views were made and written at 8 '
+                          'bits (only anaglyph and double-image views are made at 16)'),
             'alpha': ('has an alpha channel: it was dropped, the transparent pixels were '
                       'unmixed as stored and the views are opaque')}
 
 
 def depth_lost(image: np.ndarray, view: np.ndarray) -> Tuple[str, ...]:
   """('bit_depth',) when a 16-bit `image` (`read_upright(deep=True)`) gave 8-bit views (a
-  double image's or a single view's: only anaglyph views are restored at 16 bits), else ()."""
+  single view's: only anaglyph and double-image views are made at 16 bits), else ()."""
   return ('bit_depth',) if image.dtype == np.uint16 and view.dtype != np.uint16 else ()
 
 

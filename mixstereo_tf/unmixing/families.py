@@ -14,6 +14,9 @@ A family answers, for each of its encodings (`names`):
     `hints.FrameHint` rides down to the matcher's configuration), `classical_range` and
     `display_range` are its own range and display range;
   * the views: `restore` from the encoding's matrices (`restores_views`: anaglyphs);
+    `views_at_depth`: a 16-bit mixture's views are made from its 16-bit samples (the
+    hint's stored_image; matching runs on its 8-bit copy): anaglyphs restore them from
+    it, double images solve their layers from it;
   * the network plan: `signed` families may have disparities of either sign, so the plan
     may shift their `right_eye` channels (`disparity_range.plan`, `to_network`);
   * learned stages: `learned_stages` names the networks built on its classical stage
@@ -50,6 +53,7 @@ class Family:
   detectable = False
   signed = False
   restores_views = False
+  views_at_depth = False
   has_classical = False
   input_is_left = False
   weighted = False
@@ -106,6 +110,7 @@ class Anaglyph(Family):
   detectable = True
   signed = True
   restores_views = True
+  views_at_depth = True
   has_classical = True
   learned_stages = ('refiner', 'features')
 
@@ -154,6 +159,7 @@ class Diplopia(Family):
   names = ('diplopia',)
   has_classical = True
   weighted = True
+  views_at_depth = True
   learned_stages = ('refiner', 'echo_features')
 
   def estimate_range(self, image, name, default, hint=None):
@@ -163,13 +169,14 @@ class Diplopia(Family):
 
   def classical(self, image, name, search=None, hint=None):
     """`diplopia.unmix_diplopia` over `search` (None: its configured range) with the
-    hint's mixing weight (None: 1/2), its prior (a video frame's), in its window, and
-    on_disparity."""
+    hint's mixing weight (None: 1/2), its prior (a video frame's), in its window,
+    on_disparity, and its stored_image (a 16-bit mixture: the layers at 16 bits)."""
     del name
     hint = hint or hints.FrameHint()
     return diplopia.unmix_diplopia(image, search, weight=hint.mixing_weight,
                                    prior=hint.prior, prior_window=hint.prior_window,
-                                   on_disparity=hint.on_disparity)
+                                   on_disparity=hint.on_disparity,
+                                   views_image=hint.stored_image)
 
   def display_range(self):
     """The self-matching's largest configured lag."""

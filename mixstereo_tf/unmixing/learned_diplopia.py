@@ -84,7 +84,8 @@ def echo_costs(echo: Echo, config: EchoConfig = EchoConfig()) -> diplopia.Costs:
 def learned_unmix(echo: Echo, image: np.ndarray, name: str, search: Tuple[int, int],
                   hint: Optional[hints.FrameHint] = None,
                   config: EchoConfig = EchoConfig()) -> Dict[str, object]:
-  """The stage on a uint8 double image: the views, both disparities and, in 'info', the
+  """The stage on a uint8 double image: the views (from the hint's stored_image where it
+  has one: a 16-bit mixture's layers at 16 bits), both disparities and, in 'info', the
   mixing weight used (`hint.mixing_weight`: None 1/2, 'auto' estimated, or given)."""
   del name  # One encoding: the double image.
   hint = hint or hints.FrameHint()
@@ -97,7 +98,8 @@ def learned_unmix(echo: Echo, image: np.ndarray, name: str, search: Tuple[int, i
                                 config=dataclasses.replace(classical, matching=matching),
                                 costs=echo_costs(echo, config), prior=hint.prior,
                                 prior_window=hint.prior_window,
-                                on_disparity=hint.on_disparity)
+                                on_disparity=hint.on_disparity,
+                                views_image=hint.stored_image)
   outputs = {key: out[key] for key in _KEYS}
   outputs['info'] = {'mixing_weight': round(out['mixing_weight'], 3)}
   return outputs

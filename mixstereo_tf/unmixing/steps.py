@@ -12,7 +12,7 @@ Steps, shared by the model and the classical method:
      `classical` stage (`classical_unmix`, the one route of inference and of the
      refiner's training examples); the 'sgbm' baseline: OpenCV's SGBM on the eye
      channels, views restored likewise (`sgbm_unmix`).
-Outputs: 'left', 'right' uint8 [H, W, 3] (uint16 where restored from a 16-bit image),
+Outputs: 'left', 'right' uint8 [H, W, 3] (uint16 where made from a 16-bit image),
 'disparity_left', 'disparity_right' float32 [H, W] signed pixels, and 'info' (a JSON-able
 dict: mixture, detection, disparity range, shift, scale, seconds).
 
@@ -135,22 +135,24 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   is that restoration's left-right check of the refined disparities. The hint's
   on_disparity is the base stage's: a video's next frame searches around the base's
   disparities and starts while these are refined (measured on temporal.py's clips,
-  docs/DESIGN.md). The views come from the hint's stored_image where it has one; a gray
-  image (every channel equal) gets gray views, the refined views' channel mean."""
-  deep = hint is not None and hint.stored_image is not None and (
-      hint.stored_image.dtype == np.uint16)  # The base as at 8 bits; the views from it below.
-  base = (base_stage or classical_unmix)(
-      image, name, search, dataclasses.replace(hint, stored_image=None) if deep else hint)
+  docs/DESIGN.md). Views from the hint's stored_image where it has one (`_deep_views`
+  for double images); a gray image gets gray views, the refined views' channel mean."""
   family = families.of(name)
+  deep = hint is not None and hint.stored_image is not None and (
+      hint.stored_image.dtype == np.uint16)  # Anaglyphs: the base at 8 bits, views below.
+  base = (base_stage or classical_unmix)(image, name, search, dataclasses.replace(
+      hint, stored_image=None) if deep and family.restores_views else hint)
   unread = hint and hint.unread
   skipped = (unread if unread in ('disparity_left', 'disparity_right')
              and not family.restores_views else None)
+  base_views = [image_range.eight_bits(base[key]) for key in ('left', 'right')]
   refined = tiling.apply(network(skipped), refiner.network_input(
-      image, base['left'], base['right'], base['disparity_left'],
-      base['disparity_right']), multiple)
+      image, *base_views, base['disparity_left'], base['disparity_right']), multiple)
   gray = bool(np.all(image == image[..., :1]))  # Gray input, gray views: the net tints them.
   outputs = {key: image_range.signed_to_u8(np.repeat(refined[key].mean(-1, keepdims=True), 3, -1)
                                            if gray else refined[key]) for key in ('left', 'right')}
+  if deep and not family.restores_views:  # Double images: the base's layers at 16 bits.
+    outputs.update(_deep_views(base, base_views, refined, gray))
   for key in ('disparity_left', 'disparity_right'):
     outputs[key] = refined[key][..., 0] if key != skipped else base[key]
   if 'info' in base:  # The base's record: a double image's mixing weight.
@@ -168,6 +170,18 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
                               colour_line=True)
     outputs.update(views.at_depth(restored, views_from.dtype))
     outputs['consistent_left'] = restored['consistent_left']  # For the next frame's prior.
+  return outputs
+
+
+def _deep_views(base, base_views, refined, gray) -> Dict[str, np.ndarray]:
+  """16-bit views: the base's uint16 layers plus the refiner's change of their 8-bit
+  copies `base_views` (signed units: half a [0, 1] unit each); gray where `gray`."""
+  outputs = {}
+  for key, eight in zip(('left', 'right'), base_views):
+    view = image_range.to_unit(base[key]) + (refined[key] - image_range.u8_to_signed(eight)) / 2
+    if gray:
+      view = np.repeat(view.mean(-1, keepdims=True), 3, -1)
+    outputs[key] = image_range.unit_to(np.clip(view, 0.0, 1.0), np.uint16)
   return outputs
 
 
@@ -239,8 +253,9 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   `eye_order.SWAP_EYES`. A `hint`'s mixture, eye order and range (a video shot's) replace
   steps 1 and 2; `solve` may use its prior; `mixing_weight` (double images) goes to the
   hint unless it has its own. A uint16 `image` (a 16-bit file) is detected and matched at
-  8 bits (`image_range.eight_bits`); where the encoding restores its views they come from
-  it, as uint16 (the hint's stored_image), else at 8 bits."""
+  8 bits (`image_range.eight_bits`); where the family makes its views from the mixture's
+  samples (`Family.views_at_depth`) they come from it, as uint16 (the hint's
+  stored_image), else at 8 bits."""
   start = time.perf_counter()
   hint = hint or hints.FrameHint()
   deep = image if image.dtype == np.uint16 else None  # 16 bits: views restored from it.
@@ -263,13 +278,13 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   if swapped:
     image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)
     deep = None if deep is None else eye_order.mirror(deep)
-  restores = families.of(name).restores_views
-  halved = hint.chroma_halved and restores
+  family = families.of(name)
+  halved = hint.chroma_halved and family.restores_views
   matched = chroma.colour_resolution_copy(image) if halved else image
   search = hint.disparity_range
   if search is None:
     search = estimate_range(matched, name, requested_range, default_range(name), hint, plan)
-  stored = deep if deep is not None and restores else image if halved else None
+  stored = deep if deep is not None and family.views_at_depth else image if halved else None
   outputs = solve(matched, name, search,
                   hint if stored is None else dataclasses.replace(hint, stored_image=stored))
   if isinstance(requested_range, tuple) and hint.disparity_range is None:

@@ -102,8 +102,8 @@ class Unmixer:
   """A predictor: `unmixer(mixture_u8)`, or `unmixer(left_u8, right_u8)` when takes_pair.
 
   Called on a uint8 mixture [H, W, 3] it returns {'left', 'right': uint8 [H, W, 3] (a
-  uint16 mixture is matched at 8 bits, its views restored and returned as uint16 where the
-  encoding restores them: `steps.run`),
+  uint16 mixture is matched at 8 bits, its views made from it and returned as uint16
+  where the encoding's views come from its samples: anaglyphs, double images; `steps.run`),
   'disparity_left', 'disparity_right': float32 [H, W] signed pixels, 'info': what was done
   (`steps`)}; an 'oracle' returns the disparities of the clean pair. A video frame
   may be given a `hints.FrameHint` (`unmixer(frame, hint=hint)`: its shot's encoding,

@@ -120,6 +120,22 @@ def test_diplopia_constant_shift_and_layers():
     assert gain >= 1.0, (view, gain)
 
 
+def test_diplopia_layers_from_a_16_bit_copy_keep_its_depth():
+  """`views_image`: the same disparities (matched on the 8-bit mixture), the layers solved
+  from the 16-bit samples and returned as uint16; a copy of another size is named."""
+  left, right, _, _ = _scene(d_bg=5, d_fg=5)
+  mixture = _mix('diplopia', left, right)
+  deep = mixture.astype(np.uint16) * 257 + 100
+  out, eight = diplopia.unmix_diplopia(mixture, views_image=deep), diplopia.unmix_diplopia(mixture)
+  np.testing.assert_array_equal(out['disparity_left'], eight['disparity_left'])
+  assert out['left'].dtype == out['right'].dtype == np.uint16
+  for view in ('left', 'right'):  # 100 / 257 of a level brighter, as the copy is.
+    shift = out[view].astype(float) / 257 - eight[view]
+    assert abs(np.median(shift) - 100 / 257) < 0.2, (view, np.median(shift))
+  with pytest.raises(ValueError, match=r'views_image has shape \(16, 16, 3\)'):
+    diplopia.unmix_diplopia(mixture, views_image=deep[:16, :16])
+
+
 @pytest.mark.parametrize('shape', [(64, 1), (12, 12), (8, 16), (16, 8)])
 def test_a_double_image_smaller_than_the_zncc_window_is_a_clear_error(shape):
   """A 1-px strip gave an IndexError, a 12 x 12 image a broadcasting error."""

@@ -405,6 +405,23 @@ def test_an_odd_sized_video_says_its_outputs_are_padded(tmp_path):
   assert (out_info.width, out_info.height) == (48, 34)
 
 
+def test_a_16_bit_double_image_file_gives_16_bit_views(tmp_path):
+  """Its layers are solved from the file's 16-bit samples: nothing lost to say."""
+  rng = np.random.RandomState(6)
+  texture = rng.randint(0, 65536, (40, 70, 3)).astype(np.uint16)
+  double = ((texture[:, 6:].astype(np.uint32) + texture[:, :-6]) // 2).astype(np.uint16)
+  cv2.imwrite(str(tmp_path / 'double16.png'), double[..., ::-1])
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='diplopia', disparity_range=(1, 10)))
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path / 'double16.png'),
+                                    str(tmp_path / 'out'), media.OutputOptions('separate'))
+  assert report.failures == []
+  info = json.loads((tmp_path / 'out' / 'double16_info.json').read_text())
+  assert info['views_bit_depth'] == 16 and 'bit_depth' not in info
+  view = cv2.imread(str(tmp_path / 'out' / 'double16_left.png'), cv2.IMREAD_UNCHANGED)
+  assert view.dtype == np.uint16 and (view % 257 != 0).mean() > 0.9
+
+
 def test_half_resolution_colour_of_a_jpeg_or_video_reaches_the_unmixer(tmp_path):
   halved = []
 

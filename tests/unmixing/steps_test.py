@@ -90,11 +90,37 @@ def test_a_16_bit_anaglyph_is_matched_at_8_bits_and_its_views_restored_at_16(con
     np.testing.assert_array_equal(ours['right'][..., 1:], deep[..., 1:])
 
 
-def test_a_16_bit_double_image_gives_8_bit_views():
-  """A double image's layers come from the 8-bit copy: its views say so by their type."""
+@pytest.mark.parametrize('config', [
+    dict(method='classical'), dict(method='model'),
+    dict(method='model', pretrained='diplopia_echo')])
+def test_a_16_bit_double_image_is_matched_at_8_bits_and_its_layers_solved_at_16(config):
+  """Views uint16, within two 8-bit levels of the 8-bit copy's (their layers come from the
+  16-bit samples); disparities the 8-bit copy's, but for the default refiner's, which sees
+  its base's 16-bit layers through their 8-bit copy (measured: below 0.1 px everywhere,
+  0.07 at most here; on a textured ramp 0.004 px on average)."""
   deep = _deep(_anaglyph('diplopia')[0])
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(
-      'classical', mixture='diplopia', disparity_range=(1, 20)))
+      mixture='diplopia', disparity_range=(1, 20), **config))
   ours, eight = unmixer(deep), unmixer(image_range.eight_bits(deep))
-  assert ours['left'].dtype == np.uint8
-  np.testing.assert_array_equal(ours['left'], eight['left'])
+  assert ours['left'].dtype == ours['right'].dtype == np.uint16
+  assert eight['left'].dtype == np.uint8
+  exact = config.get('pretrained') or config['method'] == 'classical'
+  np.testing.assert_allclose(ours['disparity_left'], eight['disparity_left'],
+                             atol=0 if exact else 0.1)
+  for key in ('left', 'right'):
+    difference = np.abs(image_range.eight_bits(ours[key]).astype(int) - eight[key])
+    assert difference.max() <= 2 and difference.mean() < 0.5, (key, difference.max())
+
+
+def test_a_16_bit_double_image_keeps_its_samples_where_any_disparity_fits():
+  """Known answer: a vertical 16-bit gradient (each row constant, so every disparity
+  explains it and both layers are the image itself). The views hold its 16-bit samples
+  exactly; the 8-bit copy's views are off by up to 110 of those levels (measured)."""
+  ramp = np.repeat(np.linspace(0.2, 0.8, 64)[:, None, None], 96, 1).repeat(3, 2)
+  deep = np.rint(ramp * 65535).astype(np.uint16)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='diplopia', disparity_range=(1, 12)))
+  ours, eight = unmixer(deep), unmixer(image_range.eight_bits(deep))
+  for key in ('left', 'right'):
+    np.testing.assert_array_equal(ours[key], deep)
+    assert np.abs(eight[key].astype(int) * 257 - deep).max() > 100
