@@ -82,21 +82,21 @@ def record_shot(shots: List[Dict[str, object]], frame: int, info: Dict[str, obje
     shots.append(entry)
 
 
-@dataclasses.dataclass(frozen=True)
 class Opening:
-  """The frame `opening` unmixed: its index in the video, and the call, which the frame
-  pipeline reuses for that frame where its hint is the same (`frame_pipeline.Unmixed`)."""
-  index: int
-  unmixed: frame_pipeline.Unmixed
+  """The frame `opening` unmixed: its index in the video, its info, and the call, which
+  the frame pipeline takes for that frame where its hint is the same
+  (`frame_pipeline.Unmixed`), once: its images are not held through the video."""
 
-  @property
-  def info(self) -> Dict[str, object]:
-    """The frame's info (mixture, disparity range, ...)."""
-    return self.unmixed.outputs.get('info', {})
+  def __init__(self, index: int, unmixed: frame_pipeline.Unmixed):
+    self.index, self._unmixed = index, unmixed
+    self.info: Dict[str, object] = dict(unmixed.outputs.get('info', {}))
 
-  def at(self, index: int) -> Optional[frame_pipeline.Unmixed]:
-    """The call, for the video's frame `index` when it is this one."""
-    return self.unmixed if index == self.index else None
+  def take(self, index: int) -> Optional[frame_pipeline.Unmixed]:
+    """The call, for the video's frame `index` when it is this one (then no more)."""
+    if index != self.index:
+      return None
+    unmixed, self._unmixed = self._unmixed, None
+    return unmixed
 
 
 def frame_fields(chroma_halved: bool) -> Dict[str, object]:
@@ -156,7 +156,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
     index = state['done'] + shots.frames  # This run's frames begun before this one.
     fields = frame_fields(state['chroma_halved'])
     pending = pipeline.submit(frame, index % video_config.segment_frames == 0,
-                              opened and opened.at(index), **fields)
+                              opened and opened.take(index), **fields)
     report.unmix_seconds += time.perf_counter() - unmix_start
     return _drawn_when_done(pending, state, layout, display, drawn, shots.started_shot())
 

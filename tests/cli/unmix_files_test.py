@@ -36,6 +36,7 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import image_io
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import unmixer
+from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import streams
 from mixstereo_tf.video import temporal
@@ -519,6 +520,16 @@ def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_pa
   assert info['display_range'] == [0.0, 8.0] and unmixer.max_disparity != 8.0
   _, frames = streams_test.read_all(tmp_path / 'out' / 'clip_disparity.mp4')
   assert max(frame.image.max() for frame in frames) > 200  # Near shows bright (255: 8 px).
+
+
+def test_the_opening_frame_is_handed_to_its_frame_once():
+  """`video_files.Opening`: its call goes to the frame it unmixed, once (not held after),
+  and its info stays for the video's info file."""
+  image = np.zeros((4, 6, 3), np.uint8)
+  call = frame_pipeline.Unmixed(image, hints.FrameHint(), {'info': {'mixture': 'gray'}})
+  opened = video_files.Opening(5, call)
+  assert opened.take(4) is None and opened.take(5) is call and opened.take(5) is None
+  assert opened.info == {'mixture': 'gray'}
 
 
 def test_unreadable_video_is_named(setup, tmp_path):
