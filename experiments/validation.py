@@ -75,9 +75,17 @@ def scores(disparity: np.ndarray, pair: Dict[str, np.ndarray], scored: np.ndarra
                                      pair['right'].astype(np.float64))}
 
 
+def _boolean(value: str) -> bool:
+  """'true' / '1' or 'false' / '0' (any case), else ValueError."""
+  if value.lower() not in ('true', '1', 'false', '0'):
+    raise ValueError(value)
+  return value.lower() in ('true', '1')
+
+
 def numeric_fields(config_class) -> Dict[str, type]:
-  """{name: int or float} of a dataclass's int and float fields."""
-  kinds = {int: int, 'int': int, float: float, 'float': float}
+  """{name: parser} of a dataclass's int, float and bool fields (bools as true / false)."""
+  kinds = {int: int, 'int': int, float: float, 'float': float, bool: _boolean,
+           'bool': _boolean}
   return {f.name: kinds[f.type] for f in dataclasses.fields(config_class)
           if f.type in kinds}
 

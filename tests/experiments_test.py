@@ -193,7 +193,10 @@ def test_diplopia_validation_variants_parse_and_bad_ones_name_the_flag():
   assert config.layers.fidelity == diplopia_validation.diplopia.DiplopiaConfig().layers.fidelity
   _, config = diplopia_validation.parse_variant('echo=cepstrum_weight=1.5@cepstrum_step=4')
   assert (config.cepstrum.weight, config.cepstrum.step, config.cepstrum.rows) == (1.5, 4, 8)
-  for bad in ('nolabel', 'a=', 'a=matching=3', 'a=window_radius=x', 'a=p1', 'a=layers=1'):
+  _, config = diplopia_validation.parse_variant('warp=right_from_mixture=False')
+  assert config.layers.right_from_mixture is False
+  for bad in ('nolabel', 'a=', 'a=matching=3', 'a=window_radius=x', 'a=p1', 'a=layers=1',
+              'a=right_from_mixture=maybe'):
     with pytest.raises(ValueError, match='--diplopia_variants'):
       diplopia_validation.parse_variant(bad)
 

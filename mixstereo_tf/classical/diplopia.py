@@ -17,7 +17,7 @@ one linear equation per pixel in the unknown left view. Steps:
      the volume's diagonal search d_R; then the left-right check and filling of `sgm`
      (`parallel_sgm.match_volume`). Images wider than `max_width` are matched on a
      reduced copy (`working_scale`).
-  3. Layers: a regularised least squares for L given d_R, then R = L sampled at x + d_R
+  3. Layers: a regularised least squares for L given d_R, then R = (I - a L) / (1 - a)
      (`diplopia_layers.separate_layers`, weight a), at full size.
 
 Ambiguity: (L, R, d) and (R, L, -d) give the same symmetric average; positive disparities

@@ -35,6 +35,7 @@ import numpy as np
 
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.classical import sgm
@@ -44,6 +45,13 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.restoration import views
 
 Range = Tuple[int, int]
+# A double image's refined views onto its equation (`Diplopia.settle_views`): the right
+# view takes 3 times the left's share of the residual (k of `onto_mixture`). Chosen on
+# validation double images (2026-11-29), the default's views: k = 1 / 3 / inf at a = 1/2
+# +0.02 / +0.07 / 0.00 (left) and +0.50 / +0.61 / +0.57 dB (right); at a = 0.7 +0.54 /
+# +0.52 / 0.00 and +0.06 / +0.04 / -0.27; at a = 0.3 -0.12 / -0.03 / 0.00, +1.99 / +2.13 /
+# +2.16.
+REFINED_RIGHT_SHARE = 3.0
 
 
 class Family:
@@ -65,6 +73,14 @@ class Family:
     the method's own range; `hint`: options of the matcher (`hints.FrameHint`)."""
     del image, name, hint
     return default
+
+  def settle_views(self, mixture: np.ndarray, views: Dict[str, np.ndarray],
+                   info: Dict[str, object]) -> Dict[str, np.ndarray]:
+    """A refiner's 'left' and 'right' `views`, made to agree with the `mixture` they came
+    from (uint8 or uint16 [H, W, 3], as the views); `info`: its base stage's. Here: as
+    they are."""
+    del mixture, info
+    return {key: views[key] for key in ('left', 'right')}
 
   def classical(self, image: np.ndarray, name: str, search: Optional[Range] = None,
                 hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
@@ -177,6 +193,15 @@ class Diplopia(Family):
                                    prior=hint.prior, prior_window=hint.prior_window,
                                    on_disparity=hint.on_disparity,
                                    views_image=hint.stored_image)
+
+  def settle_views(self, mixture, views, info):
+    """The views projected onto I = a L + (1 - a) R at the base's weight a
+    (`diplopia_layers.onto_mixture`, the right view taking REFINED_RIGHT_SHARE)."""
+    unit = [image_range.to_unit(image) for image in (mixture, views['left'], views['right'])]
+    settled = diplopia_layers.onto_mixture(*unit, info.get('mixing_weight', 0.5),
+                                           REFINED_RIGHT_SHARE)
+    return {key: image_range.unit_to(view, views[key].dtype)
+            for key, view in zip(('left', 'right'), settled)}
 
   def display_range(self):
     """The self-matching's largest configured lag."""

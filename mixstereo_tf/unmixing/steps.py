@@ -13,17 +13,15 @@ Steps, shared by the model and the classical method:
      refiner's training examples); the 'sgbm' baseline: OpenCV's SGBM on the eye
      channels, views restored likewise (`sgbm_unmix`).
 Outputs: 'left', 'right' uint8 [H, W, 3] (uint16 where made from a 16-bit image),
-'disparity_left', 'disparity_right' float32 [H, W] signed pixels, and 'info' (a JSON-able
-dict: mixture, detection, disparity range, shift, scale, seconds).
+'disparity_left', 'disparity_right' float32 [H, W] signed pixels, 'info' (JSON-able).
 
 Eye order (`eye_order`), after step 1: the eyes as given, swapped (cyan-red glasses, mirrored
 scans) or detected ('auto', anaglyphs); swapped images go through steps 2-3 mirrored and
 come back mapped (left view's disparity, positive for near).
 
 A video frame may come with a `hints.FrameHint`: its shot's encoding, eye order and range
-replace steps 1 and 2, and its prior (the previous frame's left disparity) goes to the solver (the
-classical matcher searches around it; the model does not use it); its matcher options
-(`matcher_strips`) reach the range estimation and the classical matcher.
+replace steps 1 and 2, its prior (the previous frame's left disparity) goes to the solver
+(the classical matcher searches around it) and its matcher options to the matchers.
 """
 
 import dataclasses
@@ -153,6 +151,8 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
                                            if gray else refined[key]) for key in ('left', 'right')}
   if deep and not family.restores_views:  # Double images: the base's layers at 16 bits.
     outputs.update(_deep_views(base, base_views, refined, gray))
+  outputs.update(family.settle_views(hints.views_image(image, hint), outputs,
+                                     base.get('info', {})))
   for key in ('disparity_left', 'disparity_right'):
     outputs[key] = refined[key][..., 0] if key != skipped else base[key]
   if 'info' in base:  # The base's record: a double image's mixing weight.

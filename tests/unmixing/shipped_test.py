@@ -145,6 +145,23 @@ def test_a_held_out_double_image_where_the_learned_stage_picks_the_echo_classica
   assert (~wrong['diplopia_echo'][wrong[None]]).mean() > 0.6
 
 
+@pytest.mark.parametrize('weight', [0.3, 0.5])
+def test_the_diplopia_refiners_views_make_its_mixture_again(scenes, weight):
+  """`families.Diplopia.settle_views`: the refined views are projected onto I = a L +
+  (1 - a) R at the weight used, so they mix back into the input within rounding (before,
+  the default's views missed it by several levels)."""
+  scene = scenes[0]
+  image = np.rint(weight * scene['left'].astype(float) + (1 - weight) * scene['right'])
+  image = image.astype(np.uint8)
+  out = predictors.build_unmixer(predictors.PredictorConfig(
+      'model', mixture='diplopia', mixing_weight=weight))(image)
+  assert out['info']['pretrained'] == DIPLOPIA_DEFAULT
+  remade = weight * out['left'].astype(float) + (1 - weight) * out['right']
+  inside = (out['left'] > 0) & (out['left'] < 255) & (out['right'] > 0) & (out['right'] < 255)
+  miss = np.abs(remade - image)[inside]
+  assert miss.max() <= 1.5 and inside.mean() > 0.9, (miss.max(), inside.mean())
+
+
 def test_the_diplopia_refiner_reports_the_mixing_weight_of_its_base():
   rng = np.random.default_rng(1)
   texture = rng.integers(0, 256, (32, 72, 3)).astype(np.float32)

@@ -94,10 +94,11 @@ def test_a_16_bit_anaglyph_is_matched_at_8_bits_and_its_views_restored_at_16(con
     dict(method='classical'), dict(method='model'),
     dict(method='model', pretrained='diplopia_echo')])
 def test_a_16_bit_double_image_is_matched_at_8_bits_and_its_layers_solved_at_16(config):
-  """Views uint16, within two 8-bit levels of the 8-bit copy's (their layers come from the
-  16-bit samples); disparities the 8-bit copy's, but for the default refiner's, which sees
-  its base's 16-bit layers through their 8-bit copy (measured: below 0.1 px everywhere,
-  0.07 at most here; on a textured ramp 0.004 px on average)."""
+  """Views uint16, within four 8-bit levels of the 8-bit copy's (their layers come from the
+  16-bit samples; a right view is twice the mixture less the left, which doubles the
+  differences: 3 at most measured); disparities the 8-bit copy's, but for the default
+  refiner's, which sees its base's 16-bit layers through their 8-bit copy (measured:
+  below 0.1 px everywhere, 0.07 at most here; on a textured ramp 0.004 px on average)."""
   deep = _deep(_anaglyph('diplopia')[0])
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(
       mixture='diplopia', disparity_range=(1, 20), **config))
@@ -109,7 +110,7 @@ def test_a_16_bit_double_image_is_matched_at_8_bits_and_its_layers_solved_at_16(
                              atol=0 if exact else 0.1)
   for key in ('left', 'right'):
     difference = np.abs(image_range.eight_bits(ours[key]).astype(int) - eight[key])
-    assert difference.max() <= 2 and difference.mean() < 0.5, (key, difference.max())
+    assert difference.max() <= 4 and difference.mean() < 0.5, (key, difference.max())
 
 
 def test_a_16_bit_double_image_keeps_its_samples_where_any_disparity_fits():
