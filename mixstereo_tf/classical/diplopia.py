@@ -196,9 +196,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
       volume over config.matching's lags (None: `diplopia_costs.zncc_costs`; a learned
       stage's otherwise).
     prior: float [H, W], the previous video frame's left disparity (NaN: none there), or
-      None; lags outside its window are penalised (`diplopia_costs.add_prior`), not
-      excluded;
-      prior_window: (radius, spread) of `search_windows.around_prior` (None: 1, 2).
+      None; lags outside its window are penalised (`diplopia_costs.add_prior`).
+    prior_window: (radius, spread) of `search_windows.around_prior` (None: 1, 2).
     on_disparity: called with both disparities once they are matched, before the layers
       are solved (`hints.FrameHint.on_disparity`).
     views_image: uint16 [H, W, 3], the mixture as stored where `mixture` is its 8-bit copy
@@ -206,7 +205,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
       None: from `mixture`.
 
   Returns:
-    'left', 'right': uint8 [H, W, 3] (uint16 with a views_image); 'disparity_left',
+    'left', 'right': uint8 [H, W, 3] (uint16 with a views_image); 'right_warped': the
+    left layer sampled at x + d_R, as 'right' (`separate_layers`); 'disparity_left',
     'disparity_right': float32 [H, W], pixels, positive; 'disparity_range': the (min, max)
     searched;
     'global_shift': int, the power-cepstrum peak, pixels; 'mixing_weight': the a used.
@@ -227,8 +227,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
   layers = diplopia_layers.separate_layers(
       image if views_image is None else image_range.as_unit_float(views_image, 'views_image'),
       matched['disparity_right'], config.layers, weight)
-  return {'left': image_range.unit_to(layers['left'], depth),
-          'right': image_range.unit_to(layers['right'], depth),
+  return {**{key: image_range.unit_to(layers[key], depth)
+             for key in ('left', 'right', 'right_warped')},
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
           'disparity_range': (config.matching.min_disparity, config.matching.max_disparity),

@@ -15,8 +15,9 @@ view never shows inside the image) minimises
 solved by Jacobi-preconditioned conjugate gradients for all channels at once, the normal
 matrix applied without being built (`layers_kernel`, row blocks in threads); then R = (I -
 a L) / (1 - a), what the mixture leaves of L (`onto_mixture`; L sampled at x + d_R with
-`LayerConfig.right_from_mixture` off, wrong where R shows what L hides). The 2-tap filter a + (1 - a) e^{i w d} is zero only for a = 1/2 (at
-w = pi (2k + 1) / d): there those frequencies are unobservable and the prior sets them.
+`LayerConfig.right_from_mixture` off, wrong where R shows what L hides). The 2-tap
+filter a + (1 - a) e^{i w d} is zero only for a = 1/2 (at w = pi (2k + 1) / d): there
+those frequencies are unobservable and the prior sets them.
 
 `estimate_weight`: an edge of the left view at x shows twice in I: at x with weight a (the
 left view's copy) and at x - d_L(x) with weight 1 - a (the right view's, positive
@@ -140,7 +141,9 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
     weight: a, the left view's share of every pixel, in (0, 1).
 
   Returns:
-    'left', 'right': float32 [H, W, 3] in [0, 1].
+    'left', 'right': float32 [H, W, 3] in [0, 1]; 'right_warped': the left layer sampled
+    at x + d_R (the right layer without `right_from_mixture`; the shipped refiners'
+    input).
   """
   weight = check_weight(weight)
   h, w, channels = mixture01.shape
@@ -159,9 +162,10 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
   wide = _conjugate_gradient((x0, frac), weight, config, rhs, start, blocks, threads)
   left, right = (np.empty((h, w, channels), np.float32) for _ in range(2))
   run(layers_kernel.views_rows, wide, x0, frac, left, right)
-  if config.right_from_mixture:
-    left, right = onto_mixture(mixture01, left, right, weight, math.inf)
-  return {'left': left, 'right': right}
+  if not config.right_from_mixture:
+    return {'left': left, 'right': right, 'right_warped': right}
+  return dict(zip(('left', 'right'), onto_mixture(mixture01, left, right, weight, math.inf)),
+              right_warped=right)
 
 
 def onto_mixture(mixture01: np.ndarray, left: np.ndarray, right: np.ndarray, weight: float,

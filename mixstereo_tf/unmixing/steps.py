@@ -123,17 +123,15 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
                   ) -> Dict[str, object]:
   """The hybrid (`models/refiner.py`): the base stage (`classical_unmix`, or another with
   its signature and outputs, e.g. the learned matching stage), the refiner on its result
-  (`network(None)`, in tiles; `network(key)`: the refiner without output `key`, run when
-  the hint's `unread` is a disparity that nothing else reads: families that do not restore
-  views from both, whose output there is the base stage's), then, for anaglyphs, both
-  views restored from the refined disparities with,
-  as the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
-  the rest of the classical colour transfer (each alone was worse on some encodings),
-  and the colour-line pass (+0.1 to +0.8 dB on validation examples); 'consistent_left'
-  is that restoration's left-right check of the refined disparities. The hint's
-  on_disparity is the base stage's: a video's next frame searches around the base's
-  disparities and starts while these are refined (measured on temporal.py's clips,
-  docs/DESIGN.md). Views from the hint's stored_image where it has one (`_deep_views`
+  (`network(None)`, in tiles; `network(key)`: without output `key`, when the hint's
+  `unread` is a disparity nothing else reads: families that do not restore views from
+  both), then the views: for anaglyphs restored from the refined disparities with, as
+  the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
+  the rest of the colour transfer, and the colour-line pass (+0.1 to +0.8 dB on
+  validation); 'consistent_left': that restoration's left-right check; otherwise the
+  family's `settle_views`. The hint's on_disparity is the base stage's: a video's next
+  frame searches around the base's disparities and starts while these are refined
+  (docs/DESIGN.md). Views from the hint's stored_image where it has one (`_deep_views`
   for double images); a gray image gets gray views, the refined views' channel mean."""
   family = families.of(name)
   deep = hint is not None and hint.stored_image is not None and (
@@ -143,14 +141,15 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   unread = hint and hint.unread
   skipped = (unread if unread in ('disparity_left', 'disparity_right')
              and not family.restores_views else None)
-  base_views = [image_range.eight_bits(base[key]) for key in ('left', 'right')]
+  keys = ('left', 'right_warped' if 'right_warped' in base else 'right')  # As trained.
+  base_views = [image_range.eight_bits(base[key]) for key in keys]
   refined = tiling.apply(network(skipped), refiner.network_input(
       image, *base_views, base['disparity_left'], base['disparity_right']), multiple)
   gray = bool(np.all(image == image[..., :1]))  # Gray input, gray views: the net tints them.
   outputs = {key: image_range.signed_to_u8(np.repeat(refined[key].mean(-1, keepdims=True), 3, -1)
                                            if gray else refined[key]) for key in ('left', 'right')}
   if deep and not family.restores_views:  # Double images: the base's layers at 16 bits.
-    outputs.update(_deep_views(base, base_views, refined, gray))
+    outputs.update(_deep_views([base[key] for key in keys], base_views, refined, gray))
   outputs.update(family.settle_views(hints.views_image(image, hint), outputs,
                                      base.get('info', {})))
   for key in ('disparity_left', 'disparity_right'):
@@ -174,11 +173,12 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
 
 
 def _deep_views(base, base_views, refined, gray) -> Dict[str, np.ndarray]:
-  """16-bit views: the base's uint16 layers plus the refiner's change of their 8-bit
-  copies `base_views` (signed units: half a [0, 1] unit each); gray where `gray`."""
+  """16-bit views: the base's uint16 layers [left, right] plus the refiner's change of
+  their 8-bit copies `base_views` (signed units: half a [0, 1] unit each); gray where
+  `gray`."""
   outputs = {}
-  for key, eight in zip(('left', 'right'), base_views):
-    view = image_range.to_unit(base[key]) + (refined[key] - image_range.u8_to_signed(eight)) / 2
+  for key, deep, eight in zip(('left', 'right'), base, base_views):
+    view = image_range.to_unit(deep) + (refined[key] - image_range.u8_to_signed(eight)) / 2
     if gray:
       view = np.repeat(view.mean(-1, keepdims=True), 3, -1)
     outputs[key] = image_range.unit_to(np.clip(view, 0.0, 1.0), np.uint16)
@@ -195,7 +195,7 @@ def classical_unmix(image: np.ndarray, name: str, search: Range,
   'consistent_left', the matcher's left-right check (`temporal.VideoState` drops the prior
   where it failed)."""
   out = families.of(name).classical(image, name, search, hint)
-  keys = ('left', 'right', 'disparity_left', 'disparity_right', 'consistent_left')
+  keys = ('left', 'right', 'right_warped', 'disparity_left', 'disparity_right', 'consistent_left')
   outputs = {key: out[key] for key in keys if key in out}
   if 'mixing_weight' in out:  # Double images: the weight a the layers were separated with.
     outputs['info'] = {'mixing_weight': round(float(out['mixing_weight']), 3)}

@@ -95,10 +95,12 @@ def test_the_right_layer_from_the_mixture_is_right_where_the_left_view_hides_it(
   right = right.copy()
   right[:, 60:72] = 0.95  # Seen by the right eye alone: no left pixel holds it.
   mixture = 0.5 * left + 0.5 * right
-  psnr, whole = {}, {}
+  psnr, whole, warped = {}, {}, {}
   for from_mixture in (False, True):
     config = diplopia_layers.LayerConfig(right_from_mixture=from_mixture)
     layers = diplopia_layers.separate_layers(mixture, d_right, config)
     psnr[from_mixture] = metrics.psnr(layers['right'][:, 56:76] * 255, right[:, 56:76] * 255)
     whole[from_mixture] = metrics.psnr(layers['right'] * 255, right * 255)
+    warped[from_mixture] = layers['right_warped']
   assert psnr[True] > psnr[False] + 0.7 and whole[True] > whole[False], (psnr, whole)
+  np.testing.assert_array_equal(warped[True], warped[False])  # The refiners' input.
