@@ -53,7 +53,7 @@ class Unmixed:
     anaglyph reads it, and these outputs came from a frame in which it found one or
     from a named encoding). Hints holding arrays or callbacks (a prior, on_disparity,
     a stored image: never a shot's first frame's) serve nothing."""
-    if self.image.shape != image.shape or not np.array_equal(self.image, image):
+    if not np.array_equal(self.image, image):  # False for another shape too.
       return False
     for field in dataclasses.fields(hints.FrameHint):
       if field.name == 'fallback_mixture':
