@@ -106,28 +106,6 @@ class DiplopiaConfig:
                        'matches every image to itself).')
 
 
-def global_shift(gray: np.ndarray, min_lag: int = 2, max_lag: int = 128) -> int:
-  """The lag in [min_lag, max_lag] (pixels, max_lag clipped to W - 1) maximising the
-  row-averaged power cepstrum of float [H, W] `gray`: the dominant echo of a double image.
-
-  An echo I(x) = (L(x) + L(x + d)) / 2 multiplies the row power spectrum by
-  (1 + cos(w d)) / 2, a ripple the log turns into an additive term whose inverse transform
-  peaks at quefrency d (the autocorrelation of natural images peaks at lag 1 instead;
-  lags below 2 are dominated by the spectrum's envelope).
-  """
-  rows = np.asarray(gray, np.float64)
-  rows = rows - rows.mean(axis=1, keepdims=True)
-  width = rows.shape[1]
-  max_lag = min(max_lag, width - 1)
-  if not 1 <= min_lag <= max_lag:
-    raise ValueError(f'Need 1 <= min_lag <= max_lag < width, got {min_lag}, {max_lag} for '
-                     f'width {width}.')
-  power = (np.abs(np.fft.rfft(rows, n=2 * width, axis=1)) ** 2).mean(axis=0)
-  # The floor: rows without any change (a blank image, a vertical gradient) have no power.
-  cepstrum = np.fft.irfft(np.log(power + max(1e-6 * power.max(), 1e-30)))
-  return int(min_lag + np.argmax(cepstrum[min_lag:max_lag + 1]))
-
-
 def check_size(shape: Tuple[int, ...], config: DiplopiaConfig) -> None:
   """ValueError naming the size of an image [H, W, ...] smaller than the ZNCC window (too
   small to tell echoes from texture; a 1-px strip has no lag at all)."""
@@ -145,11 +123,13 @@ def _self_match(image, config, weight, costs, prior, prior_window):
                               (matching.min_disparity, matching.max_disparity), prior)
   config = dataclasses.replace(config, matching=dataclasses.replace(
       matching, min_disparity=copy.search[0], max_disparity=copy.search[1]))
-  volume = (costs or diplopia_costs.zncc_costs)(copy.image, config)
+  gray = diplopia_costs.gray_255(copy.image)  # ZNCC's and the echo score's image.
+  volume = (diplopia_costs.self_matching_volume(gray, config) if costs is None
+            else costs(copy.image, config))
   diplopia_costs.penalise_small_lags(volume, config)
   if copy.prior is None or config.cepstrum.with_prior:  # Its weight 0: add_echo_costs skips.
-    diplopia_cepstrum.add_echo_costs(volume, diplopia_costs.gray_255(copy.image),
-                                     config.matching.min_disparity, config.cepstrum)
+    diplopia_cepstrum.add_echo_costs(volume, gray, config.matching.min_disparity,
+                                     config.cepstrum)
   if copy.prior is not None:
     diplopia_costs.add_prior(volume, config, copy.prior, prior_window or (1, 2))
   matched = parallel_sgm.match_volume(volume, config.matching,
@@ -208,8 +188,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     'left', 'right': uint8 [H, W, 3] (uint16 with a views_image); 'right_warped': the
     left layer sampled at x + d_R, as 'right' (`separate_layers`); 'disparity_left',
     'disparity_right': float32 [H, W], pixels, positive; 'disparity_range': the (min, max)
-    searched;
-    'global_shift': int, the power-cepstrum peak, pixels; 'mixing_weight': the a used.
+    searched; 'mixing_weight': the a used.
 
   Raises:
     ValueError: a range with min < 1 or min >= max, no lag of it within the image, or a
@@ -232,7 +211,4 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
           'disparity_range': (config.matching.min_disparity, config.matching.max_disparity),
-          'global_shift': global_shift(diplopia_costs.gray_255(image),
-                                       max(2, config.matching.min_disparity),
-                                       config.matching.max_disparity),
           'mixing_weight': weight}

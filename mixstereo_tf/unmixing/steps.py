@@ -146,10 +146,11 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   refined = tiling.apply(network(skipped), refiner.network_input(
       image, *base_views, base['disparity_left'], base['disparity_right']), multiple)
   gray = bool(np.all(image == image[..., :1]))  # Gray input, gray views: the net tints them.
-  outputs = {key: image_range.signed_to_u8(np.repeat(refined[key].mean(-1, keepdims=True), 3, -1)
-                                           if gray else refined[key]) for key in ('left', 'right')}
-  if deep and not family.restores_views:  # Double images: the base's layers at 16 bits.
-    outputs.update(_deep_views([base[key] for key in keys], base_views, refined, gray))
+  signed = {key: np.repeat(refined[key].mean(-1, keepdims=True), 3, -1) if gray
+            else refined[key] for key in ('left', 'right')}
+  outputs = (_deep_views([base[key] for key in keys], base_views, signed)
+             if deep and not family.restores_views  # Double images: 16-bit base layers.
+             else {key: image_range.signed_to_u8(view) for key, view in signed.items()})
   outputs.update(family.settle_views(hints.views_image(image, hint), outputs,
                                      base.get('info', {})))
   for key in ('disparity_left', 'disparity_right'):
@@ -172,15 +173,13 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   return outputs
 
 
-def _deep_views(base, base_views, refined, gray) -> Dict[str, np.ndarray]:
+def _deep_views(base, base_views, signed) -> Dict[str, np.ndarray]:
   """16-bit views: the base's uint16 layers [left, right] plus the refiner's change of
-  their 8-bit copies `base_views` (signed units: half a [0, 1] unit each); gray where
-  `gray`."""
+  their 8-bit copies `base_views` (`signed`: its views, signed units, half a [0, 1] unit
+  each; a gray image's base layers are gray, so gray views stay gray)."""
   outputs = {}
   for key, deep, eight in zip(('left', 'right'), base, base_views):
-    view = image_range.to_unit(deep) + (refined[key] - image_range.u8_to_signed(eight)) / 2
-    if gray:
-      view = np.repeat(view.mean(-1, keepdims=True), 3, -1)
+    view = image_range.to_unit(deep) + (signed[key] - image_range.u8_to_signed(eight)) / 2
     outputs[key] = image_range.unit_to(np.clip(view, 0.0, 1.0), np.uint16)
   return outputs
 
