@@ -203,7 +203,8 @@ def _failed(index: int, item: input_listing.MediaItem, why: str,
             seconds: float) -> Iterator[object]:
   """`_UnmixFn`'s outputs for an input that failed: logged, counted, a dead letter and its
   summary row."""
-  logging.error('failed %s: %s (to the dead-letter list)', item.path, why)
+  logging.error('failed %s: %s (to the dead-letter list)', item.path, why,
+                extra={unmix_files.NAMES_ITS_INPUT: True})  # Not another thread's input.
   beam.metrics.Metrics.counter('mixstereo', 'failed').inc()
   yield beam.pvalue.TaggedOutput(_DEAD, (index, {'input': printable.printable(item.path),
                                                  'error': printable.printable(why)}))

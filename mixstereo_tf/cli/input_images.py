@@ -13,9 +13,10 @@ picture the tools unmix is named, not read silently:
     thumbnails, are not counted).
 """
 
+import contextlib
 import dataclasses
 import os
-from typing import Dict, Optional, Tuple
+from typing import Dict, Iterator, Optional, Tuple
 
 from absl import logging
 import numpy as np
@@ -153,6 +154,19 @@ def truncated_jpeg(path: str) -> bool:
       return False
     f.seek(max(0, os.path.getsize(path) - 4096))
     return not f.read().rstrip(b'\x00').endswith(b'\xff\xd9')
+
+
+@contextlib.contextmanager
+def blaming_truncation(path: str) -> Iterator[None]:
+  """ValueErrors raised inside (e.g. unmixing the image) say so when `path` is a JPEG cut
+  short (`truncated_jpeg`): its missing rows are gray, which detection crops as a border."""
+  try:
+    yield
+  except ValueError as error:
+    if not truncated_jpeg(path):
+      raise
+    raise ValueError(f'{error} {path} may be the cause: the JPEG file ends before its end '
+                     'marker (a file cut short; its missing rows are gray).') from error
 
 
 # What reading an image at 8 bits in RGB dropped (`image_io.dropped`) -> its info note.

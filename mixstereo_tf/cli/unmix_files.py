@@ -1,29 +1,25 @@
 """Unmixing files: every image and video of an input specification, results to a folder.
 
 Images are read as viewers show them (EXIF orientation applied: `input_images.read_upright`).
-Outputs per input `<name>` in the output folder, where `<name>` is the file stem, or stem
-+ '_' + extension when inputs share a stem (`input_listing.output_names`): the views
-(`<name>_left.png` and `<name>_right.png` for the 'separate' layout, else
-`<name>_<layout>.png`; 16-bit from a 16-bit anaglyph, RGBA from an image with
-transparency), the colour-mapped left disparity `<name>_disparity.png` (over the
-range found, or a fixed one), KITTI-style `<name>_disparity16.png` (uint16, d * 256; only
-when every disparity lies in 0..255.996 px) and float32 signed pixels
-`<name>_disparity.npy`, the stereo formats asked for (`OutputOptions.formats`,
-`stereo_formats`), and a side-car `<name>_info.json` (mixture used and detected, range
-searched, scale, method, seconds, files, the EXIF orientation applied, the request;
-`info_file`). Per
-video, in the input's container (`.mp4`, `.mov`, `.mkv`, `.avi`; `.webm` in `.mkv`) with
-its frame rate, timestamps, audio and subtitle streams (copied), frames a player turns by
-quarter turns (portrait phone videos) turned upright before they are unmixed and written
-so (other rotations copied): the layout as `<name>_<layout><ext>` (or `_left` / `_right`;
-side by side and top-bottom tagged as such: `encoders.STEREO_MODES`), `<name>_disparity<ext>`,
-`<name>_<format><ext>` for the formats drawn as videos (rgbd, anaglyphs; the others are
-skipped, saying why) and `<name>_info.json` (the first unmixed frame's info, frames, frame
-rate, rotation left to players, `turned_upright` degrees, audio streams, the scene cuts
-found in this run, `shots`: each shot's first frame and decisions (mixture, range, eye
-order, weight; from `shots_from_frame` on when a run resumed), files, the colour maps'
-`display_range`; `video_files`). Videos are
-written resumably (`video.jobs`). Progress
+Outputs per input `<name>` in the output folder, where `<name>` is the file stem, or stem + '_' +
+extension when inputs share a stem (`input_listing.output_names`): the views (`<name>_left.png` and
+`<name>_right.png` for the 'separate' layout, else `<name>_<layout>.png`; 16-bit from a 16-bit
+anaglyph, RGBA from an image with transparency), the colour-mapped left disparity
+`<name>_disparity.png` (over the range found, or a fixed one), KITTI-style `<name>_disparity16.png`
+(uint16, d * 256; only when every disparity lies in 0..255.996 px) and float32 signed pixels
+`<name>_disparity.npy`, the stereo formats asked for (`OutputOptions.formats`, `stereo_formats`),
+and a side-car `<name>_info.json` (mixture used and detected, range searched, scale, method,
+seconds, files, the EXIF orientation applied, the request; `info_file`). Per video, in the input's
+container (`.mp4`, `.mov`, `.mkv`, `.avi`; `.webm` in `.mkv`) with its frame rate, timestamps,
+audio and subtitle streams (copied), frames a player turns by quarter turns (portrait phone videos)
+turned upright before they are unmixed and written so (other rotations copied): the layout as
+`<name>_<layout><ext>` (or `_left` / `_right`; side by side and top-bottom tagged as such:
+`encoders.STEREO_MODES`), `<name>_disparity<ext>`, `<name>_<format><ext>` for the formats drawn as
+videos (rgbd, anaglyphs; the others are skipped, saying why) and `<name>_info.json` (the first
+unmixed frame's info, frames, frame rate, rotation left to players, `turned_upright` degrees, audio
+streams, the scene cuts found in this run, `shots`: each shot's first frame and decisions (mixture,
+range, eye order, weight; from `shots_from_frame` on when a run resumed), files, the colour maps'
+`display_range`; `video_files`). Videos are written resumably (`video.jobs`). Progress
 (`progress.ProgressBar`) is shown for several inputs and for every video's frames.
 
 Video frames are unmixed with temporal consistency (`temporal`, unless
@@ -103,10 +99,9 @@ def reason(error: Exception) -> str:
   return f'{kind.__name__}: {line}'
 
 
-# What one input may raise without stopping the others: unreadable or malformed files
-# (ValueError, cv2.error, FFmpeg's errors), failures inside TensorFlow (e.g. an image too
-# large for memory), NumPy / numba allocations too large (MemoryError) and file-system
-# errors while reading or writing.
+# What one input may raise without stopping the others: unreadable or malformed files (ValueError,
+# cv2.error, FFmpeg's errors), failures inside TensorFlow (e.g. an image too large for memory),
+# NumPy / numba allocations too large (MemoryError) and file-system errors while reading or writing.
 INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError,
                 MemoryError, Image.DecompressionBombError)  # The last: a huge or forged size.
 
@@ -169,7 +164,8 @@ def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, out
   image, orientation, lost = input_images.read_upright(item.path, found, deep=True, alpha=True)
   stored = hints.stored(found.chroma_halved)  # A 4:2:0 JPEG (unmixing/chroma).
   unmix_start = time.perf_counter()
-  outputs = unmixer(image, **stored)  # RGBA: unmixed without its alpha.
+  with input_images.blaming_truncation(item.path):
+    outputs = unmixer(image, **stored)  # RGBA: unmixed without its alpha.
   report.unmix_seconds += time.perf_counter() - unmix_start
   lost += input_images.depth_lost(image, outputs['left'])
   if image.shape[2] == 4:  # Transparency kept: the views carry the input's alpha.
@@ -218,7 +214,7 @@ class _NamingInputs(std_logging.Filter):
   """Prefixes warnings and errors with the input they concern (`naming_input`): the one
   its thread runs, else, while a single input runs, that one (a warning of a helper
   thread, e.g. the video pipeline's); unnamed while several run (Beam's threads) and the
-  thread runs none of them."""
+  thread runs none of them, or when the record says it names its input (NAMES_ITS_INPUT)."""
 
   def __init__(self):
     super().__init__()
@@ -230,9 +226,13 @@ class _NamingInputs(std_logging.Filter):
                                              else None)
     # The formatted message: a record whose arguments name the path is not named twice.
     message = record.getMessage()
-    if path and record.levelno >= std_logging.WARNING and not message.startswith(path):
+    if (path and record.levelno >= std_logging.WARNING and not message.startswith(path)
+        and not getattr(record, NAMES_ITS_INPUT, False)):
       record.msg, record.args = f'{path}: {message}', ()
     return True
+
+
+NAMES_ITS_INPUT = 'names_its_input'  # In a log call's `extra`: `naming_input` adds no name.
 
 
 _NAMING = _NamingInputs()

@@ -73,6 +73,26 @@ def test_truncated_jpeg_is_told_apart(tmp_path):
   assert not input_images.truncated_jpeg(str(tmp_path / 'a.png'))
 
 
+def test_errors_about_a_cut_jpeg_say_that_it_was_cut(tmp_path):
+  """A JPEG cut short decodes with gray rows, which detection crops as a border: its error
+  ('needs an image of at least 16x16 px ... got 320x12') did not say the file was cut."""
+  image = np.random.default_rng(0).integers(0, 256, (64, 64, 3), dtype=np.uint8)
+  whole = str(tmp_path / 'whole.jpg')
+  cv2.imwrite(whole, image)
+  (tmp_path / 'cut.jpg').write_bytes(open(whole, 'rb').read()[:400])
+  cut = str(tmp_path / 'cut.jpg')
+  with pytest.raises(ValueError, match=r'^too small\. .*cut\.jpg may be the cause: the JPEG '
+                     r'file ends before its end marker'):
+    with input_images.blaming_truncation(cut):
+      raise ValueError('too small.')
+  with pytest.raises(ValueError, match=r'^too small\.$'):  # A whole file: as it was.
+    with input_images.blaming_truncation(whole):
+      raise ValueError('too small.')
+  with pytest.raises(KeyError):  # Not a file's fault: passed on.
+    with input_images.blaming_truncation(cut):
+      raise KeyError('left')
+
+
 def test_read_image_gray_to_rgb(tmp_path):
   path = str(tmp_path / 'gray.png')
   cv2.imwrite(path, np.full((5, 6), 77, np.uint8))

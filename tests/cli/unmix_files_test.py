@@ -924,6 +924,48 @@ def test_warnings_name_the_input_of_their_thread_while_several_run(caplog):
       'a.jpg: clipped', 'b.jpg: clipped', 'c.jpg: helper', 'from elsewhere']
 
 
+def test_a_line_that_names_its_input_is_not_named_after_another_threads(caplog):
+  """Beam's thread whose input failed logged 'failed b.jpg: ...' after leaving it, while
+  one other thread ran a.jpg: the line came out as 'a.jpg: failed b.jpg: ...'."""
+  from absl import logging  # pylint: disable=import-outside-toplevel
+  running, done = threading.Event(), threading.Event()
+
+  def other():
+    with unmix_files.naming_input('a.jpg'):
+      running.set()
+      done.wait()
+
+  def worker():
+    with unmix_files.naming_input('b.jpg'):
+      pass
+    running.wait()
+    logging.error('failed %s: unreadable', 'b.jpg',
+                  extra={unmix_files.NAMES_ITS_INPUT: True})  # As beam_batch logs it.
+  threads = [threading.Thread(target=other), threading.Thread(target=worker)]
+  with caplog.at_level('WARNING'):
+    for thread in threads:
+      thread.start()
+    threads[1].join()
+    done.set()
+    threads[0].join()
+  assert [r.getMessage() for r in caplog.records] == ['failed b.jpg: unreadable']
+
+
+def test_a_cut_jpeg_that_fails_is_named_as_cut(tmp_path):
+  image = np.random.RandomState(0).randint(0, 256, (40, 50, 3)).astype(np.uint8)
+  cv2.imwrite(str(tmp_path / 'whole.jpg'), image)
+  data = (tmp_path / 'whole.jpg').read_bytes()
+  (tmp_path / 'cut.jpg').write_bytes(data[:len(data) * 2 // 3])  # Decodes, rows gray.
+
+  def undetectable(image, **kwargs):
+    raise ValueError('The encoding cannot be detected on it.')
+  report = unmix_files.unmix_inputs(undetectable, str(tmp_path / '*.jpg'),
+                                    str(tmp_path / 'out'))
+  reasons = dict(report.failures)
+  assert 'ends before its end marker' in reasons[str(tmp_path / 'cut.jpg')]
+  assert 'end marker' not in reasons[str(tmp_path / 'whole.jpg')]
+
+
 def test_a_full_output_disk_ends_the_run_instead_of_failing_every_input(setup, tmp_path,
                                                                         monkeypatch):
   """Writes failing on a full disk were recorded as bad inputs, one after the other."""
