@@ -26,8 +26,8 @@ from mixstereo_tf.artifacts import pretrained
 from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.cli import input_failures
 from mixstereo_tf.cli import input_listing
-from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.cli import worker_output
 from mixstereo_tf.unmixing import predictors
 
@@ -80,7 +80,7 @@ def main(argv):
     with worker_output.filtered_stderr():  # Multi-processing workers' notes and Ctrl-C.
       counts = beam_batch.run(items, config, FLAGS.output_dir, options, pipeline_options)
   except (KeyboardInterrupt, RuntimeError) as e:  # Beam re-raises Ctrl-C as RuntimeError.
-    if 'OutputFull' in str(e) or isinstance(e, unmix_files.OutputFull):
+    if 'OutputFull' in str(e) or isinstance(e, input_failures.OutputFull):
       sys.exit(f'error: {str(e).split("OutputFull: ", 1)[-1]}')
     if not isinstance(e, KeyboardInterrupt) and 'KeyboardInterrupt' not in str(e):
       raise

@@ -24,6 +24,7 @@ from absl import logging
 from mixstereo_tf.cli import device
 from mixstereo_tf.cli import flag_errors
 from mixstereo_tf.cli import flags as cli_flags
+from mixstereo_tf.cli import input_failures
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
 
@@ -49,7 +50,7 @@ def main(argv):
         progress_stream=sys.stderr)
   except ValueError as e:
     raise flag_errors.usage_error(e) from None
-  except unmix_files.OutputFull as e:
+  except input_failures.OutputFull as e:
     sys.exit(f'error: {e}')
   except KeyboardInterrupt:
     logging.error('Interrupted: finished inputs are kept, and a video continues from its '
@@ -61,7 +62,7 @@ def main(argv):
                report.frames / report.unmix_seconds if report.unmix_seconds else 0.0)
   for path, reason in report.failures:
     logging.warning('failed: %s (%s)', path, reason)
-  message = unmix_files.failure_message(report)
+  message = input_failures.failure_message(report)
   if message:
     sys.exit(message)
 

@@ -6,7 +6,7 @@ Each input gets exactly the outputs and `<name>_info.json` that `mixstereo-unmix
 input an earlier run into the folder named keeps its name, so a grown archive renames
 nothing). The unmixer is built once per worker (`_UnmixFn.setup`). Runs are resumable: an
 input whose outputs are complete (`completed_info`) is skipped. An input that fails with one of
-`unmix_files.INPUT_ERRORS` goes to the dead-letter list and the job goes on; any other
+`input_failures.INPUT_ERRORS` goes to the dead-letter list and the job goes on; any other
 error is a bug and fails the job, as in `mixstereo-unmix`. The output folder also gets
 `batch_summary.csv` (one row per input, `SUMMARY_FIELDS`) and `batch_dead_letters.csv`
 (input, error). Inputs and the output folder must be paths every worker opens as local
@@ -31,6 +31,7 @@ from apache_beam.options.pipeline_options import PipelineOptions
 from apache_beam.options.pipeline_options import StandardOptions
 
 from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import input_failures
 from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
@@ -189,9 +190,9 @@ class _UnmixFn(beam.DoFn):
       with unmix_files.naming_input(item.path):  # Per thread (Beam's threads run several).
         unmix_files.unmix_item(self._unmixer, item, self._output_dir, self._options,
                                unmix_files.UnmixReport())
-    except unmix_files.INPUT_ERRORS as e:
-      unmix_files.check_output_room(self._output_dir, e)  # OutputFull ends the job.
-      yield from _failed(index, item, unmix_files.reason(e) + earlier,
+    except input_failures.INPUT_ERRORS as e:
+      input_failures.check_output_room(self._output_dir, e)  # OutputFull ends the job.
+      yield from _failed(index, item, input_failures.reason(e) + earlier,
                          time.perf_counter() - start)
       return
     beam.metrics.Metrics.counter('mixstereo', 'done').inc()

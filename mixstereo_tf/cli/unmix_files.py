@@ -31,32 +31,24 @@ there.
 
 import contextlib
 import dataclasses
-import errno
 import logging as std_logging
-import os
-import shutil
 import threading
 import time
 from typing import Dict, Iterator, List, Optional, TextIO, Tuple
 
 from absl import logging
-import cv2
 import numpy as np
-from PIL import Image
-import tensorflow as tf
 
-from mixstereo_tf.cli import flag_errors
-from mixstereo_tf.cli import flags as cli_flags
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import input_failures
 from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import printable
 from mixstereo_tf.unmixing import predictors
-from mixstereo_tf.video import streams
 
 
 @dataclasses.dataclass
@@ -74,84 +66,6 @@ class UnmixReport:
   def frames_per_second(self) -> float:
     """Frames over the whole run, reading and writing included."""
     return self.frames / self.seconds if self.seconds > 0 else 0.0
-
-
-def failure_message(report: UnmixReport) -> Optional[str]:
-  """The error that ends the run with a non-zero status: any input failed."""
-  if not report.failures:
-    return None
-  paths = ', '.join(path for path, _ in report.failures[:5])
-  more = ', ...' if len(report.failures) > 5 else ''
-  return (f'error: {len(report.failures)} of {report.processed + len(report.failures)} '
-          f'input(s) failed: {paths}{more}')
-
-
-def reason(error: Exception) -> str:
-  """A one-line reason for a failed input (TensorFlow messages can span many lines),
-  naming the predictor flags (`--mixture`) instead of PredictorConfig fields, and the
-  package's own error classes by their built-in base (`ValueError`)."""
-  message = error.message if isinstance(error, tf.errors.OpError) else str(error)
-  lines = message.strip().splitlines()
-  line = flag_errors.flag_names(lines[0], known=cli_flags.PREDICTOR_FLAGS) if lines else ''
-  kind = type(error)
-  while kind.__module__.startswith('mixstereo_tf.'):  # The package's own: by their base.
-    kind = kind.__base__
-  return f'{kind.__name__}: {line}'
-
-
-# What one input may raise without stopping the others: unreadable or malformed files (ValueError,
-# cv2.error, FFmpeg's errors), failures inside TensorFlow (e.g. an image too large for memory),
-# NumPy / numba allocations too large (MemoryError) and file-system errors while reading or writing.
-INPUT_ERRORS = (ValueError, cv2.error, streams.FFmpegError, tf.errors.OpError, OSError,
-                MemoryError, Image.DecompressionBombError)  # The last: a huge or forged size.
-
-
-class OutputFull(RuntimeError):
-  """The output folder's disk is full or takes no more files: no later input could be
-  written either."""
-
-
-# Free bytes under which a failed input is taken for a full output disk, not its own fault.
-OUTPUT_RESERVE = 1 << 20
-
-# Write errors that every later input would meet too: a full disk, an exhausted quota, a
-# file system (re)mounted read-only.
-_STOPPING_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS)
-
-
-def _stopping_error(error: Optional[BaseException]) -> str:
-  """The reason ('Disk quota exceeded', ...) when `error` or one it was raised from is one
-  of `_STOPPING_ERRNOS`, by its errno or, from FFmpeg or OpenCV, by its text; else ''."""
-  seen = set()
-  while error is not None and id(error) not in seen:
-    seen.add(id(error))
-    if isinstance(error, OSError) and error.errno in _STOPPING_ERRNOS:
-      return os.strerror(error.errno)
-    for code in _STOPPING_ERRNOS:
-      if os.strerror(code) in str(error):
-        return os.strerror(code)
-    error = error.__cause__ or error.__context__
-  return ''
-
-
-def check_output_room(output_dir: str, error: Optional[BaseException] = None) -> None:
-  """Raises OutputFull, naming `output_dir`, when its file system has under OUTPUT_RESERVE
-  bytes free, or when `error` (the input's) is a write error every later input would meet
-  (`_STOPPING_ERRNOS`); called when an input failed (a full disk made every later input fail
-  as a bad one, and the batch's summary was then not written)."""
-  keep = 'the finished inputs are kept: {} and run the same command to continue'
-  stopping = _stopping_error(error)
-  if stopping:
-    raise OutputFull(f'writing the results failed with "{stopping}" (the output folder '
-                     f'{output_dir} or its disk), as it would for every later input; '
-                     + keep.format('fix it'))
-  try:
-    free = shutil.disk_usage(output_dir).free
-  except OSError:
-    return
-  if free < OUTPUT_RESERVE:
-    raise OutputFull(f'the output folder {output_dir} is on a full disk ({free} bytes free); '
-                     + keep.format('free some space'))
 
 
 def _unmix_image(unmixer: predictors.Unmixer, item: input_listing.MediaItem, output_dir: str,
@@ -194,8 +108,8 @@ def unmix_item(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outpu
   """Unmixes one image or video into `output_dir` (existing); returns the frames unmixed.
 
   The one path every tool writes an input's results by (`mixstereo-unmix`, the batch
-  pipeline). Errors propagate (`INPUT_ERRORS` are the per-input ones); `report` gains the
-  seconds spent unmixing.
+  pipeline). Errors propagate (`input_failures.INPUT_ERRORS` are the per-input ones);
+  `report` gains the seconds spent unmixing.
   """
   request = info_file.describe(options)
   if item.is_video:
@@ -283,12 +197,13 @@ def unmix_inputs(unmixer: predictors.Unmixer, input_spec: str, output_dir: str,
     try:
       with naming_input(item.path):
         frames = unmix_item(unmixer, item, output_dir, options, report, progress_stream)
-    except INPUT_ERRORS as e:
-      check_output_room(output_dir, e)
+    except input_failures.INPUT_ERRORS as e:
+      input_failures.check_output_room(output_dir, e)
       if bar:
         bar.clear()
-      logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, reason(e))
-      report.failures.append((item.path, reason(e)))
+      why = input_failures.reason(e)
+      logging.error('[%d/%d] skipped %s: %s', index, len(items), item.path, why)
+      report.failures.append((item.path, why))
     else:
       report.processed += 1
       report.frames += frames

@@ -17,6 +17,7 @@ from mixstereo_tf.cli import beam_batch
 from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import info_file
+from mixstereo_tf.cli import input_failures
 from mixstereo_tf.cli import input_listing
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.unmixing import predictors
@@ -324,14 +325,14 @@ def test_a_full_or_read_only_output_ends_the_job(tmp_path, monkeypatch, error, f
   """A read-only disk ends it with room left (its inputs failed one by one)."""
   folder = _folder(tmp_path / 'in')
   os.remove(folder / 'broken.png')
-  usage = unmix_files.shutil.disk_usage(tmp_path)
+  usage = input_failures.shutil.disk_usage(tmp_path)
 
   def failing(*args, **kwargs):
     raise error
   monkeypatch.setattr(media, 'write_image_outputs', failing)
   if free is not None:
-    monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage._replace(free=free))
-  with pytest.raises((unmix_files.OutputFull, RuntimeError), match=message):
+    monkeypatch.setattr(input_failures.shutil, 'disk_usage', lambda path: usage._replace(free=free))
+  with pytest.raises((input_failures.OutputFull, RuntimeError), match=message):
     beam_batch.run(beam_batch.list_inputs(str(folder), None), CONFIG, str(tmp_path / 'out'),
                    OPTIONS)
 

@@ -27,6 +27,7 @@ from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import input_images
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import stereo_formats
+from mixstereo_tf.cli import input_failures
 from mixstereo_tf.cli import unmix_files
 from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import colormap
@@ -245,7 +246,7 @@ def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
   assert '[##########] 3/3' in terminal.getvalue() and terminal.getvalue().endswith('\n')
   assert [os.path.basename(p) for p, _ in report.failures] == ['b.png']
   assert 'b.png' in report.failures[0][1]
-  assert unmix_files.failure_message(report) == (
+  assert input_failures.failure_message(report) == (
       f'error: 1 of 3 input(s) failed: {folder / "b.png"}')
   assert input_images.read_image(str(tmp_path / 'out' / 'c_sbs_half.png')).shape == (33, 47, 3)
   assert not os.path.exists(tmp_path / 'out' / 'b_disparity.npy')
@@ -254,7 +255,7 @@ def test_folder_with_a_corrupt_file_and_a_gray_image(setup, tmp_path):
   os.remove(folder / 'c.jpg')
   report = unmix_files.unmix_inputs(setup, str(folder), str(tmp_path / 'out2'))
   assert report.processed == 0 and len(report.failures) == 1
-  assert '1 of 1 input(s) failed' in unmix_files.failure_message(report)
+  assert '1 of 1 input(s) failed' in input_failures.failure_message(report)
 
 
 def _correlated(texture):
@@ -624,7 +625,7 @@ def test_a_video_resumed_after_its_last_segment_records_what_was_done(tmp_path,
   def disk_full(*args, **kwargs):
     raise OSError(28, 'No space left on device')
   monkeypatch.setattr(jobs.assembly, 'assemble', disk_full)
-  with pytest.raises(unmix_files.OutputFull, match='No space left'):  # Ends the run.
+  with pytest.raises(input_failures.OutputFull, match='No space left'):  # Ends the run.
     unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'out'), options)
   monkeypatch.setattr(jobs.assembly, 'assemble', assemble)
   report = unmix_files.unmix_inputs(unmixer, source, str(tmp_path / 'out'), options)
@@ -747,7 +748,7 @@ def test_tensorflow_and_file_system_errors_skip_only_their_input(tmp_path):
   assert report.failures == [
       (str(folder / 'a.png'), 'ResourceExhaustedError: OOM when allocating'),
       (str(folder / 'b.png'), 'OSError: [Errno 5] Input/output error')]
-  assert unmix_files.failure_message(report).startswith('error: 2 of 3 input(s) failed: ')
+  assert input_failures.failure_message(report).startswith('error: 2 of 3 input(s) failed: ')
   # Anything else is a bug and stops the run rather than being reported as a bad input.
   media.write_image(str(folder / 'd.png'), np.full((8, 8, 3), 40, np.uint8))
   with pytest.raises(KeyError):
@@ -809,13 +810,6 @@ def test_a_rerun_redoes_an_input_whose_results_a_kill_left_unlisted(tmp_path, mo
   report = unmix_files.unmix_inputs(unmixer, pattern, str(out))
   assert report.processed == 1 and not report.failures and len(calls) == 3
   assert (out / 'pic_info.json').exists() and not list(out.glob('*unfinished*'))
-
-
-def test_failure_message_names_at_most_five_inputs():
-  assert unmix_files.failure_message(unmix_files.UnmixReport(processed=3)) is None
-  report = unmix_files.UnmixReport(processed=1, failures=[(f'{i}.png', 'bad') for i in range(7)])
-  assert unmix_files.failure_message(report) == (
-      'error: 7 of 8 input(s) failed: 0.png, 1.png, 2.png, 3.png, 4.png, ...')
 
 
 def test_stereo_formats_of_an_image_are_listed_in_its_info(tmp_path):
@@ -976,10 +970,10 @@ def test_a_full_output_disk_ends_the_run_instead_of_failing_every_input(setup, t
   def full(*args, **kwargs):
     raise OSError('4800 requested and 3040 written')  # NumPy's tofile on a full disk.
   monkeypatch.setattr(media, 'write_image_outputs', full)
-  monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage._replace(free=4096))
-  with pytest.raises(unmix_files.OutputFull, match='is on a full disk .4096 bytes free'):
+  monkeypatch.setattr(input_failures.shutil, 'disk_usage', lambda path: usage._replace(free=4096))
+  with pytest.raises(input_failures.OutputFull, match='is on a full disk .4096 bytes free'):
     unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
-  monkeypatch.setattr(unmix_files.shutil, 'disk_usage', lambda path: usage)  # Room: per input.
+  monkeypatch.setattr(input_failures.shutil, 'disk_usage', lambda path: usage)  # Room: per input.
   report = unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
   assert len(report.failures) == 2 and 'requested' in report.failures[0][1]
 
@@ -1004,7 +998,7 @@ def test_a_quota_or_read_only_output_ends_the_run_with_room_left(setup, tmp_path
     raise error
   monkeypatch.setattr(media, 'write_image_outputs', refused)
   reason = os.strerror(getattr(error, 'errno', None) or errno.EDQUOT)
-  with pytest.raises(unmix_files.OutputFull, match=reason):
+  with pytest.raises(input_failures.OutputFull, match=reason):
     unmix_files.unmix_inputs(setup, str(tmp_path / '*.png'), str(tmp_path / 'out'))
   assert len(calls) == 1
 
