@@ -41,7 +41,7 @@ class FrameHint:
       (0, 1): that weight (`classical.diplopia_layers.resolve_weight`).
     unread: an output the caller does not read ('disparity_right': a video's frames,
       which write the views and the left disparity): a stage may return its first stage's
-      value there instead of refining it (`steps.refiner_unmix`); None: every output.
+      value there instead of refining it (`refiner_stage.refiner_unmix`); None: every output.
     on_disparity: called once with {'disparity_left', 'disparity_right'} (and
       'consistent_left' where the stage checks them) as soon as the frame's first stage
       has matched them, before its views are restored or refined (the anaglyph matcher,

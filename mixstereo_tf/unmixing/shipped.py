@@ -1,6 +1,6 @@
 """The Unmixers of the models shipped with the package (`artifacts/pretrained`), by kind:
   * 'joint': the paper's network, run like a trained run (`unmixer.model_unmixer`);
-  * 'refiner': the classical method, then the refiner on its result (`steps.refiner_unmix`);
+  * 'refiner': the classical method, then the refiner on its result (`refiner_stage.refiner_unmix`);
   * 'features': the learned matching stage of anaglyphs (`learned_matching`): learned
     descriptors of both eyes, cosine costs, SGM, views restored from the encoding; it
     plans its disparity range with the same costs (`Stage.plan`);
@@ -24,6 +24,7 @@ from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import learned_diplopia
 from mixstereo_tf.unmixing import learned_matching
 from mixstereo_tf.unmixing import mixture_choice
+from mixstereo_tf.unmixing import refiner_stage
 from mixstereo_tf.unmixing import steps
 from mixstereo_tf.unmixing import unmixer
 
@@ -43,7 +44,7 @@ class Stage:
 
 
 def _refiner_stage(model: tf.keras.Model, base: Optional[Stage] = None) -> Stage:
-  """`steps.refiner_unmix` with the model traced once per output it may leave out (None:
+  """`refiner_stage.refiner_unmix` with the model traced once per output it may leave out (None:
   none), planning as its base. TensorFlow prunes what a left-out output alone needs:
   without a video frame's right disparity the network takes 0.45 s instead of 0.68 s at
   1280x720."""
@@ -58,7 +59,7 @@ def _refiner_stage(model: tf.keras.Model, base: Optional[Stage] = None) -> Stage
     return functions[skipped]
 
   base_solve = base.solve if base else None
-  return Stage(lambda image, name, search, hint: steps.refiner_unmix(
+  return Stage(lambda image, name, search, hint: refiner_stage.refiner_unmix(
       network, model.size_multiple, image, name, search, hint, base_solve),
                base.plan if base else None)
 

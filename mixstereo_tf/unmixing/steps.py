@@ -35,19 +35,13 @@ import tensorflow as tf
 from mixstereo_tf.classical import sgbm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
-from mixstereo_tf.models import refiner
 from mixstereo_tf.restoration import views
 from mixstereo_tf.unmixing import chroma
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import mixture_choice
-from mixstereo_tf.unmixing import tiling
 
-# The refined views' share of the restoration prior of a refiner's anaglyph (the rest: the
-# classical colour transfer); chosen on validation examples, neither training nor
-# evaluation data (experiments/results/pretrained_ablations.md).
-REFINED_VIEW_WEIGHT = 0.25
 Range = Union[None, str, Tuple[int, int]]  # disparity_range.parse's values.
 # A method's own range planning: plan(uint8 image, encoding, hint) -> (min, max) pixels.
 Planner = Callable[[np.ndarray, str, Optional[hints.FrameHint]], Tuple[int, int]]
@@ -113,74 +107,6 @@ def model_unmix(graph: Callable[[tf.Tensor], Dict[str, tf.Tensor]], image: np.nd
         image_range.u8_to_unit(outputs['right']))
     outputs.update(views.at_depth(restored, views_from.dtype))
   outputs['info'] = {'shift': chosen.shift, 'scale': round(chosen.scale, 4)}
-  return outputs
-
-
-def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: int,
-                  image: np.ndarray, name: str, search: Range,
-                  hint: Optional[hints.FrameHint] = None,
-                  base_stage: Optional[Callable[..., Dict[str, object]]] = None
-                  ) -> Dict[str, object]:
-  """The hybrid (`models/refiner.py`): the base stage (`classical_unmix`, or another with
-  its signature and outputs, e.g. the learned matching stage), the refiner on its result
-  (`network(None)`, in tiles; `network(key)`: without output `key`, when the hint's
-  `unread` is a disparity nothing else reads: families that do not restore views from
-  both), then the views: for anaglyphs restored from the refined disparities with, as
-  the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
-  the rest of the colour transfer, and the colour-line pass (+0.1 to +0.8 dB on
-  validation); 'consistent_left': that restoration's left-right check; otherwise the
-  family's `settle_views`. The hint's on_disparity is the base stage's: a video's next
-  frame searches around the base's disparities and starts while these are refined
-  (docs/DESIGN.md). Views from the hint's stored_image where it has one (`_deep_views`
-  for double images); a gray image gets gray views, the refined views' channel mean."""
-  family = families.of(name)
-  deep = hint is not None and hint.stored_image is not None and (
-      hint.stored_image.dtype == np.uint16)  # Anaglyphs: the base at 8 bits, views below.
-  base = (base_stage or classical_unmix)(image, name, search, dataclasses.replace(
-      hint, stored_image=None) if deep and family.restores_views else hint)
-  unread = hint and hint.unread
-  skipped = (unread if unread in ('disparity_left', 'disparity_right')
-             and not family.restores_views else None)
-  keys = ('left', 'right_warped' if 'right_warped' in base else 'right')  # As trained.
-  base_views = [image_range.eight_bits(base[key]) for key in keys]
-  refined = tiling.apply(network(skipped), refiner.network_input(
-      image, *base_views, base['disparity_left'], base['disparity_right']), multiple)
-  gray = bool(np.all(image == image[..., :1]))  # Gray input, gray views: the net tints them.
-  signed = {key: np.repeat(refined[key].mean(-1, keepdims=True), 3, -1) if gray
-            else refined[key] for key in ('left', 'right')}
-  outputs = (_deep_views([base[key] for key in keys], base_views, signed)
-             if deep and not family.restores_views  # Double images: 16-bit base layers.
-             else {key: image_range.signed_to_u8(view) for key, view in signed.items()})
-  outputs.update(family.settle_views(hints.views_image(image, hint), outputs,
-                                     base.get('info', {})))
-  for key in ('disparity_left', 'disparity_right'):
-    outputs[key] = refined[key][..., 0] if key != skipped else base[key]
-  if 'info' in base:  # The base's record: a double image's mixing weight.
-    outputs['info'] = base['info']
-  if family.restores_views:
-    views_from = hints.views_image(image, hint)
-    mixture01 = image_range.to_unit(views_from)
-    disparities = outputs['disparity_left'], outputs['disparity_right']
-    transfer = family.restore(mixture01, name, *disparities)
-    weight = REFINED_VIEW_WEIGHT
-    prior = [weight * image_range.u8_to_unit(outputs[k]) + (1 - weight) * transfer[k]
-             for k in ('left', 'right')]
-    checked = transfer['consistent_left'], transfer['consistent_right']
-    restored = family.restore(mixture01, name, *disparities, *prior, consistent=checked,
-                              colour_line=True)
-    outputs.update(views.at_depth(restored, views_from.dtype))
-    outputs['consistent_left'] = restored['consistent_left']  # For the next frame's prior.
-  return outputs
-
-
-def _deep_views(base, base_views, signed) -> Dict[str, np.ndarray]:
-  """16-bit views: the base's uint16 layers [left, right] plus the refiner's change of
-  their 8-bit copies `base_views` (`signed`: its views, signed units, half a [0, 1] unit
-  each; a gray image's base layers are gray, so gray views stay gray)."""
-  outputs = {}
-  for key, deep, eight in zip(('left', 'right'), base, base_views):
-    view = image_range.to_unit(deep) + (signed[key] - image_range.u8_to_signed(eight)) / 2
-    outputs[key] = image_range.unit_to(np.clip(view, 0.0, 1.0), np.uint16)
   return outputs
 
 
