@@ -156,6 +156,9 @@ def truncated_jpeg(path: str) -> bool:
     return not f.read().rstrip(b'\x00').endswith(b'\xff\xd9')
 
 
+_CUT_SHORT = 'the JPEG file ends before its end marker'  # `truncated_jpeg`'s note.
+
+
 @contextlib.contextmanager
 def blaming_truncation(path: str) -> Iterator[None]:
   """ValueErrors raised inside (e.g. unmixing the image) say so when `path` is a JPEG cut
@@ -165,8 +168,8 @@ def blaming_truncation(path: str) -> Iterator[None]:
   except ValueError as error:
     if not truncated_jpeg(path):
       raise
-    raise ValueError(f'{error} {path} may be the cause: the JPEG file ends before its end '
-                     'marker (a file cut short; its missing rows are gray).') from error
+    raise ValueError(f'{error} {path} may be the cause: {_CUT_SHORT} (a file cut short; '
+                     'its missing rows are gray).') from error
 
 
 # What reading an image at 8 bits in RGB dropped (`image_io.dropped`) -> its info note.
@@ -191,7 +194,7 @@ def reading_notes(path: str, found: ImageHeader, lost: Tuple[str, ...]) -> Dict[
     notes[key] = f'{path} {_DROPPED[key]}'
     logging.warning('%s.', notes[key])
   if truncated_jpeg(path):
-    notes['warning'] = 'the JPEG file ends before its end marker: rows may be missing'
+    notes['warning'] = f'{_CUT_SHORT}: rows may be missing'
     logging.warning('%s: %s.', path, notes['warning'])
   if found.pages > 1:  # Logged by read_upright.
     notes['warning'] = f'the file holds {found.pages} pages: only the first was unmixed'
