@@ -15,8 +15,8 @@ A family answers, for each of its encodings (`names`):
     `display_range` are its own range and display range;
   * the views: `restore` from the encoding's matrices (`restores_views`: anaglyphs);
     `views_at_depth`: a 16-bit mixture's views are made from its 16-bit samples (the
-    hint's stored_image; matching runs on its 8-bit copy): anaglyphs restore them from
-    it, double images solve their layers from it;
+    hint's stored_image; matching runs on its 8-bit copy); `settle_views`: a refiner's
+    views made to agree with the mixture;
   * the network plan: `signed` families may have disparities of either sign, so the plan
     may shift their `right_eye` channels (`disparity_range.plan`, `to_network`);
   * learned stages: `learned_stages` names the networks built on its classical stage
@@ -29,7 +29,7 @@ subclass and one `register` call.
 """
 
 import dataclasses
-from typing import Dict, Optional, Sequence, Tuple
+from typing import Dict, Optional, Tuple
 
 import numpy as np
 
@@ -47,11 +47,13 @@ from mixstereo_tf.restoration import views
 Range = Tuple[int, int]
 # A double image's refined views onto its equation (`Diplopia.settle_views`): the right
 # view takes 3 times the left's share of the residual (k of `onto_mixture`). Chosen on
-# validation double images (2026-11-29), the default's views: k = 1 / 3 / inf at a = 1/2
-# +0.02 / +0.07 / 0.00 (left) and +0.50 / +0.61 / +0.57 dB (right); at a = 0.7 +0.54 /
-# +0.52 / 0.00 and +0.06 / +0.04 / -0.27; at a = 0.3 -0.12 / -0.03 / 0.00, +1.99 / +2.13 /
-# +2.16.
+# validation double images (2026-11-29), the default's views, k = 1 / 3 / inf, left and
+# right, dB: a = 1/2 +0.02 / +0.07 / 0.00, +0.50 / +0.61 / +0.57; a = 0.7 +0.54 / +0.52 /
+# 0.00, +0.06 / +0.04 / -0.27; a = 0.3 -0.12 / -0.03 / 0.00, +1.99 / +2.13 / +2.16.
 REFINED_RIGHT_SHARE = 3.0
+# The refined views' share of a refiner's anaglyph restoration prior (`Anaglyph.settle_views`;
+# the rest: the colour transfer); chosen on validation examples (pretrained_ablations.md).
+REFINED_VIEW_WEIGHT = 0.25
 
 
 class Family:
@@ -74,13 +76,15 @@ class Family:
     del image, name, hint
     return default
 
-  def settle_views(self, mixture: np.ndarray, views: Dict[str, np.ndarray],
+  def settle_views(self, mixture: np.ndarray, name: str, refined: Dict[str, np.ndarray],
                    info: Dict[str, object]) -> Dict[str, np.ndarray]:
-    """A refiner's 'left' and 'right' `views`, made to agree with the `mixture` they came
-    from (uint8 or uint16 [H, W, 3], as the views); `info`: its base stage's. Here: as
-    they are."""
-    del mixture, info
-    return {key: views[key] for key in ('left', 'right')}
+    """A refiner's views made to agree with their `mixture` (uint8 or uint16 [H, W, 3],
+    encoding `name`): `refined` holds its 'left' and 'right' (uint8, or a double image's
+    at the mixture's depth) and 'disparity_left' / 'disparity_right' (float32 [H, W],
+    signed px); `info`: its base stage's. Returns 'left' and 'right' at the mixture's
+    depth and what the family adds. Here: the views as they are."""
+    del mixture, name, info
+    return {key: refined[key] for key in ('left', 'right')}
 
   def classical(self, image: np.ndarray, name: str, search: Optional[Range] = None,
                 hint: Optional[hints.FrameHint] = None) -> Dict[str, object]:
@@ -133,14 +137,11 @@ class Anaglyph(Family):
   def matching(self, hint: Optional[hints.FrameHint] = None) -> matcher.MatcherConfig:
     """The matcher's configuration for a frame: the defaults, with a hint's prior window
     (when it has a prior), coarse-to-fine threshold and SGM strips."""
-    fields = {}
-    if hint is not None:
-      if hint.prior is not None and hint.prior_window is not None:
-        fields.update(prior_radius=hint.prior_window[0], prior_spread=hint.prior_window[1])
-      if hint.full_search_cells is not None:
-        fields.update(full_search_cells=hint.full_search_cells)
-      if hint.matcher_strips is not None:
-        fields.update(strips=hint.matcher_strips)
+    hint = hint or hints.FrameHint()
+    fields = {key: value for key, value in (('full_search_cells', hint.full_search_cells),
+                                            ('strips', hint.matcher_strips)) if value is not None}
+    if hint.prior is not None and hint.prior_window is not None:
+      fields.update(prior_radius=hint.prior_window[0], prior_spread=hint.prior_window[1])
     return dataclasses.replace(matcher.MatcherConfig(), **fields)
 
   def estimate_range(self, image, name, default, hint=None):
@@ -157,6 +158,22 @@ class Anaglyph(Family):
     return anaglyph.unmix_anaglyph(image, name, search, config=config, prior=hint.prior,
                                    on_disparity=hint.on_disparity,
                                    views_from=hint.stored_image)
+
+  def settle_views(self, mixture, name, refined, info):
+    """Restored from the refined disparities (`restore`, colour-line pass on), the prior
+    REFINED_VIEW_WEIGHT of the refined views and the rest of the colour transfer (+0.1 to
+    +0.8 dB on validation); and its left-right check 'consistent_left' (a video's prior)."""
+    del info
+    mixture01 = image_range.to_unit(mixture)
+    disparities = refined['disparity_left'], refined['disparity_right']
+    transfer = self.restore(mixture01, name, *disparities)
+    prior = [REFINED_VIEW_WEIGHT * image_range.u8_to_unit(refined[key])
+             + (1 - REFINED_VIEW_WEIGHT) * transfer[key] for key in ('left', 'right')]
+    checked = transfer['consistent_left'], transfer['consistent_right']
+    restored = self.restore(mixture01, name, *disparities, *prior, consistent=checked,
+                            colour_line=True)
+    return dict(views.at_depth(restored, mixture.dtype),
+                consistent_left=restored['consistent_left'])
 
   def right_eye(self, name):
     """`MixtureSpec.eye_channels`' right eye."""
@@ -194,13 +211,15 @@ class Diplopia(Family):
                                    on_disparity=hint.on_disparity,
                                    views_image=hint.stored_image)
 
-  def settle_views(self, mixture, views, info):
+  def settle_views(self, mixture, name, refined, info):
     """The views projected onto I = a L + (1 - a) R at the base's weight a
     (`diplopia_layers.onto_mixture`, the right view taking REFINED_RIGHT_SHARE)."""
-    unit = [image_range.to_unit(image) for image in (mixture, views['left'], views['right'])]
+    del name
+    unit = [image_range.to_unit(image) for image in (mixture, refined['left'],
+                                                      refined['right'])]
     settled = diplopia_layers.onto_mixture(*unit, info.get('mixing_weight', 0.5),
                                            REFINED_RIGHT_SHARE)
-    return {key: image_range.unit_to(view, views[key].dtype)
+    return {key: image_range.unit_to(view, refined[key].dtype)
             for key, view in zip(('left', 'right'), settled)}
 
   def display_range(self):
@@ -263,27 +282,6 @@ def detected() -> Family:
   """The family whose encodings `detection` finds in an image (the anaglyphs): the one a
   mixture asked as 'auto' belongs to."""
   return next(family for family in _REGISTRY.values() if family.detectable)
-
-
-def allowed_name(name: str, allowed: Sequence[str]) -> str:
-  """`name`, or a ValueError when a predictor that unmixes `allowed` cannot unmix it."""
-  if name not in allowed:
-    raise ValueError(f'The image is read as mixture {name!r}; this predictor unmixes '
-                     f'{", ".join(allowed)}: choose one that unmixes {name!r} '
-                     '(PredictorConfig.pretrained, PredictorConfig.checkpoint or '
-                     'PredictorConfig.method) or name the mixture (PredictorConfig.mixture).')
-  return name
-
-
-def undetectable(allowed: Sequence[str], weighted: bool = False) -> Optional[str]:
-  """What 'auto' reads an image without an anaglyph as, or None (refused): the one
-  encoding of `allowed` when detection can tell none of them (a double image model's
-  'diplopia'), or with `weighted` (a mixing weight given) the one that takes a weight."""
-  if not weighted and any(of(name).detectable for name in allowed):
-    return None
-  names = [name for name in allowed if not of(name).detectable
-           and (of(name).weighted or not weighted)]
-  return names[0] if len(names) == 1 else None
 
 
 def classical_names() -> Tuple[str, ...]:

@@ -59,7 +59,7 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
     image: uint8 [H, W, 3] mixture.
     requested: a mixture name, or 'auto' to detect it; an image 'auto' finds no anaglyph
       in is read as the one encoding of `allowed` detection cannot tell, if there is one
-      (`families.undetectable`: a double image model's 'diplopia').
+      (`_undetectable`: a double image model's 'diplopia').
     allowed: the encodings the predictor can unmix.
     weighted: a mixing weight was given (only weighted encodings take one).
     fallback: for 'auto', the encoding an image with no anaglyph found (or too small or
@@ -79,10 +79,10 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
     if requested == AUTO:
       return fallback, {'detected': None, 'detection': str(e), 'read_as': fallback,
                         'undecided': True}
-    return families.allowed_name(requested, allowed), {'detected': None, 'detection': str(e)}
+    return _allowed_name(requested, allowed), {'detected': None, 'detection': str(e)}
   info = _detection_info(found)
   if requested == AUTO:
-    only = families.undetectable(allowed, weighted)
+    only = _undetectable(allowed, weighted)
     if found.name is None and (only or fallback):
       why = ('a mixing weight given' if weighted else 'the only encoding this predictor '
              'takes') if only else "the video's encoding"
@@ -108,7 +108,28 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
       logging.warning('The image was given as %r, but the detector %s (confidence %.2f).',
                       name, f'reads it as {found.name!r}' if found.name else
                       'finds no anaglyph in it', found.confidence)
-  return families.allowed_name(name, allowed), info
+  return _allowed_name(name, allowed), info
+
+
+def _allowed_name(name: str, allowed: Sequence[str]) -> str:
+  """`name`, or a ValueError when a predictor that unmixes `allowed` cannot unmix it."""
+  if name not in allowed:
+    raise ValueError(f'The image is read as mixture {name!r}; this predictor unmixes '
+                     f'{", ".join(allowed)}: choose one that unmixes {name!r} '
+                     '(PredictorConfig.pretrained, PredictorConfig.checkpoint or '
+                     'PredictorConfig.method) or name the mixture (PredictorConfig.mixture).')
+  return name
+
+
+def _undetectable(allowed: Sequence[str], weighted: bool = False) -> Optional[str]:
+  """What 'auto' reads an image without an anaglyph as, or None (refused): the one
+  encoding of `allowed` when detection can tell none of them (a double image model's
+  'diplopia'), or with `weighted` (a mixing weight given) the one that takes a weight."""
+  if not weighted and any(families.of(name).detectable for name in allowed):
+    return None
+  names = [name for name in allowed if not families.of(name).detectable
+           and (families.of(name).weighted or not weighted)]
+  return names[0] if len(names) == 1 else None
 
 
 def _tie_cost(name: str, colour: str) -> str:

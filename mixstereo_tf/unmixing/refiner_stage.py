@@ -10,15 +10,9 @@ import numpy as np
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.models import refiner
-from mixstereo_tf.restoration import views
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import steps
 from mixstereo_tf.unmixing import tiling
-
-# The refined views' share of the restoration prior of a refiner's anaglyph (the rest: the
-# classical colour transfer); chosen on validation examples, neither training nor
-# evaluation data (experiments/results/pretrained_ablations.md).
-REFINED_VIEW_WEIGHT = 0.25
 
 
 def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: int,
@@ -30,11 +24,9 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   its signature and outputs, e.g. the learned matching stage), the refiner on its result
   (`network(None)`, in tiles; `network(key)`: without output `key`, when the hint's
   `unread` is a disparity nothing else reads: families that do not restore views from
-  both), then the views: for anaglyphs restored from the refined disparities with, as
-  the prior where the views do not match, REFINED_VIEW_WEIGHT of the refined views and
-  the rest of the colour transfer, and the colour-line pass (+0.1 to +0.8 dB on
-  validation); 'consistent_left': that restoration's left-right check; otherwise the
-  family's `settle_views`. The hint's on_disparity is the base stage's: a video's next
+  both), then the views made to agree with the mixture by the family's `settle_views`
+  (anaglyphs: restored from the refined disparities, double images: projected onto
+  their equation). The hint's on_disparity is the base stage's: a video's next
   frame searches around the base's disparities and starts while these are refined
   (docs/DESIGN.md). Views from the hint's stored_image where it has one (`_deep_views`
   for double images); a gray image gets gray views, the refined views' channel mean."""
@@ -56,25 +48,12 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
   outputs = (_deep_views([base[key] for key in keys], base_views, signed)
              if deep and not family.restores_views  # Double images: 16-bit base layers.
              else {key: image_range.signed_to_u8(view) for key, view in signed.items()})
-  outputs.update(family.settle_views(hints.views_image(image, hint), outputs,
-                                     base.get('info', {})))
   for key in ('disparity_left', 'disparity_right'):
     outputs[key] = refined[key][..., 0] if key != skipped else base[key]
+  outputs.update(family.settle_views(hints.views_image(image, hint), name, outputs,
+                                     base.get('info', {})))
   if 'info' in base:  # The base's record: a double image's mixing weight.
     outputs['info'] = base['info']
-  if family.restores_views:
-    views_from = hints.views_image(image, hint)
-    mixture01 = image_range.to_unit(views_from)
-    disparities = outputs['disparity_left'], outputs['disparity_right']
-    transfer = family.restore(mixture01, name, *disparities)
-    weight = REFINED_VIEW_WEIGHT
-    prior = [weight * image_range.u8_to_unit(outputs[k]) + (1 - weight) * transfer[k]
-             for k in ('left', 'right')]
-    checked = transfer['consistent_left'], transfer['consistent_right']
-    restored = family.restore(mixture01, name, *disparities, *prior, consistent=checked,
-                              colour_line=True)
-    outputs.update(views.at_depth(restored, views_from.dtype))
-    outputs['consistent_left'] = restored['consistent_left']  # For the next frame's prior.
   return outputs
 
 

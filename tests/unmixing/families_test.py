@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import skimage.data
 
 from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import matcher
@@ -134,3 +135,28 @@ def test_double_images_take_a_frames_prior_and_its_window(monkeypatch):
   assert seen['weight'] == 0.4
   double.classical(np.zeros((4, 6, 3), np.uint8), 'diplopia', (1, 9))
   assert seen['prior'] is None and seen['weight'] is None  # A still image: no prior.
+
+
+@pytest.mark.parametrize('dtype', [np.uint8, np.uint16])
+def test_an_anaglyphs_refined_views_are_restored_from_its_channels(dtype):
+  """`Anaglyph.settle_views`: the views at the mixture's depth, each copying the channels
+  the anaglyph holds of it (the left red, the right green and blue) exactly, the rest
+  near the truth at the true disparities; with its left-right check for a video's prior.
+  A family that settles nothing keeps a refiner's views as they are."""
+  texture = skimage.data.astronaut()[60:108:2, 150:294:2]  # Natural colours: the
+  left, right = texture[:, 2:66], texture[:, 6:70]  # transfer's local colour statistics.
+  scale = 257 if dtype == np.uint16 else 1
+  mixture = np.dstack([left[..., 0], right[..., 1], right[..., 2]]).astype(dtype) * scale
+  refined = {'left': left, 'right': right, 'disparity_left': np.full((24, 64), 4.0),
+             'disparity_right': np.full((24, 64), 4.0)}
+  out = families.of('anaglyph').settle_views(mixture, 'anaglyph', refined, {})
+  assert out['left'].dtype == dtype and out['right'].dtype == dtype
+  np.testing.assert_array_equal(out['left'][..., 0], mixture[..., 0])
+  np.testing.assert_array_equal(out['right'][..., 1:], mixture[..., 1:])
+  inner = np.s_[:, 8:-8]
+  for key, view in (('left', left), ('right', right)):
+    error = np.abs(out[key][inner].astype(float) / scale - view[inner])
+    assert np.median(error) <= 4.0, (key, np.median(error))  # Left x: right x - 4.
+  assert out['consistent_left'][inner].mean() > 0.9
+  kept = families.Family().settle_views(mixture, 'anaglyph', refined, {})
+  assert kept.keys() == {'left', 'right'} and kept['left'] is left
