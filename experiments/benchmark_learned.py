@@ -5,6 +5,7 @@ and a 4000x3000 photo (`photo_12mp.py`: wall seconds, CPU seconds, peak resident
 each measurement in its own process.
 
     python -m experiments.benchmark_learned [--before_checkout=DIR] [--nolearned_photos]
+        [--learned_video_bits=10]
 
 With --before_checkout (a checkout of an earlier commit, e.g. `git worktree add DIR REV`)
 each row's video is also run in that checkout (its package and experiments) in the same
@@ -21,6 +22,8 @@ from absl import flags
 from experiments import benchmark_video
 from experiments import checkouts  # Defines --before_checkout.
 
+flags.DEFINE_integer('learned_video_bits', 8, 'Bits per sample of the video clip (10: '
+                     'H.264 High 10, as a 10-bit phone or HDR video).')
 flags.DEFINE_bool('learned_photos', True, 'Also each row\'s 4000x3000 photo (minutes a '
                   'row); --nolearned_photos: the videos alone.')
 FLAGS = flags.FLAGS
@@ -34,8 +37,8 @@ PHOTO = {'classical': ['--photo_method=classical'],
 def _video(method, checkout=''):
   """`benchmark_video.video_speed` of `method` in its own process (in `checkout` when
   given)."""
-  return checkouts.measure('benchmark_video', f'b.video_speed({method!r}, 1280, 720)',
-                           checkout)
+  return checkouts.measure('benchmark_video', f'b.video_speed({method!r}, 1280, 720, '
+                           f'bits={FLAGS.learned_video_bits})', checkout)
 
 
 def _photo(method):
@@ -47,16 +50,18 @@ def _photo(method):
 
 
 def _cells(video):
-  """The video columns: frames/s of the whole call (inside the unmixer), per variant."""
-  return [f"{video[v]['fps']:.2f} ({video[v]['unmix_fps']:.2f})"
+  """The video columns: frames/s of the whole call (inside the unmixer), per variant, and
+  the left views' PSNR (dB) when measured."""
+  return [f"{video[v]['fps']:.2f} ({video[v]['unmix_fps']:.2f})" + (
+      f", {video[v]['left_psnr']:.2f} dB" if 'left_psnr' in video[v] else '')
           for v, _ in benchmark_video.QUALITY_VARIANTS]
 
 
 def main(argv):
   del argv
   load = os.getloadavg()
-  lines = ['| method | 1280x720 video, per frame: frames/s (unmix only) | per shot + prior | '
-           '4000x3000 photo |', '| --- | --- | --- | --- |']
+  lines = ['| method | 1280x720 video, per frame: frames/s (unmix only), left view PSNR | '
+           'per shot + prior | 4000x3000 photo |', '| --- | --- | --- | --- |']
   for method in ROWS:
     if FLAGS.before_checkout:
       lines.append(f'| {method}, before | ' + ' | '.join(

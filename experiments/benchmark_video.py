@@ -56,18 +56,58 @@ def video_quality(method: str, frames_per_shot: int = 20) -> dict:
   return result
 
 
-def _write_clip(path: str, size, frames: int) -> None:
-  from experiments import temporal as clip_lib  # pylint: disable=g-import-not-at-top
-  from mixstereo_tf.video import streams  # pylint: disable=g-import-not-at-top
-  writer = streams.VideoWriter(path, fractions.Fraction(25))
-  for index, (image, *_) in enumerate(clip_lib.make_clip(frames)[:frames]):
-    writer.write(cv2.resize(image, size, interpolation=cv2.INTER_CUBIC),
-                 fractions.Fraction(index, 25))
-  writer.close()
+def _write_clip(path: str, size, frames: int, bits: int = 8) -> None:
+  """The clip upscaled to `size`; `bits` 10: as 10-bit H.264 (High 10, through PyAV
+  itself: an earlier tree's writer takes 8-bit frames only), its frames upscaled from
+  16-bit copies."""
+  # pylint: disable=g-import-not-at-top
+  import av
+  import numpy as np
+  from experiments import temporal as clip_lib
+  from mixstereo_tf.video import streams
+  clip = [image for image, *_ in clip_lib.make_clip(frames)[:frames]]
+  if bits == 8:
+    with streams.VideoWriter(path, fractions.Fraction(25)) as writer:
+      for index, image in enumerate(clip):
+        writer.write(cv2.resize(image, size, interpolation=cv2.INTER_CUBIC),
+                     fractions.Fraction(index, 25))
+    return
+  with av.open(path, 'w') as out:
+    stream = out.add_stream('libx264', rate=25, options={'crf': '18', 'preset': 'veryfast'})
+    stream.width, stream.height, stream.pix_fmt = *size, 'yuv420p10le'
+    stream.codec_context.colorspace, stream.codec_context.color_range = 1, 1  # As made.
+    for index, image in enumerate(clip):
+      deep = cv2.resize(image.astype(np.uint16) * 257, size, interpolation=cv2.INTER_CUBIC)
+      frame = av.VideoFrame.from_ndarray(deep, format='rgb48le').reformat(
+          format='yuv420p10le', dst_colorspace=1, dst_color_range=1)
+      frame.pts = index
+      out.mux(stream.encode(frame))
+    out.mux(stream.encode(None))
 
 
-def video_speed(method: str, width: int, height: int, frames: int = 12) -> dict:
-  """Frames/s of `unmix_inputs` on a `frames`-frame clip, without and with the prior."""
+def _left_psnr(path: str, size, frames: int) -> float:
+  """Mean RGB PSNR (dB, 8-bit scale) of the left views of side-by-side video `path`
+  against the clip's clean left views upscaled as its frames were, the left 64 columns
+  left out (matches there leave the frame); decoded by PyAV at 16 bits, whatever the
+  package does."""
+  # pylint: disable=g-import-not-at-top
+  import av
+  import numpy as np
+  from experiments import temporal as clip_lib
+  truths = [cv2.resize(left, size, interpolation=cv2.INTER_CUBIC).astype(np.float64)
+            for _, _, _, left, *_ in clip_lib.make_clip(frames)[:frames]]
+  psnr = []
+  with av.open(path) as video:
+    for truth, frame in zip(truths, video.decode(video=0)):
+      view = frame.to_ndarray(format='rgb48le')[:, :size[0]] / 257.0
+      psnr.append(10 * np.log10(255.0 ** 2 / np.mean((view - truth)[:, 64:] ** 2)))
+  return float(np.mean(psnr))
+
+
+def video_speed(method: str, width: int, height: int, frames: int = 12,
+                bits: int = 8) -> dict:
+  """Frames/s of `unmix_inputs` on a `frames`-frame clip (`bits` per sample), without and
+  with the prior, and its left views' PSNR (`_left_psnr`)."""
   # pylint: disable=g-import-not-at-top
   from mixstereo_tf.unmixing import predictors
   from mixstereo_tf.video import temporal
@@ -77,7 +117,7 @@ def video_speed(method: str, width: int, height: int, frames: int = 12) -> dict:
   root = tempfile.mkdtemp()
   try:
     path = os.path.join(root, 'clip.mp4')
-    _write_clip(path, (width, height), frames)
+    _write_clip(path, (width, height), frames, bits)
     unmixer = predictors.build_unmixer(predictors.PredictorConfig(mixture='auto',
                                                                   **METHODS[method]))
     _, decoded = streams.open_video(path)
@@ -93,7 +133,9 @@ def video_speed(method: str, width: int, height: int, frames: int = 12) -> dict:
         raise RuntimeError(f'unmix_inputs: {report}')
       result[name] = {'fps': report.frames_per_second,
                       'unmix_fps': frames / report.unmix_seconds,
-                      'seconds': report.seconds}
+                      'seconds': report.seconds,
+                      'left_psnr': _left_psnr(os.path.join(output_dir, 'clip_sbs.mp4'),
+                                              (width, height), frames)}
     return result
   finally:
     shutil.rmtree(root, ignore_errors=True)

@@ -12,6 +12,7 @@ import time
 from typing import Callable, Dict, List, Optional, TextIO, Tuple
 
 from absl import logging
+import numpy as np
 
 from mixstereo_tf.cli import info_file
 from mixstereo_tf.cli import input_listing
@@ -19,8 +20,10 @@ from mixstereo_tf.cli import media
 from mixstereo_tf.cli import progress
 from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import colormap
+from mixstereo_tf.core import image_range
 from mixstereo_tf.unmixing import mixture_choice
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import encoders
 from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import streams
@@ -51,11 +54,13 @@ def _video_outputs(item: input_listing.MediaItem, output_dir: str, layout: str,
 
 def _frame_images(result: Dict[str, object], layout: str, display: Tuple[float, float],
                   drawn: Tuple[str, ...]) -> Dict[str, object]:
-  """One unmixed frame's images: {output key: uint8 RGB}; colour maps over `display`."""
+  """One unmixed frame's images: {output key: RGB}, the views' (uint16 from a deep video's
+  frame) at their depth, the colour maps (over `display`) and `drawn` formats uint8."""
   images = dict(media.layout_images(result['left'], result['right'], layout))
   images['disparity'] = colormap.colorize(result['disparity_left'], display[1], display[0])
   if drawn:
-    pair = stereo_formats.StereoResult(result['left'], result['right'],
+    pair = stereo_formats.StereoResult(image_range.eight_bits(result['left']),
+                                       image_range.eight_bits(result['right']),
                                        result['disparity_left'], images['disparity'],
                                        display)
     images.update((name, stereo_formats.FORMATS[name].frame(pair)) for name in drawn)
@@ -83,12 +88,15 @@ def record_shot(shots: List[Dict[str, object]], frame: int, info: Dict[str, obje
 
 
 class Opening:
-  """The frame `opening` unmixed: its index in the video, its info, and the call, which
-  the frame pipeline takes for that frame where its hint is the same
-  (`frame_pipeline.Unmixed`), once: its images are not held through the video."""
+  """The frame `opening` unmixed: its index in the video, its info, the bits per sample of
+  the video (`bits`) and of the views made from it (`view_bits`: 16 where the method
+  makes them from a deep video's samples, else 8), and the call, which the frame pipeline
+  takes for that frame where its hint is the same (`frame_pipeline.Unmixed`), once: its
+  images are not held through the video."""
 
-  def __init__(self, index: int, unmixed: frame_pipeline.Unmixed):
-    self.index, self._unmixed = index, unmixed
+  def __init__(self, index: int, unmixed: frame_pipeline.Unmixed, bits: int = 8):
+    self.index, self._unmixed, self.bits = index, unmixed, bits
+    self.view_bits = 16 if np.asarray(unmixed.outputs.get('left', 0)).dtype == np.uint16 else 8
     self.info: Dict[str, object] = dict(unmixed.outputs.get('info', {}))
 
   def take(self, index: int) -> Optional[frame_pipeline.Unmixed]:
@@ -132,8 +140,8 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
                 report, temporal_config: temporal.TemporalConfig,
                 formats: Tuple[str, ...] = (), request: Optional[Dict] = None,
                 opened: Optional[Opening] = None) -> int:
-  """Unmixes every frame of a video into layout, disparity and `formats` videos
-  (resumable, `video.jobs`; side by side and top-bottom tagged so), writes
+  """Unmixes every frame of a video into layout, disparity and `formats` videos (resumable,
+  `video.jobs`; side by side and top-bottom tagged so; views kept above 8 bits), writes
   `<name>_info.json` (with `request`; `opened`'s info, the `opening` frame's, when this
   run resumed) and returns the frames unmixed in this run; `report` gains the seconds
   spent unmixing. Frames go through a `temporal.VideoState` (shots; frames with no
@@ -164,7 +172,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
                       dict(settings, layout=layout, display_range=list(display),
                            temporal=dataclasses.asdict(temporal_config), formats=drawn),
                       video_config, {layout: media.STEREO_MODES[layout]}
-                      if layout in media.STEREO_MODES else {})
+                      if layout in media.STEREO_MODES else {}, _deep_views(layout, opened))
   info_file.begin_outputs(output_dir, item)
   try:
     with pipeline:
@@ -184,7 +192,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
       files=[os.path.basename(path) for path in outputs.values()],
       **({'skipped_formats': skipped} if skipped else {}),
-      **_notes(info, done['frames'], item.path)), request)
+      **_notes(info, done['frames'], item.path, _view_bits(outputs, job, opened))), request)
   return state['rendered']
 
 
@@ -204,7 +212,7 @@ def opening(unmixer: predictors.Unmixer, path: str,
   Raises:
     ValueError: no frame of those scanned shows an anaglyph, naming the video.
   """
-  info, frames = streams.open_video(path)
+  info, frames = streams.open_video(path, deep=True)
   last = None
   try:
     for index, frame in enumerate(frames):
@@ -215,7 +223,8 @@ def opening(unmixer: predictors.Unmixer, path: str,
           **frame_fields(info.chroma_halved))
       try:
         return Opening(index, frame_pipeline.Unmixed(frame.image, hint,
-                                                     unmixer(frame.image, hint=hint)))
+                                                     unmixer(frame.image, hint=hint)),
+                       info.bits)
       except mixture_choice.NoAnaglyphError as e:
         if index + SCAN_STRIDE >= SCAN_FRAMES:
           raise ValueError(f'No frame of the first {SCAN_FRAMES} of {path} looks like an '
@@ -237,11 +246,31 @@ def display_range(unmixer: predictors.Unmixer, opened: Dict[str, object]
   return float(low), float(max(high, low + 1))
 
 
-def _notes(info, frames: int, path: str) -> Dict[str, str]:
+def _deep_views(layout: str, opened: Optional[Opening]) -> Tuple[str, ...]:
+  """The outputs that keep a video's samples of more than 8 bits (`jobs.VideoJob.deep`):
+  the views' (the layout's), where `opened` found such samples and made its views of them."""
+  if not opened or opened.bits <= 8 or opened.view_bits <= 8:
+    return ()
+  return ('left', 'right') if layout == 'separate' else (layout,)
+
+
+def _view_bits(outputs: Dict[str, str], job: jobs.VideoJob,
+               opened: Optional[Opening]) -> Tuple[int, str]:
+  """(Bits per sample of the views' videos, why not more where the video has more): the
+  input's as encoded (`jobs.VideoJob.deep`), else 8."""
+  if job.deep:
+    bits = encoders.encoder_for(outputs[job.deep[0]], bits=16).bits
+    return bits, '' if bits > 8 else "this container's codec has no more"
+  return 8, ('this method makes 8-bit views' if opened and opened.view_bits <= 8
+             else 'read at 8 bits')
+
+
+def _notes(info, frames: int, path: str, view_bits: Tuple[int, str]) -> Dict[str, object]:
   """{'padding': why an output video is a row or column larger than the input}, if it is;
   {'ended_early': ...} (also logged) when the video ended well before the frames its
-  container declares (a cut or damaged file: what decoded is written); {'bit_depth': ...}
-  (also logged) for samples of more than 8 bits, which are unmixed and written at 8."""
+  container declares (a cut or damaged file: what decoded is written); for samples of
+  more than 8 bits {'bit_depth': what was kept of them}, 'views_bit_depth': the views'
+  videos' (`view_bits`: with why not more; logged where it is 8)."""
   notes = {}
   if info.width % 2 or info.height % 2:
     notes['padding'] = (f'{info.width}x{info.height} frames: an output video whose width or '
@@ -252,8 +281,13 @@ def _notes(info, frames: int, path: str) -> Dict[str, str]:
                             'its container declares (a cut or damaged file?); the decoded '
                             'ones are written')
     logging.warning('%s.', notes['ended_early'])
+  bits, short = view_bits
   if info.bits > 8:
-    notes['bit_depth'] = (f'{path} stores {info.bits}-bit samples: it was read, unmixed '
-                          'and written at 8 bits')
-    logging.warning('%s.', notes['bit_depth'])
+    notes['views_bit_depth'] = bits
+    notes['bit_depth'] = f'{path} stores {info.bits}-bit samples: ' + (
+        f'matched at 8 bits, its views made from 16-bit samples and written at {bits} '
+        '(H.264 High 10); the disparity video and other formats at 8' if bits > 8
+        else f'its views were written at 8 bits ({short})')
+    if bits == 8:
+      logging.warning('%s.', notes['bit_depth'])
   return notes

@@ -21,7 +21,7 @@ import fractions
 import json
 import os
 import shutil
-from typing import Callable, Dict, Optional, Union
+from typing import Callable, Dict, Optional, Tuple, Union
 
 import numpy as np
 
@@ -69,12 +69,16 @@ class VideoJob:
     config: segment length.
     stereo_modes: {key: `encoders.STEREO_MODES` name} of the outputs tagged as stereo
       (frame-packing SEI, Matroska StereoMode).
+    deep: the outputs that keep an input's samples of more than 8 bits: such an input's
+      frames reach `render` as uint16 and these outputs are encoded at its bits
+      (`encoders.encoder_for`); the others at 8.
   """
   input_path: str
   outputs: Dict[str, str]
   settings: Dict[str, object]
   config: VideoConfig = VideoConfig()
   stereo_modes: Dict[str, str] = dataclasses.field(default_factory=dict)
+  deep: Tuple[str, ...] = ()
 
   @property
   def folder(self) -> str:
@@ -95,7 +99,8 @@ def _identity(job: VideoJob) -> Dict[str, object]:
           'size': stat.st_size, 'mtime_ns': stat.st_mtime_ns,
           'segment_frames': job.config.segment_frames, 'outputs': sorted(job.outputs),
           'encoder': dataclasses.asdict(encoders.encoder_for(next(iter(job.outputs.values())))),
-          'stereo_modes': job.stereo_modes, 'settings': job.settings}
+          'stereo_modes': job.stereo_modes, 'settings': job.settings,
+          **({'deep': list(job.deep)} if job.deep else {})}
 
 
 def _segment_path(job: VideoJob, key: str, index: int) -> str:
@@ -143,7 +148,8 @@ class _Segment:
     self.writers = {key: streams.VideoWriter(partial_path(_segment_path(job, key, index)),
                                               info.frame_rate, info.time_base,
                                               encoders.encoder_for(
-                                                  path, job.stereo_modes.get(key)),
+                                                  path, job.stereo_modes.get(key),
+                                                  info.bits if key in job.deep else 8),
                                               info.aspect, info.colour)
                     for key, path in job.outputs.items()}
 
@@ -231,7 +237,8 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Rendered],
 
   Args:
     job: the input, outputs and settings.
-    render: uint8 RGB input frame -> {output key: uint8 RGB frame}, or a call returning
+    render: RGB input frame (uint8; uint16 for `job.deep`, `VideoJob`) -> {output key:
+      RGB frame (uint8, or uint16 for a deep output)}, or a call returning
       them (`Rendered`, called on the writer's thread in frame order); a frame's outputs may
       differ in size from each other but not between frames.
     on_start: called with the VideoInfo and the number of frames already done before any
@@ -247,7 +254,7 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Rendered],
   manifest = load_progress(job)
   done = sum(entry['frames'] for entry in manifest['segments'])
   try:
-    info, frames = streams.open_video(job.input_path, skip=done)
+    info, frames = streams.open_video(job.input_path, skip=done, deep=bool(job.deep))
   except ValueError:
     if not manifest['segments']:  # Nothing to resume: no folder left behind.
       shutil.rmtree(job.folder, ignore_errors=True)

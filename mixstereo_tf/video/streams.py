@@ -27,6 +27,7 @@ from absl import logging
 import av
 import numpy as np
 
+from mixstereo_tf.core import image_range
 from mixstereo_tf.video import encoders
 
 Fraction = fractions.Fraction
@@ -58,8 +59,8 @@ class VideoInfo:
       AVColorTransferCharacteristic numbers (2: unspecified): what its RGB values mean.
     chroma_halved: the stream stores colour at half the width or height (4:2:0, 4:2:2,
       nv12: most video), as `hints.FrameHint.chroma_halved` says.
-    bits: the stream's bits per sample (10: HDR and many phones' HEVC); frames are
-      delivered and written at 8 bits.
+    bits: the stream's bits per sample (10: HDR and many phones' HEVC); frames of more
+      than 8 are delivered as uint16 when asked (`open_video(deep=True)`).
   """
   width: int
   height: int
@@ -77,7 +78,8 @@ class VideoInfo:
 
 @dataclasses.dataclass(frozen=True)
 class Frame:
-  """One decoded frame: `image` uint8 RGB [H, W, 3] (None when skipped), `time` in exact
+  """One decoded frame: `image` uint8 RGB [H, W, 3] (uint16, the samples scaled to 0-65535,
+  from a stream of more than 8 bits opened `deep`; None when skipped), `time` in exact
   seconds from the stream's timestamps, `index` from 0 in decoding order."""
   image: Optional[np.ndarray]
   time: Fraction
@@ -85,8 +87,10 @@ class Frame:
 
 
 def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFrame],
-            rate: Fraction, skip: int, quarter_turns: int = 0) -> Iterator[Frame]:
-  """Frames of `decoded`, turned `quarter_turns` x 90 degrees counter-clockwise; those
+            rate: Fraction, skip: int, quarter_turns: int = 0,
+            rgb: str = 'rgb24') -> Iterator[Frame]:
+  """Frames of `decoded` in format `rgb` (rgb24 or rgb48le), turned `quarter_turns` x 90
+  degrees counter-clockwise; those
   before `skip` are not converted to RGB. Frames of another size than the first (a stream
   whose resolution changes: a broadcast, joined clips) are scaled to the first's, as
   FFmpeg's own tools do, with one warning naming where the size changed: every output
@@ -112,7 +116,7 @@ def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFr
       if previous is not None and time <= previous:
         time = previous + 1 / rate
       previous = time
-      image = (frame.to_ndarray(format='rgb24', width=size[0], height=size[1])
+      image = (frame.to_ndarray(format=rgb, width=size[0], height=size[1])
                if index >= skip else None)
       if image is not None and quarter_turns:
         image = np.ascontiguousarray(np.rot90(image, quarter_turns))
@@ -135,8 +139,8 @@ def _display_rotation(frame: av.VideoFrame) -> int:
   return round(getattr(frame, 'rotation', 0) or 0)
 
 
-def open_video(path: str, skip: int = 0,
-               upright: bool = True) -> Tuple[VideoInfo, Iterator[Frame]]:
+def open_video(path: str, skip: int = 0, upright: bool = True,
+               deep: bool = False) -> Tuple[VideoInfo, Iterator[Frame]]:
   """Opens a video: its VideoInfo and an iterator over its frames (`Frame`).
 
   Args:
@@ -146,6 +150,7 @@ def open_video(path: str, skip: int = 0,
       filming in portrait) are turned as a player shows them, so that the eyes of a
       mixture lie side by side as its viewer saw them (`VideoInfo.turned`); False: as
       stored.
+    deep: frames of a stream with more than 8 bits per sample come as uint16 RGB.
 
   Raises:
     ValueError: the file cannot be opened, has no video stream or no decodable frame;
@@ -180,12 +185,13 @@ def open_video(path: str, skip: int = 0,
                    chroma_halved=any(c.width < first.width or c.height < first.height
                                      for c in first.format.components),
                    bits=max(c.bits for c in first.format.components))
-  return info, _frames(container, itertools.chain([first], decoded), rate, skip, turns)
+  rgb = 'rgb48le' if deep and info.bits > 8 else 'rgb24'
+  return info, _frames(container, itertools.chain([first], decoded), rate, skip, turns, rgb)
 
 
 class VideoWriter:
-  """Encodes uint8 RGB frames [H, W, 3] into a video-only file (default encoder: the
-  path's, `encoders.encoder_for`).
+  """Encodes RGB frames [H, W, 3] into a video-only file (default encoder: the path's,
+  `encoders.encoder_for`): uint8, or uint16 (0-65535), kept at the encoder's bits.
 
   The size comes from the first frame; odd sizes are padded by one row / column of edge
   replication (4:2:0 chroma needs even sizes); `aspect` is the sample aspect ratio encoded,
@@ -232,8 +238,11 @@ class VideoWriter:
     pad = ((0, self._stream.height - image.shape[0]), (0, self._stream.width - image.shape[1]),
            (0, 0))
     # `padded` must outlive the encode call: PyAV may wrap the array without copying it.
+    if self.settings.bits == 8:
+      image = image_range.eight_bits(image)
     padded = np.ascontiguousarray(np.pad(image, pad, 'edge'))
-    frame = av.VideoFrame.from_ndarray(padded, format='rgb24')
+    frame = av.VideoFrame.from_ndarray(padded, format='rgb48le' if padded.dtype == np.uint16
+                                       else 'rgb24')
     frame = frame.reformat(format=self.settings.pix_fmt,  # The encoder's, as tagged.
                            dst_colorspace=self.settings.matrix,
                            dst_color_range=self.settings.color_range)

@@ -38,6 +38,7 @@ import cv2
 import numpy as np
 
 from mixstereo_tf.core import hints
+from mixstereo_tf.core import image_range
 
 # What a shot keeps of its deciding frame's detection info (`hints.FrameHint.detection`).
 _DETECTION_KEYS = ('detected', 'confidence', 'also_fits', 'eye_order_score')
@@ -200,7 +201,7 @@ class VideoState:
       self.shot_starts.append(self.frames)
       self.frames += 1
       return hints.FrameHint(fallback_mixture=self.fallback_mixture)
-    current = signature(image, self.config)
+    current = signature(image_range.eight_bits(image), self.config)  # uint16: 10-bit video.
     found = self._signature is not None and is_cut(self._signature, current, self.config)
     if found:
       self.cuts.append(self.frames)

@@ -470,14 +470,82 @@ def test_a_cut_video_is_written_as_far_as_it_decodes_and_says_so(tmp_path):
   assert len(frames) == info['frames']
 
 
-def test_a_10_bit_video_says_it_was_unmixed_at_8_bits():
-  info = streams.VideoInfo(96, 64, fractions.Fraction(12), fractions.Fraction(1, 12), 12, 0, 0,
-                           bits=10)
-  notes = video_files._notes(info, 12, 'hdr.mkv')  # pylint: disable=protected-access
-  assert notes == {'bit_depth': 'hdr.mkv stores 10-bit samples: it was read, unmixed and '
-                                'written at 8 bits'}
-  eight = dataclasses.replace(info, bits=8)
-  assert video_files._notes(eight, 12, 'x.mkv') == {}  # pylint: disable=protected-access
+def _ten_bit_anaglyph_video(path, frames=3):
+  """A red-cyan anaglyph video of 10-bit samples (through PyAV directly: HEVC Main 10, AVI
+  FFV1): its red a smooth ramp of about 500 10-bit levels, green and blue other ramps
+  (smooth: 4:2:0 colour lends the red no texture). Returns the red, uint16 [64, 96]."""
+  y, x = np.mgrid[:64, :96]
+  ramps = [(0.25 + 0.5 * (x + 7 * y) / (95 + 7 * 63)), 0.3 + 0.4 * y / 63, 0.6 - 0.3 * x / 95]
+  image = np.rint(np.dstack(ramps) * 65535).astype(np.uint16)
+  avi = str(path).endswith('.avi')
+  with av.open(str(path), 'w') as out:
+    stream = out.add_stream('ffv1' if avi else 'libx265', rate=12, options={} if avi else {
+        'crf': '4', 'x265-params': 'log-level=error'})
+    stream.width, stream.height, stream.pix_fmt = 96, 64, 'yuv420p10le'
+    for index in range(frames):
+      frame = av.VideoFrame.from_ndarray(image, format='rgb48le')
+      frame = frame.reformat(format='yuv420p10le', dst_colorspace=1, dst_color_range=1)
+      frame.pts = index
+      out.mux(stream.encode(frame))
+    out.mux(stream.encode(None))
+  return image[..., 0]
+
+
+@pytest.mark.parametrize('extension', ['.mp4', '.avi'])
+def test_a_10_bit_video_keeps_its_bits_in_the_views(tmp_path, extension):
+  """A 10-bit video's frames reach the unmixer at 16 bits and its views' video keeps 10
+  (H.264 High 10): the left view's red, the anaglyph's red
+  copied, takes the input's ~500 levels where 8 bits hold 128 of them; the disparity video
+  stays 8-bit H.264. AVI's Motion JPEG has 8 bits: written so, and said."""
+  ramp = _ten_bit_anaglyph_video(tmp_path / f'hdr{extension}')
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', disparity_range=(-4, 4)))
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path / f'hdr{extension}'),
+                                    str(tmp_path / 'out'), media.OutputOptions('sbs'))
+  assert report.failures == []
+  info = json.loads((tmp_path / 'out' / 'hdr_info.json').read_text())
+  sbs = str(tmp_path / 'out' / f'hdr_sbs{extension}')
+  with av.open(sbs) as video:
+    stream = video.streams.video[0]
+    codec, pix_fmt = stream.codec_context.name, stream.codec_context.pix_fmt
+    left = next(video.decode(stream)).to_ndarray(format='rgb48le')[:, :96, 0]
+  levels = len(np.unique(left[:, 8:-8] >> 6))  # In 10-bit steps.
+  error = np.abs(left.astype(float) - ramp)[:, 8:-8] / 64
+  if extension == '.mp4':
+    assert info['views_bit_depth'] == 10 and 'written at 10' in info['bit_depth']
+    assert (codec, pix_fmt) == ('h264', 'yuv420p10le') and levels > 300, (pix_fmt, levels)
+    assert np.median(error) <= 4, np.median(error)  # Two lossy encodes: < 1 8-bit step.
+  else:
+    assert info['views_bit_depth'] == 8 and 'written at 8' in info['bit_depth']
+    assert codec == 'mjpeg' and levels <= 140, levels
+  with av.open(str(tmp_path / 'out' / f'hdr_disparity{extension}')) as video:
+    assert video.streams.video[0].codec_context.pix_fmt in ('yuv420p', 'yuvj420p')
+
+
+def test_a_10_bit_video_whose_method_makes_8_bit_views_says_so(tmp_path):
+  """A method whose views come at 8 bits from 16-bit frames (a single view's models):
+  the video is read at 8 bits after its opening frame, its views' video is 8-bit, and the
+  info says why."""
+  frames = []
+
+  def unmix(image, **hint):
+    del hint
+    frames.append(image.dtype)
+    return {'left': image_range.eight_bits(image), 'right': image_range.eight_bits(image),
+            'info': {}, 'disparity_left': np.zeros(image.shape[:2], np.float32)}
+
+  _ten_bit_anaglyph_video(tmp_path / 'hdr.mkv', frames=2)
+  report = unmix_files.unmix_inputs(predictors.Unmixer(unmix, 'test', 'anaglyph', 8.0),
+                                    str(tmp_path / 'hdr.mkv'), str(tmp_path / 'out'),
+                                    media.OutputOptions('sbs'))
+  assert report.failures == [] and frames[0] == np.uint16  # The opening frame, read deep:
+  assert set(frames[1:]) == {np.dtype(np.uint8)}  # its views are 8-bit, so 8 bits on.
+  info = json.loads((tmp_path / 'out' / 'hdr_info.json').read_text())
+  assert info['views_bit_depth'] == 8
+  assert info['bit_depth'].endswith('its views were written at 8 bits (this method makes '
+                                    '8-bit views)')
+  with av.open(str(tmp_path / 'out' / 'hdr_sbs.mkv')) as video:
+    assert video.streams.video[0].codec_context.pix_fmt == 'yuv420p'
 
 
 def test_an_input_too_large_for_memory_fails_alone(tmp_path):

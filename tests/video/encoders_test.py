@@ -20,3 +20,12 @@ def test_stereo_modes_add_x264_frame_packing_only():
   assert dict(encoders.encoder_for('a.mkv', 'left_right').options)['x264-params'].endswith(
       'frame-packing=3')
   assert encoders.encoder_for('a.avi', 'left_right') == encoders.encoder_for('a.avi')
+
+
+def test_frames_of_more_than_8_bits_get_h264_high_10_with_its_stereo_tag():
+  for path in ('a.mp4', 'a.MOV', 'a.mkv'):
+    deep = encoders.encoder_for(path, 'left_right', bits=10)
+    assert (deep.codec, deep.pix_fmt, deep.bits) == ('libx264', 'yuv420p10le', 10)
+    assert dict(deep.options)['x264-params'].endswith('frame-packing=3')
+  assert encoders.encoder_for('a.mp4').bits == 8
+  assert encoders.encoder_for('a.avi', bits=10) == encoders.encoder_for('a.avi')

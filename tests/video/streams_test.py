@@ -326,6 +326,30 @@ def test_video_info_gives_the_bits_per_sample(tmp_path):
     out.mux(stream.encode(None))
   info, frames = read_all(deep)
   assert info.bits == 10 and frames[0].image.dtype == np.uint8
+  _, wide = streams.open_video(deep, deep=True)
+  wide = [frame.image for frame in wide]
+  assert wide[0].dtype == np.uint16 and len(wide) == 2
+  difference = np.abs(wide[0] / 257.0 - frames[0].image)  # Up to 3.5: swscale's rgb24
+  assert difference.mean() < 1 and difference.max() < 4  # path upsamples colour otherwise.
+  _, eight = streams.open_video(make_video(tmp_path / 'in8.mp4', [pattern(0)]), deep=True)
+  assert next(eight).image.dtype == np.uint8  # An 8-bit stream stays uint8.
+
+
+def test_uint16_frames_keep_10_bits_in_high_10_and_8_in_h264(tmp_path):
+  """The writer takes uint16 frames: a DEEP encoder keeps a ramp's 10-bit levels; an 8-bit
+  one gets them rounded to 8 bits (`image_range.eight_bits`; read back as uint8)."""
+  ramp = np.rint(np.linspace(0.2, 0.8, 64 * 96) * 65535).astype(np.uint16).reshape(64, 96)
+  image = np.dstack([ramp] * 3)
+  levels = {}
+  for name, settings in (('deep.mp4', encoders.DEEP), ('plain.mp4', None)):
+    with streams.VideoWriter(str(tmp_path / name), Fraction(10), encoder=settings) as writer:
+      writer.write(image, Fraction(0))
+    _, frames = streams.open_video(str(tmp_path / name), deep=True)
+    decoded = next(frames).image.astype(np.uint16)
+    decoded = decoded if settings else decoded * 257
+    assert np.abs(decoded.astype(float) - image).max() < 4 * 257, name  # Limited range.
+    levels[name] = len(np.unique(decoded[..., 1] >> 6))
+  assert levels['deep.mp4'] > 400 and levels['plain.mp4'] <= 160, levels
 
 
 def _transport_stream(path, frames, first_index):
