@@ -10,7 +10,7 @@ picture the tools unmix is named, not read silently:
     image is a preview (typed 'Large Thumbnail') is an ordinary photo;
   * a TIFF with several full-resolution pages (a scanner's multi-page file) has its first
     page unmixed, with a warning giving the count (reduced-resolution pages, a TIFF's
-    thumbnails, are not counted).
+    thumbnails, are not counted); a HEIF holding several images (a burst) its primary one.
 """
 
 import contextlib
@@ -31,6 +31,7 @@ _ORIENTATIONS = {2: lambda a: a[:, ::-1], 3: lambda a: a[::-1, ::-1], 4: lambda 
                  5: lambda a: a.transpose(1, 0, 2), 6: lambda a: np.rot90(a, -1),
                  7: lambda a: np.rot90(a, 2).transpose(1, 0, 2), 8: lambda a: np.rot90(a, 1)}
 _ANIMATED = ('.gif', '.webp', '.png', '.apng')
+_HEIF = ('.heic', '.heif', '.hif')
 _MPO_STEREO = 'Multi-Frame Image: (Disparity)'  # Pillow's name of MP type 0x020002.
 _TIFF_REDUCED = 1  # NewSubfileType (tag 254) bit 0: a reduced-resolution copy.
 
@@ -47,7 +48,7 @@ class ImageHeader:
       keep the input's pixel values, so they are in its colour space and carry its profile.
     frames: images the file holds (an animation's frames, an MPO's images, TIFF pages).
     stereo_views: images of an MPO marked as views of a stereo pair (0 for other files).
-    pages: a TIFF's full-resolution pages (1 for other files).
+    pages: a TIFF's full-resolution pages, a HEIF's images (1 for other files).
     chroma_halved: colour stored at half the width or less (`image_io.chroma_halved`).
   """
   orientation: int = 1
@@ -93,7 +94,8 @@ def header(path: str) -> ImageHeader:
       halved = image_io.chroma_halved_of(image, path)
       frames = int(getattr(image, 'n_frames', 1))
       stereo = _stereo_views(image, frames)
-      pages = _tiff_pages(image, frames) if image.format == 'TIFF' and frames > 1 else 1
+      pages = (_tiff_pages(image, frames) if image.format == 'TIFF' and frames > 1 else
+               frames if image.format == 'HEIF' else 1)
   except (OSError, ValueError, SyntaxError, EOFError):
     return ImageHeader()
   return ImageHeader(orientation if orientation in _ORIENTATIONS else 1,
@@ -111,7 +113,10 @@ def _refuse_other_images(path: str, found: ImageHeader) -> None:
     raise ValueError(f'{path} is an animated image ({found.frames} frames); only its first '
                      'frame would be read. Convert it to a video to unmix every frame, e.g. '
                      f'ffmpeg -i {path} -pix_fmt yuv420p out.mp4')
-  if found.pages > 1:
+  if found.pages > 1 and path.lower().endswith(_HEIF):
+    logging.warning('%s holds %d images: only its primary image is unmixed. Convert each '
+                    'to a PNG to unmix the others.', path, found.pages)
+  elif found.pages > 1:
     logging.warning('%s holds %d pages: only the first is unmixed. Split the file (e.g. '
                     'tiffsplit, or convert to one PNG per page) to unmix the others.',
                     path, found.pages)

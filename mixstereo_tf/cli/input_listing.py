@@ -12,7 +12,7 @@ from typing import Collection, Dict, Iterable, Iterator, List, Optional, Sequenc
 from absl import logging
 
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg', '.jfif', '.bmp', '.ppm', '.pgm', '.pnm',
-                    '.tif', '.tiff', '.webp', '.gif')
+                    '.tif', '.tiff', '.webp', '.gif', '.heic', '.heif', '.hif', '.avif')
 VIDEO_EXTENSIONS = ('.mp4', '.m4v', '.avi', '.mov', '.mkv', '.webm', '.ts', '.m2ts', '.mts',
                     '.mpg', '.mpeg', '.wmv', '.flv')
 

@@ -13,8 +13,13 @@ import cv2
 import numpy as np
 from PIL import Image
 from PIL import JpegImagePlugin
+import pillow_heif
 
 from mixstereo_tf.core import image_range
+
+# HEIF / HEIC (phones' default photo format) through Pillow: pillow-heif decodes them and
+# turns them upright by their own transforms (the EXIF orientation it leaves says 1).
+pillow_heif.register_heif_opener()
 
 # Extensions `find_image` swaps: monodepth's KITTI lists name .jpg files, downloads hold .png.
 _SWAP_EXTENSIONS = ('.jpg', '.png')
@@ -36,16 +41,28 @@ TIFF_EXTENSIONS = ('.tif', '.tiff')
 
 
 def _read_with_pillow(path: str) -> Optional[np.ndarray]:
-  """The pixels in OpenCV's channel order, or None when Pillow cannot decode the file."""
+  """The pixels in OpenCV's channel order, or None when Pillow cannot decode the file; a
+  HEIF of more than 8 bits at 16 (`_deep_heif`)."""
   try:
     with Image.open(path) as image:
-      image = image.convert(_PILLOW_MODES.get(image.mode, 'RGB'))
-      array = np.asarray(image)
+      if image.format == 'HEIF' and image.info.get('bit_depth', 8) > 8:
+        array = _deep_heif(path)
+      else:
+        array = np.asarray(image.convert(_PILLOW_MODES.get(image.mode, 'RGB')))
   except (OSError, ValueError, SyntaxError):
     return None
   if array.ndim == 3 and array.shape[2] >= 3:  # RGB(A) -> BGR(A), as cv2.imread.
     array = np.concatenate([array[..., 2::-1], array[..., 3:]], axis=2)
   return np.ascontiguousarray(array)
+
+
+def _deep_heif(path: str) -> np.ndarray:
+  """A HEIF of 10 or 12 bits as uint16 RGB(A), its samples scaled to 0-65535 (pillow-heif
+  gives them shifted left, 1023 -> 65472)."""
+  heif = pillow_heif.open_heif(path, convert_hdr_to_8bit=False)
+  bits = heif.info.get('bit_depth', 10)
+  samples = np.asarray(heif).astype(np.uint32) >> (16 - bits)
+  return ((samples * 65535 + (2 ** bits - 1) // 2) // (2 ** bits - 1)).astype(np.uint16)
 
 
 def _utf8(path: str) -> bool:
@@ -173,7 +190,20 @@ def chroma_halved_of(image: Image.Image, path: str) -> bool:
   """`chroma_halved` of the file at `path`, already open as `image`."""
   if image.format == 'JPEG':
     return JpegImagePlugin.get_sampling(image) in (1, 2)
+  if image.format == 'HEIF':
+    return image.info.get('chroma') in (420, 422)
+  if image.format == 'AVIF':
+    return _av1_halved(path)
   return _lossy_webp(path)
+
+
+def _av1_halved(path: str) -> bool:
+  """Whether an AVIF's AV1 sequence (its 'av1C' box, AV1-ISOBMFF 2.3.3) stores colour at
+  half the width (chroma_subsampling_x); False where the box is not in the first 64 KiB."""
+  with open(path, 'rb') as f:
+    head = f.read(1 << 16)
+  at = head.find(b'av1C')
+  return at >= 0 and len(head) > at + 6 and bool(head[at + 6] & 0x08)
 
 
 def _lossy_webp(path: str) -> bool:

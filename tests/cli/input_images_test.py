@@ -5,6 +5,7 @@ import logging
 import cv2
 import numpy as np
 from PIL import Image
+import pillow_heif
 import pytest
 
 from mixstereo_tf.cli import input_images
@@ -163,6 +164,29 @@ def test_a_multi_page_tiff_unmixes_its_first_page_and_says_so(tmp_path, caplog):
   np.testing.assert_array_equal(image, np.asarray(_picture(0)))
   assert input_images.header(path).pages == 3
   assert 'scans.tif holds 3 pages: only the first is unmixed' in caplog.text
+
+
+def test_a_phone_heic_is_read_upright_and_a_burst_unmixes_its_primary_image(tmp_path, caplog):
+  """pillow-heif turns a HEIC upright by its own transform (saved from EXIF orientation 6)
+  and its EXIF then says 1: the picture is turned once, not twice. A HEIF holding several
+  images (a burst) has its primary one unmixed, with a warning."""
+  y, x = np.mgrid[:16, :24]
+  upright = np.dstack([40 + x * 5, 40 + y * 8, 200 - x * 5]).astype(np.uint8)  # Not square.
+  exif = Image.Exif()
+  exif[0x0112] = 6  # Stored turned: a viewer turns it 90 degrees clockwise.
+  Image.fromarray(np.ascontiguousarray(np.rot90(upright, 1))).save(
+      tmp_path / 'portrait.heic', quality=100, exif=exif.tobytes())
+  read = input_images.read_image(str(tmp_path / 'portrait.heic'))
+  assert read.shape == upright.shape and input_images.header(
+      str(tmp_path / 'portrait.heic')).orientation == 1
+  assert np.abs(read.astype(int) - upright).mean() < 4
+  burst = pillow_heif.from_bytes(mode='RGB', size=(24, 16), data=upright.tobytes())
+  burst.add_frombytes(mode='RGB', size=(24, 16), data=upright[::-1].tobytes())
+  burst.save(str(tmp_path / 'burst.heic'), quality=100)
+  caplog.set_level(logging.WARNING, logger='absl')
+  read = input_images.read_image(str(tmp_path / 'burst.heic'))
+  assert np.abs(read.astype(int) - upright).mean() < 4  # The primary: the first added.
+  assert 'burst.heic holds 2 images: only its primary image is unmixed' in caplog.text
 
 
 def test_reduced_resolution_tiff_pages_are_not_pages(tmp_path, caplog):

@@ -2,7 +2,6 @@
 
 import dataclasses
 import errno
-import fractions
 import io
 import json
 import os
@@ -17,6 +16,7 @@ import cv2
 import imageio_ffmpeg
 import numpy as np
 from PIL import Image
+import pillow_heif
 import pytest
 import tensorflow as tf
 
@@ -39,7 +39,6 @@ from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import unmixer
 from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import jobs
-from mixstereo_tf.video import streams
 from mixstereo_tf.video import temporal
 from tests.unmixing import predictors_test
 from tests.video import streams_test
@@ -421,6 +420,28 @@ def test_a_16_bit_double_image_file_gives_16_bit_views(tmp_path):
   info = json.loads((tmp_path / 'out' / 'double16_info.json').read_text())
   assert info['views_bit_depth'] == 16 and 'bit_depth' not in info
   view = cv2.imread(str(tmp_path / 'out' / 'double16_left.png'), cv2.IMREAD_UNCHANGED)
+  assert view.dtype == np.uint16 and (view % 257 != 0).mean() > 0.9
+
+
+def test_a_10_bit_heic_anaglyph_gives_16_bit_views(tmp_path):
+  """A phone's HEIC is an input (`input_listing`); one of 10 bits is read at 16
+  (`image_io._deep_heif`) and its views restored from those samples, as a 16-bit PNG's."""
+  y, x = np.mgrid[:48, :80]
+  texture = np.random.default_rng(7).random((48, 96))
+  left = np.dstack([0.3 + 0.4 * texture[:, 8:88], 0.2 + 0.3 * x / 80, 0.5 + 0.2 * y / 48])
+  right = np.dstack([0.3 + 0.4 * texture[:, 4:84], 0.2 + 0.3 * x / 80, 0.5 + 0.2 * y / 48])
+  anaglyph = np.rint(np.dstack([left[..., 0], right[..., 1], right[..., 2]]) * 65535)
+  pillow_heif.from_bytes(mode='RGB;16', size=(80, 48),
+                         data=anaglyph.astype(np.uint16).tobytes()).save(
+                             str(tmp_path / 'phone.heic'), quality=-1)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', disparity_range=(0, 8)))
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path), str(tmp_path / 'out'),
+                                    media.OutputOptions('separate'))
+  assert report.failures == [] and report.processed == 1
+  info = json.loads((tmp_path / 'out' / 'phone_info.json').read_text())
+  assert info['views_bit_depth'] == 16 and info['matched_at_colour_resolution']
+  view = cv2.imread(str(tmp_path / 'out' / 'phone_left.png'), cv2.IMREAD_UNCHANGED)
   assert view.dtype == np.uint16 and (view % 257 != 0).mean() > 0.9
 
 

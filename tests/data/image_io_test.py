@@ -8,6 +8,7 @@ import zlib
 
 import numpy as np
 from PIL import Image
+import pillow_heif
 import pytest
 
 from mixstereo_tf.data import image_io
@@ -111,14 +112,38 @@ def test_chroma_halved_names_files_stored_with_half_resolution_colour(tmp_path):
   image = Image.fromarray(np.random.default_rng(0).integers(0, 256, (16, 24, 3), np.uint8))
   saved = {'420.jpg': dict(quality=90), '422.jpg': dict(subsampling=1),
            '444.jpg': dict(subsampling=0), 'lossy.webp': dict(quality=80),
-           'lossless.webp': dict(lossless=True), 'plain.png': {}}
+           'lossless.webp': dict(lossless=True), 'plain.png': {},
+           '420.heic': dict(quality=90), '444.heic': dict(quality=90, chroma=444),
+           '420.avif': dict(quality=90, subsampling='4:2:0'),
+           '444.avif': dict(quality=90, subsampling='4:4:4')}
   for name, options in saved.items():
     image.save(tmp_path / name, **options)
   (tmp_path / 'broken.jpg').write_bytes(b'\xff\xd8 not a jpeg')
   assert {name: image_io.chroma_halved(str(tmp_path / name))
           for name in list(saved) + ['broken.jpg']} == {
               '420.jpg': True, '422.jpg': True, '444.jpg': False, 'lossy.webp': True,
-              'lossless.webp': False, 'plain.png': False, 'broken.jpg': False}
+              'lossless.webp': False, 'plain.png': False, 'broken.jpg': False,
+              '420.heic': True, '444.heic': False, '420.avif': True, '444.avif': False}
+
+
+def test_heif_and_avif_photos_are_read_and_a_10_bit_heif_at_16_bits(tmp_path):
+  """Phones' HEIC (pillow-heif) and AVIF (Pillow) are read as RGB; a 10-bit HEIF as uint16
+  with its samples scaled to 0-65535 (1023 -> 65535), not shifted (1023 -> 65472)."""
+  rgb = np.zeros((16, 24, 3), np.uint8)
+  rgb[:, :12] = (200, 40, 90)
+  rgb[:, 12:] = (30, 160, 220)
+  for name in ('photo.heic', 'photo.avif'):
+    Image.fromarray(rgb).save(tmp_path / name, quality=100)
+    read = image_io.read_image(str(tmp_path / name)).astype(int)
+    away = np.abs(read - rgb)[:, np.r_[2:9, 15:22]]  # From the colour edge (4:2:0).
+    assert read.shape == rgb.shape and away.max() <= 6, (name, away.max())
+  ramp = np.linspace(0.0, 1.0, 16 * 24 * 3).reshape(16, 24, 3)
+  deep = np.rint(ramp * 65535).astype(np.uint16)
+  pillow_heif.from_bytes(mode='RGB;16', size=(24, 16), data=deep.tobytes()).save(
+      str(tmp_path / 'ten.heic'), quality=-1)  # Lossless in YUV, 10 bits.
+  read = image_io.read_raw(str(tmp_path / 'ten.heic'))[..., ::-1]  # BGR, as cv2.imread.
+  assert read.dtype == np.uint16 and read.max() == 65535
+  assert np.abs(read.astype(float) - deep).max() <= 3 * 64  # 3 10-bit steps (via YUV).
 
 
 def test_a_tiff_opencv_cannot_read_is_read_without_opencvs_error_lines(tmp_path, capfd):
