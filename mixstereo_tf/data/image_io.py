@@ -11,6 +11,7 @@ from typing import Optional, Tuple
 
 import cv2
 import numpy as np
+from PIL import features
 from PIL import Image
 from PIL import JpegImagePlugin
 import pillow_heif
@@ -126,7 +127,9 @@ def read_raw(path: str) -> np.ndarray:
   if array is None:
     array = _read_with_pillow(path)
   if array is None:
-    raise ValueError(f'Cannot decode image file: {path}')
+    why = (' (neither this OpenCV nor this Pillow reads AVIF; Pillow does from 11.3 on)'
+           if path.lower().endswith('.avif') and not features.check('avif') else '')
+    raise ValueError(f'Cannot decode image file: {path}{why}')
   return array
 
 

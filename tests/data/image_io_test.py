@@ -126,6 +126,16 @@ def test_chroma_halved_names_files_stored_with_half_resolution_colour(tmp_path):
               '420.heic': True, '444.heic': False, '420.avif': True, '444.avif': False}
 
 
+def test_an_avif_that_this_pillow_cannot_read_says_why(tmp_path, monkeypatch):
+  Image.fromarray(np.zeros((8, 8, 3), np.uint8)).save(tmp_path / 'a.avif')
+  monkeypatch.setattr(image_io.features, 'check', lambda name: False)
+  monkeypatch.setattr(image_io, '_read_with_pillow', lambda path: None)
+  monkeypatch.setattr(image_io.cv2, 'imread', lambda path, flags: None)
+  with pytest.raises(ValueError, match=r'a\.avif \(neither this OpenCV nor this Pillow '
+                     r'reads AVIF; Pillow does from 11\.3 on\)'):
+    image_io.read_raw(str(tmp_path / 'a.avif'))
+
+
 def test_heif_and_avif_photos_are_read_and_a_10_bit_heif_at_16_bits(tmp_path):
   """Phones' HEIC (pillow-heif) and AVIF (Pillow) are read as RGB; a 10-bit HEIF as uint16
   with its samples scaled to 0-65535 (1023 -> 65535), not shifted (1023 -> 65472)."""
