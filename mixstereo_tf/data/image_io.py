@@ -127,7 +127,7 @@ def read_raw(path: str) -> np.ndarray:
   if array is None:
     array = _read_with_pillow(path)
   if array is None:
-    why = (' (neither this OpenCV nor this Pillow reads AVIF; Pillow does from 11.3 on)'
+    why = (' (neither this OpenCV nor this Pillow reads AVIF: newer versions of both do)'
            if path.lower().endswith('.avif') and not features.check('avif') else '')
     raise ValueError(f'Cannot decode image file: {path}{why}')
   return array
