@@ -123,11 +123,13 @@ def _self_match(image, config, weight, costs, prior, prior_window):
                               (matching.min_disparity, matching.max_disparity), prior)
   config = dataclasses.replace(config, matching=dataclasses.replace(
       matching, min_disparity=copy.search[0], max_disparity=copy.search[1]))
-  gray = diplopia_costs.gray_255(copy.image)  # ZNCC's and the echo score's image.
+  echo = config.cepstrum.weight > 0 and (copy.prior is None or config.cepstrum.with_prior)
+  # ZNCC's and the echo score's image (none where a learned stage's costs stand alone).
+  gray = diplopia_costs.gray_255(copy.image) if costs is None or echo else None
   volume = (diplopia_costs.self_matching_volume(gray, config) if costs is None
             else costs(copy.image, config))
   diplopia_costs.penalise_small_lags(volume, config)
-  if copy.prior is None or config.cepstrum.with_prior:  # Its weight 0: add_echo_costs skips.
+  if echo:
     diplopia_cepstrum.add_echo_costs(volume, gray, config.matching.min_disparity,
                                      config.cepstrum)
   if copy.prior is not None:
