@@ -168,11 +168,9 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
     report.unmix_seconds += time.perf_counter() - unmix_start
     return _drawn_when_done(pending, state, layout, display, drawn, shots.started_shot())
 
-  job = jobs.VideoJob(item.path, outputs,
-                      dict(settings, layout=layout, display_range=list(display),
-                           temporal=dataclasses.asdict(temporal_config), formats=drawn),
-                      video_config, {layout: media.STEREO_MODES[layout]}
-                      if layout in media.STEREO_MODES else {}, _deep_views(layout, opened))
+  job = _job(item, outputs, dict(settings, layout=layout, display_range=list(display),
+                                 temporal=dataclasses.asdict(temporal_config), formats=drawn),
+             video_config, layout, opened)
   info_file.begin_outputs(output_dir, item)
   try:
     with pipeline:
@@ -244,6 +242,17 @@ def display_range(unmixer: predictors.Unmixer, opened: Dict[str, object]
   searched = opened.get('disparity_range')
   low, high = searched if searched else (0.0, unmixer.max_disparity)
   return float(low), float(max(high, low + 1))
+
+
+def _job(item: input_listing.MediaItem, outputs: Dict[str, str], settings: Dict[str, object],
+         video_config: jobs.VideoConfig, layout: str, opened: Optional[Opening]
+         ) -> jobs.VideoJob:
+  """A video's job (`jobs.VideoJob`): side by side and top-bottom tagged as stereo, the
+  views kept above 8 bits (`_deep_views`), the disparity's colour map tagged sRGB."""
+  return jobs.VideoJob(item.path, outputs, settings, video_config,
+                       {layout: media.STEREO_MODES[layout]}
+                       if layout in media.STEREO_MODES else {},
+                       _deep_views(layout, opened), ('disparity',))
 
 
 def _deep_views(layout: str, opened: Optional[Opening]) -> Tuple[str, ...]:

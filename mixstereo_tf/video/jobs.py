@@ -35,6 +35,10 @@ Fraction = fractions.Fraction
 # the writer's thread: a frame still being finished, `frame_pipeline`).
 Rendered = Union[Dict[str, np.ndarray], Callable[[], Dict[str, np.ndarray]]]
 MANIFEST = 'manifest.json'
+# (primaries, transfer) of outputs drawn in sRGB colours (`VideoJob.colour_maps`): BT.709's
+# (FFmpeg's AVColorPrimaries / AVColorTransferCharacteristic 1), whose transfer players
+# show as sRGB's.
+SRGB_TAGS = (1, 1)
 _VERSION = 1
 
 
@@ -72,6 +76,9 @@ class VideoJob:
     deep: the outputs that keep an input's samples of more than 8 bits: such an input's
       frames reach `render` as uint16 and these outputs are encoded at its bits
       (`encoders.encoder_for`); the others at 8.
+    colour_maps: the outputs drawn in sRGB colours whatever the input's (a disparity's
+      colour map): tagged BT.709 (`SRGB_TAGS`), not with the input's primaries and
+      transfer, which an HDR input's (BT.2020, HLG or PQ) would make players misshow.
   """
   input_path: str
   outputs: Dict[str, str]
@@ -79,6 +86,7 @@ class VideoJob:
   config: VideoConfig = VideoConfig()
   stereo_modes: Dict[str, str] = dataclasses.field(default_factory=dict)
   deep: Tuple[str, ...] = ()
+  colour_maps: Tuple[str, ...] = ()
 
   @property
   def folder(self) -> str:
@@ -100,7 +108,8 @@ def _identity(job: VideoJob) -> Dict[str, object]:
           'segment_frames': job.config.segment_frames, 'outputs': sorted(job.outputs),
           'encoder': dataclasses.asdict(encoders.encoder_for(next(iter(job.outputs.values())))),
           'stereo_modes': job.stereo_modes, 'settings': job.settings,
-          **({'deep': list(job.deep)} if job.deep else {})}
+          **({'deep': list(job.deep)} if job.deep else {}),
+          **({'colour_maps': list(job.colour_maps)} if job.colour_maps else {})}
 
 
 def _segment_path(job: VideoJob, key: str, index: int) -> str:
@@ -150,7 +159,8 @@ class _Segment:
                                               encoders.encoder_for(
                                                   path, job.stereo_modes.get(key),
                                                   info.bits if key in job.deep else 8),
-                                              info.aspect, info.colour)
+                                              info.aspect, SRGB_TAGS
+                                              if key in job.colour_maps else info.colour)
                     for key, path in job.outputs.items()}
 
   def write(self, frame: streams.Frame, images: Rendered) -> None:

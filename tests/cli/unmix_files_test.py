@@ -491,10 +491,11 @@ def test_a_cut_video_is_written_as_far_as_it_decodes_and_says_so(tmp_path):
   assert len(frames) == info['frames']
 
 
-def _ten_bit_anaglyph_video(path, frames=3):
+def _ten_bit_anaglyph_video(path, frames=3, colour=(2, 2)):
   """A red-cyan anaglyph video of 10-bit samples (through PyAV directly: HEVC Main 10, AVI
   FFV1): its red a smooth ramp of about 500 10-bit levels, green and blue other ramps
-  (smooth: 4:2:0 colour lends the red no texture). Returns the red, uint16 [64, 96]."""
+  (smooth: 4:2:0 colour lends the red no texture), tagged with `colour` (primaries,
+  transfer). Returns the red, uint16 [64, 96]."""
   y, x = np.mgrid[:64, :96]
   ramps = [(0.25 + 0.5 * (x + 7 * y) / (95 + 7 * 63)), 0.3 + 0.4 * y / 63, 0.6 - 0.3 * x / 95]
   image = np.rint(np.dstack(ramps) * 65535).astype(np.uint16)
@@ -503,6 +504,7 @@ def _ten_bit_anaglyph_video(path, frames=3):
     stream = out.add_stream('ffv1' if avi else 'libx265', rate=12, options={} if avi else {
         'crf': '4', 'x265-params': 'log-level=error'})
     stream.width, stream.height, stream.pix_fmt = 96, 64, 'yuv420p10le'
+    stream.codec_context.color_primaries, stream.codec_context.color_trc = colour
     for index in range(frames):
       frame = av.VideoFrame.from_ndarray(image, format='rgb48le')
       frame = frame.reformat(format='yuv420p10le', dst_colorspace=1, dst_color_range=1)
@@ -541,6 +543,25 @@ def test_a_10_bit_video_keeps_its_bits_in_the_views(tmp_path, extension):
     assert codec == 'mjpeg' and levels <= 140, levels
   with av.open(str(tmp_path / 'out' / f'hdr_disparity{extension}')) as video:
     assert video.streams.video[0].codec_context.pix_fmt in ('yuv420p', 'yuvj420p')
+
+
+def test_an_hdr_videos_views_keep_its_colour_tags_and_its_colour_map_is_tagged_srgb(
+    tmp_path):
+  """An HLG video (BT.2020 primaries, transfer 18): its views' RGB is the input's, so they
+  keep its tags; the disparity's colour map is drawn in sRGB colours, which the input's
+  tags made HDR players misshow: tagged BT.709 (`jobs.SRGB_TAGS`)."""
+  _ten_bit_anaglyph_video(tmp_path / 'hlg.mp4', frames=2, colour=(9, 18))
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', disparity_range=(-4, 4)))
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path / 'hlg.mp4'), str(tmp_path / 'out'),
+                                    media.OutputOptions('sbs', formats=('rgbd',)))
+  assert report.failures == []
+  tags = {}
+  for key in ('sbs', 'rgbd', 'disparity'):
+    with av.open(str(tmp_path / 'out' / f'hlg_{key}.mp4')) as video:
+      context = video.streams.video[0].codec_context
+      tags[key] = (int(context.color_primaries), int(context.color_trc))
+  assert tags == {'sbs': (9, 18), 'rgbd': (9, 18), 'disparity': jobs.SRGB_TAGS}
 
 
 def test_a_10_bit_video_whose_method_makes_8_bit_views_says_so(tmp_path):
