@@ -58,12 +58,12 @@ HEIGHT, WIDTH, MAX_DISPARITY, NOISE = 180, 320, 32, 2.0
 SHOTS = ((101, 2), (202, 1))  # (scene seed, pan px per frame).
 VARIANTS = (
     ('per frame (--notemporal)', temporal.TemporalConfig(enabled=False)),
-    ('per shot, no prior', temporal.TemporalConfig(use_prior=False)),
+    ('per shot, no prior (--notemporal_prior)', temporal.TemporalConfig(use_prior=False)),
     ('per shot + prior (radius 1, spread 2; default)', temporal.TemporalConfig()),
     ('per shot + prior (radius 4, spread 4)',
      temporal.TemporalConfig(prior_radius=4, prior_spread=4)),
 )
-TIMED = (0, 2)  # The variants timed at SIZES: per frame and the default.
+TIMED = (0, 1, 2)  # The variants timed at SIZES: per frame, per shot without and with prior.
 METHODS = ('classical', 'model')  # The model runs the TIMED variants only.
 SIZES = ((1280, 720), (1920, 1080))
 

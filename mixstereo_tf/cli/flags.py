@@ -73,7 +73,8 @@ def define_output_dir() -> None:
 @functools.lru_cache(maxsize=None)
 def define_output_options() -> None:
   """How results are written (`media.OutputOptions`): --layout, --max_display_disparity,
-  --segment_frames, --temporal, --output_format (mixstereo-unmix and mixstereo-batch)."""
+  --segment_frames, --temporal, --temporal_prior, --output_format (mixstereo-unmix and
+  mixstereo-batch)."""
   options = defaults(media.OutputOptions)
   flags.DEFINE_enum('layout', options['layout'], media.LAYOUTS,
                     'Views as two files (separate), side by side (sbs), side by side at '
@@ -91,6 +92,13 @@ def define_output_options() -> None:
                        '(scene cuts found from colour histograms) and search each frame '
                        "around the previous frame's disparity (classical method); "
                        '--notemporal unmixes every frame alone.')
+  flags.DEFINE_boolean('temporal_prior', temporal.TemporalConfig.use_prior,
+                       "With --temporal: search each frame around the previous frame's "
+                       'disparities (steadier disparities, faster; the learned matching '
+                       "stage then matches a shot's first frame and the census matcher the "
+                       'others); --notemporal_prior matches every frame whole (the learned '
+                       'stage on each: better disparities and views, slower), the '
+                       "shot's encoding and range kept (experiments/results/temporal.md).")
   flags.DEFINE_multi_enum('output_format', list(options['formats']),
                           stereo_formats.FORMAT_NAMES,
                           'Also write the pair in this stereo format (repeat for several): ' +
@@ -110,7 +118,8 @@ def output_options(config: Optional[predictors.PredictorConfig] = None
   return media.OutputOptions(
       layout=FLAGS.layout, max_display_disparity=FLAGS.max_display_disparity,
       video_config=jobs.VideoConfig(FLAGS.segment_frames), settings=settings,
-      temporal_config=temporal.TemporalConfig(enabled=FLAGS.temporal),
+      temporal_config=temporal.TemporalConfig(enabled=FLAGS.temporal,
+                                              use_prior=FLAGS.temporal_prior),
       formats=tuple(FLAGS.output_format))
 
 

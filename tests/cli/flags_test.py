@@ -122,3 +122,12 @@ def test_max_network_pixels_given_for_a_method_without_a_network_is_refused():
         cli_flags.predictor_config()
     finally:
       flags.FLAGS['method'].unparse()
+
+
+def test_temporal_prior_reaches_the_videos_temporal_config():
+  cli_flags.define_output_options()
+  with _parsing('temporal_prior') as temporal_prior:
+    assert cli_flags.output_options().temporal_config.use_prior  # The default: the prior.
+    temporal_prior.parse(False)
+    config = cli_flags.output_options().temporal_config
+    assert config.enabled and not config.use_prior
