@@ -90,11 +90,10 @@ def _frames(container: av.container.InputContainer, decoded: Iterator[av.VideoFr
             rate: Fraction, skip: int, quarter_turns: int = 0,
             rgb: str = 'rgb24') -> Iterator[Frame]:
   """Frames of `decoded` in format `rgb` (rgb24 or rgb48le), turned `quarter_turns` x 90
-  degrees counter-clockwise; those
-  before `skip` are not converted to RGB. Frames of another size than the first (a stream
-  whose resolution changes: a broadcast, joined clips) are scaled to the first's, as
-  FFmpeg's own tools do, with one warning naming where the size changed: every output
-  keeps one size.
+  degrees counter-clockwise; those before `skip` are not converted to RGB. Frames of
+  another size than the first (a stream whose resolution changes: a broadcast, joined
+  clips) are scaled to the first's, as FFmpeg's own tools do, with one warning naming
+  where the size changed: every output keeps one size.
 
   Times come from the frames' pts (when missing: the previous time + 1 / rate) and are
   made strictly increasing, as every encoder needs. Closes the container at the end.
