@@ -199,8 +199,9 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
     image: a uint8 (or uint16) RGB [H, W, 3] (alpha of RGBA dropped) or gray [H, W] array
       (OpenCV's cv2.imread / imdecode give BGR: pass `bgr[..., ::-1]`), a PIL image (as
       RGB, EXIF orientation applied, 16-bit gray as uint16), or the path (str, bytes,
-      PathLike) of an image file (read like the CLI reads it: gray files become RGB,
-      16-bit ones uint16, EXIF orientation applied); videos: the `mixstereo-unmix` tool.
+      PathLike) of an image file (read like the CLI reads it, HEIC and AVIF too: gray
+      files become RGB, 16-bit ones and 10- or 12-bit HEICs uint16, EXIF orientation
+      applied); videos: the `mixstereo-unmix` tool.
     mixture: the image's mixture operator (`mixstereo_tf.core.mixtures` names, e.g. 'gray',
       'diplopia'); 'auto' detects an anaglyph's encoding; None: the model's own.
     method: 'model' (a network), 'classical' (training-free) or 'sgbm' (OpenCV's, a peer).

@@ -120,6 +120,15 @@ def test_a_pair_of_fractional_bounds_widens_as_on_the_command_line(anaglyph):
   assert out.info['disparity_range'] == [1, 9]
 
 
+def test_a_heic_path_is_read_as_the_cli_reads_it(anaglyph, tmp_path):
+  """A phone's HEIC (pillow-heif): read, detected and matched at colour resolution."""
+  image = anaglyph[0][:64, 150:230]
+  PIL.Image.fromarray(image).save(tmp_path / 'phone.heic', quality=100)
+  read = mixstereo_tf.unmix(str(tmp_path / 'phone.heic'), method='classical')
+  assert read.left.shape == image.shape and read.info['mixture'] == 'gray'  # As drawn.
+  assert read.info['matched_at_colour_resolution']
+
+
 def test_a_folder_is_no_image_file(tmp_path):
   with pytest.raises(ValueError, match='is a folder, not an image file'):
     mixstereo_tf.unmix(str(tmp_path))
