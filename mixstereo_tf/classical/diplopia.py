@@ -27,6 +27,7 @@ Ambiguity: (L, R, d) and (R, L, -d) give the same symmetric average; positive di
 import dataclasses
 from typing import Callable, Dict, Optional, Tuple, Union
 
+from absl import logging
 import numpy as np
 
 from mixstereo_tf.classical import diplopia_cepstrum
@@ -117,7 +118,8 @@ def check_size(shape: Tuple[int, ...], config: DiplopiaConfig) -> None:
 
 def _self_match(image, config, weight, costs, prior, prior_window):
   """Step 2 and the weight on the copy reduced to `config.max_width` (`working_scale`):
-  ({'disparity_left', 'disparity_right'} at full size, the a used)."""
+  ({'disparity_left', 'disparity_right'} at full size, (the a used, a note or None):
+  `diplopia_layers.resolve_weight`)."""
   matching = config.matching
   copy = working_scale.reduce(image, working_scale.factor(image.shape[1], config.max_width),
                               (matching.min_disparity, matching.max_disparity), prior)
@@ -139,7 +141,9 @@ def _self_match(image, config, weight, costs, prior, prior_window):
                                      max_strip_mib=config.max_strip_mib)
   del volume  # H x W x D bytes, not held through the layer solve.
   weight = diplopia_layers.resolve_weight(weight, copy.image, matched['disparity_left'],
-                                          matched['consistent_left'])
+                                          matched['consistent_left'])  # (a, note).
+  if weight[1]:
+    logging.warning('--mixing_weight=auto: %s.', weight[1])
   return {key: working_scale.enlarge(matched[key], image.shape[:2], copy.scale)
           for key in ('disparity_left', 'disparity_right')}, weight
 
@@ -190,7 +194,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     'left', 'right': uint8 [H, W, 3] (uint16 with a views_image); 'right_warped': the
     left layer sampled at x + d_R, as 'right' (`separate_layers`); 'disparity_left',
     'disparity_right': float32 [H, W], pixels, positive; 'disparity_range': the (min, max)
-    searched; 'mixing_weight': the a used.
+    searched; 'mixing_weight': the a used; 'mixing_weight_note' where 'auto' found no
+    clear echo and used 1/2 (`diplopia_layers.NO_ECHO`).
 
   Raises:
     ValueError: a range with min < 1 or min >= max, no lag of it within the image, or a
@@ -201,7 +206,8 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
   if views_image is not None and np.shape(views_image) != image.shape:
     raise ValueError(f'views_image has shape {np.shape(views_image)}, the mixture '
                      f'{image.shape}: it must be the same image, stored at 16 bits.')
-  matched, weight = _self_match(image, config, weight, costs, prior, prior_window)
+  matched, (weight, weight_note) = _self_match(image, config, weight, costs, prior,
+                                              prior_window)
   if on_disparity is not None:
     on_disparity(dict(matched))
   depth = np.uint8 if views_image is None else np.asarray(views_image).dtype
@@ -213,4 +219,13 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
           'disparity_left': matched['disparity_left'],
           'disparity_right': matched['disparity_right'],
           'disparity_range': (config.matching.min_disparity, config.matching.max_disparity),
-          'mixing_weight': weight}
+          'mixing_weight': weight,
+          **({'mixing_weight_note': weight_note} if weight_note else {})}
+
+
+def weight_record(out: Dict[str, object]) -> Dict[str, object]:
+  """What an info file records of `unmix_diplopia`'s weight: 'mixing_weight' (rounded to
+  3 decimals) and its 'mixing_weight_note' where it has one."""
+  note = out.get('mixing_weight_note')
+  return {'mixing_weight': round(float(out['mixing_weight']), 3),
+          **({'mixing_weight_note': note} if note else {})}

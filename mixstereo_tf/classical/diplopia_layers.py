@@ -30,7 +30,7 @@ for a and 1 - a.
 
 import dataclasses
 import math
-from typing import Dict, Tuple
+from typing import Dict, Optional, Tuple
 
 import cv2
 import numpy as np
@@ -211,7 +211,7 @@ def _lagged(values: np.ndarray, lag: np.ndarray):
 
 def estimate_weight(mixture01: np.ndarray, d_left: np.ndarray, consistent: np.ndarray,
                     quantile: float = 0.9, isolation: float = 0.25, min_lag: int = 5,
-                    min_pairs: int = 30) -> float:
+                    min_pairs: int = 30, fallback: Optional[float] = 0.5) -> Optional[float]:
   """The left view's weight a of a double image (module docstring).
 
   Pairs: consistent left pixels x with d = round(d_L(x)) >= `min_lag` (nearer copies'
@@ -226,10 +226,10 @@ def estimate_weight(mixture01: np.ndarray, d_left: np.ndarray, consistent: np.nd
     d_left: float [H, W], pixels, positive: left pixel x matches right pixel x - d_L.
     consistent: bool [H, W], left pixels whose disparity passed the left-right check.
     quantile, isolation, min_lag: the pairs' selection (above).
-    min_pairs: with fewer pairs the image shows no clear echo: 1/2.
+    min_pairs: with fewer pairs the image shows no clear echo: `fallback` is returned.
 
   Returns:
-    a in [0.05, 0.95].
+    a in [0.05, 0.95], or `fallback`.
   """
   gray = np.asarray(mixture01, np.float32)
   gray = gray.mean(axis=-1) if gray.ndim == 3 else gray
@@ -244,7 +244,7 @@ def estimate_weight(mixture01: np.ndarray, d_left: np.ndarray, consistent: np.nd
             (here + there >= np.quantile(here, quantile)) & (grad * echo > 0) &
             (np.abs(after) < isolation * weaker) & (np.abs(before) < isolation * weaker))
   if np.count_nonzero(chosen) < min_pairs:
-    return 0.5
+    return fallback
   ratio = here[chosen] / (here[chosen] + there[chosen])
   counts, _ = np.histogram(ratio, bins=90, range=(0.05, 0.95), weights=weaker[chosen])
   kernel = np.exp(-0.5 * (np.arange(-8, 9) / 3.0) ** 2)
@@ -252,14 +252,19 @@ def estimate_weight(mixture01: np.ndarray, d_left: np.ndarray, consistent: np.nd
 
 
 AUTO = 'auto'  # A mixing weight estimated from the image (`estimate_weight`).
+# Said where AUTO found too few echo pairs to estimate a from (`resolve_weight`).
+NO_ECHO = ('no clear echo to estimate it from (too few isolated echo pairs): 1/2 used; '
+           'name the weight (--mixing_weight) if known')
 
 
 def resolve_weight(weight, mixture01: np.ndarray, d_left: np.ndarray,
-                   consistent: np.ndarray) -> float:
-  """The weight a to separate with: None -> 1/2 (`--mixture=diplopia` exactly), AUTO ->
-  `estimate_weight`, a number in (0, 1) -> itself (ValueError otherwise)."""
+                   consistent: np.ndarray) -> Tuple[float, Optional[str]]:
+  """(The weight a to separate with, a note or None): None -> 1/2 (`--mixture=diplopia`
+  exactly), AUTO -> `estimate_weight` (noted NO_ECHO where it found too few pairs and fell
+  back to 1/2), a number in (0, 1) -> itself (ValueError otherwise)."""
   if weight is None:
-    return 0.5
-  if weight == AUTO:
-    return estimate_weight(mixture01, d_left, consistent)
-  return check_weight(weight)
+    return 0.5, None
+  if weight != AUTO:
+    return check_weight(weight), None
+  found = estimate_weight(mixture01, d_left, consistent, fallback=None)
+  return (0.5, NO_ECHO) if found is None else (found, None)

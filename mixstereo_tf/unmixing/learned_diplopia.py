@@ -101,5 +101,5 @@ def learned_unmix(echo: Echo, image: np.ndarray, name: str, search: Tuple[int, i
                                 on_disparity=hint.on_disparity,
                                 views_image=hint.stored_image)
   outputs = {key: out[key] for key in _KEYS}
-  outputs['info'] = {'mixing_weight': round(out['mixing_weight'], 3)}
+  outputs['info'] = diplopia.weight_record(out)
   return outputs

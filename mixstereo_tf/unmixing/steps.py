@@ -32,6 +32,7 @@ from absl import logging
 import numpy as np
 import tensorflow as tf
 
+from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import sgbm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
@@ -123,7 +124,7 @@ def classical_unmix(image: np.ndarray, name: str, search: Range,
   keys = ('left', 'right', 'right_warped', 'disparity_left', 'disparity_right', 'consistent_left')
   outputs = {key: out[key] for key in keys if key in out}
   if 'mixing_weight' in out:  # Double images: the weight a the layers were separated with.
-    outputs['info'] = {'mixing_weight': round(float(out['mixing_weight']), 3)}
+    outputs['info'] = diplopia.weight_record(out)
   return outputs
 
 

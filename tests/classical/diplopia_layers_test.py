@@ -54,9 +54,12 @@ def test_resolve_weight_and_bad_weights():
   left, right = _steps_pair()
   mixture = 0.6 * left + 0.4 * right
   args = (mixture, np.full((_H, _W), float(_D)), np.ones((_H, _W), bool))
-  assert diplopia_layers.resolve_weight(None, *args) == 0.5
-  assert diplopia_layers.resolve_weight(0.25, *args) == 0.25
-  assert diplopia_layers.resolve_weight('auto', *args) == pytest.approx(0.6, abs=0.03)
+  assert diplopia_layers.resolve_weight(None, *args) == (0.5, None)
+  assert diplopia_layers.resolve_weight(0.25, *args) == (0.25, None)
+  found, note = diplopia_layers.resolve_weight('auto', *args)
+  assert found == pytest.approx(0.6, abs=0.03) and note is None
+  flat = (np.full_like(mixture, 0.5), *args[1:])  # No edge, no echo: 1/2, and said.
+  assert diplopia_layers.resolve_weight('auto', *flat) == (0.5, diplopia_layers.NO_ECHO)
   for bad in (0.0, 1.0, -0.2):
     with pytest.raises(ValueError, match='mixing weight'):
       diplopia_layers.resolve_weight(bad, *args)
