@@ -140,12 +140,12 @@ def _self_match(image, config, weight, costs, prior, prior_window):
                                      threads=workers.usable_cpus(0),
                                      max_strip_mib=config.max_strip_mib)
   del volume  # H x W x D bytes, not held through the layer solve.
-  weight = diplopia_layers.resolve_weight(weight, copy.image, matched['disparity_left'],
-                                          matched['consistent_left'])  # (a, note).
-  if weight[1]:
-    logging.warning('--mixing_weight=auto: %s.', weight[1])
+  resolved = diplopia_layers.resolve_weight(weight, copy.image, matched['disparity_left'],
+                                            matched['consistent_left'])  # (a, note).
+  if resolved[1]:
+    logging.warning('--mixing_weight=auto: %s.', resolved[1])
   return {key: working_scale.enlarge(matched[key], image.shape[:2], copy.scale)
-          for key in ('disparity_left', 'disparity_right')}, weight
+          for key in ('disparity_left', 'disparity_right')}, resolved
 
 
 def _searching(config: DiplopiaConfig, disparity_range: Optional[Tuple[int, int]]
