@@ -90,7 +90,7 @@ def define_output_options() -> None:
   flags.DEFINE_boolean('temporal', temporal.TemporalConfig.enabled,
                        'Videos: decide the encoding and the disparity range once per shot '
                        '(scene cuts found from colour histograms) and search each frame '
-                       "around the previous frame's disparity (classical method); "
+                       "around the previous frame's disparity, moved with the camera; "
                        '--notemporal unmixes every frame alone.')
   flags.DEFINE_boolean('temporal_prior', temporal.TemporalConfig.use_prior,
                        "With --temporal: search each frame around the previous frame's "

@@ -13,7 +13,8 @@ change and consecutive disparities are close, so `VideoState` keeps, per shot:
     prior (the classical matcher searches around it, `matcher.match(..., prior)`; a double
     image's self-matching penalises lags away from it, `diplopia_costs.add_prior`), except where
     that frame's match failed the left-right check (NaN: those pixels search the valid
-    prior's range nearby, or the whole range where none is near).
+    prior's range nearby, or the whole range where none is near), and moved with the
+    camera where the two frames differ by a translation (`video.motion`).
 Everything is reset at a scene cut. A cut is found between consecutive frames when the
 distance of their colour histograms exceeds `TemporalConfig.cut_threshold`
 (`histogram_distance`): per channel, 16-bin histograms of a copy at most 160 px wide,
@@ -39,6 +40,7 @@ import numpy as np
 
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
+from mixstereo_tf.video import motion as motion_lib
 
 # What a shot keeps of its deciding frame's detection info (`hints.FrameHint.detection`).
 _DETECTION_KEYS = ('detected', 'confidence', 'also_fits', 'eye_order_score')
@@ -80,6 +82,7 @@ class TemporalConfig:
     settle_every: a shot whose encoding also fits a larger one (`hints.FrameHint.may_be`)
       is detected again on every settle_every-th frame (a detection costs about half a
       720p frame's unmixing, and such frames are waited for whole); 1: every frame.
+    motion: the prior follows the camera's frame-to-frame translation (`video.motion`).
   """
   enabled: bool = True
   cut_threshold: float = 0.3
@@ -93,6 +96,7 @@ class TemporalConfig:
   prior_spread: int = 2
   first_frame_cells: int = 20_000_000
   settle_every: int = 4
+  motion: motion_lib.MotionConfig = motion_lib.MotionConfig()
 
   def __post_init__(self):
     if not 0.0 < self.soft_cut_threshold <= self.cut_threshold < 1.0:
@@ -192,6 +196,7 @@ class VideoState:
     self._signature = None
     self._shot: Dict[str, object] = {}
     self._prior: Optional[np.ndarray] = None
+    self._motion_copy: Optional[np.ndarray] = None
 
   def begin(self, image: np.ndarray, cut: bool = False) -> hints.FrameHint:
     """The hint for the next frame; `cut=True` starts a new shot whatever the histograms
@@ -212,9 +217,7 @@ class VideoState:
     settling = (self.frames - self.shot_starts[-1]) % self.config.settle_every == 0
     self._signature = current
     self.frames += 1
-    prior = self._prior if self.config.use_prior else None
-    if prior is not None and prior.shape != image.shape[:2]:
-      prior = None
+    prior = self._moved_prior(image) if self.config.use_prior else None
     return hints.FrameHint(mixture=self._shot.get('mixture'),
                      may_be=self._shot.get('may_be') if settling else None,
                      detection=self._shot.get('detection'),
@@ -224,6 +227,20 @@ class VideoState:
                      full_search_cells=self.config.first_frame_cells if starts else None,
                      mixing_weight=self._shot.get('mixing_weight'),
                      fallback_mixture=self.fallback_mixture)
+
+  def _moved_prior(self, image: np.ndarray) -> Optional[np.ndarray]:
+    """The previous frame's disparity as this frame's prior (None: none, or another
+    shape), moved with the camera where `config.motion` finds a translation."""
+    prior, moves = self._prior, self.config.motion
+    if prior is not None and prior.shape != image.shape[:2]:
+      prior = None
+    if not moves.enabled:
+      return prior
+    previous, self._motion_copy = self._motion_copy, motion_lib.motion_copy(image, moves.width)
+    if prior is None or previous is None or previous.shape != self._motion_copy.shape:
+      return prior
+    shift = motion_lib.global_shift(previous, self._motion_copy, image.shape[1], moves)
+    return prior if not shift or shift == (0, 0) else motion_lib.shift_map(prior, *shift)
 
   def started_shot(self) -> bool:
     """Whether the frame begun last started a shot (a scene cut, the first frame or

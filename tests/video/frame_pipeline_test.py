@@ -10,6 +10,7 @@ from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import diplopia
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.video import frame_pipeline
+from mixstereo_tf.video import motion
 from mixstereo_tf.video import temporal
 from tests.unmixing import eye_order_test
 from tests.video import temporal_test
@@ -167,7 +168,9 @@ def test_side_by_side_frames_give_the_outputs_of_one_at_a_time(method, mixture, 
     priors.append(hint.prior)
     return unmixer(image, hint=hint)
 
-  config = temporal.TemporalConfig(enabled=not alone)
+  # The prior as reported, not moved with the camera (`video.motion`: its own tests).
+  config = temporal.TemporalConfig(enabled=not alone,
+                                  motion=motion.MotionConfig(enabled=False))
   single = _one_at_a_time(recording, frames, config)
   module, name = (diplopia, 'unmix_diplopia') if mixture == 'diplopia' else (
       anaglyph, 'unmix_anaglyph')

@@ -15,6 +15,7 @@ from mixstereo_tf.data import texture_atlas
 from mixstereo_tf.unmixing import detection
 from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.video import motion
 from mixstereo_tf.video import temporal
 from tests.unmixing import eye_order_test
 
@@ -151,9 +152,10 @@ def test_prior_is_the_previous_disparity_and_none_after_a_cut(two_shots, monkeyp
   assert priors[0] is None and priors[7] is None
   for index in list(range(1, 7)) + list(range(8, 12)):
     previous = outputs[index - 1]
-    # NaN (search everything) where the previous match failed the left-right check.
-    np.testing.assert_array_equal(priors[index], np.where(
-        previous['consistent_left'], previous['disparity_left'], np.nan))
+    # NaN (search everything) where the previous match failed the left-right check, and
+    # moved with the camera's pan (the frame shows at x what the previous one did at x + 2).
+    np.testing.assert_array_equal(priors[index], motion.shift_map(np.where(
+        previous['consistent_left'], previous['disparity_left'], np.nan), -PAN, 0))
   assert any(np.isnan(prior).any() for prior in priors[1:7])
   assert [o['info']['prior'] for o in outputs] == [i not in (0, 7) for i in range(12)]
   # A shot's first frame (only) gets the coarse-to-fine threshold of its full search.
