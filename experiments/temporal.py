@@ -15,8 +15,9 @@ which matches a shot's first frame and leaves the others to the census matcher a
 prior; per frame and per shot + prior only):
   * per frame: today's behaviour (encoding, range and disparity of each frame alone);
   * per shot: encoding and range once per shot (`temporal.VideoState`), no prior;
-  * per shot + prior: also the previous frame's disparity as the matcher's prior, with
-    `TemporalConfig`'s narrow window and with the still-image window (MatcherConfig's).
+  * per shot + prior: also the previous frame's disparity as the matcher's prior (moved
+    with the camera's pan since 2026-11-29, `video.motion`), with `TemporalConfig`'s narrow
+    window and with the still-image window (MatcherConfig's).
 Flicker: mean absolute change between consecutive frames of a shot, motion-compensated
 (the known pan), of the left disparity (px) and of the restored left view (levels 0..255),
 on pixels whose ground-truth disparity and clean colour do not change and whose match lies
