@@ -29,12 +29,10 @@ SIZE, CROP = (1400, 800), (slice(40, 760), slice(60, 1340))
 
 
 def _peak(first, second):
-  """((dx, dy) in frame pixels, peak) of two 1280x720 frames."""
+  """((dx, dy) in frame pixels, peak) of two 1280x720 frames (`motion.translation`)."""
   copies = [motion.motion_copy(np.clip(f, 0, 255).astype(np.uint8), 320)
             for f in (first, second)]
-  window = cv2.createHanningWindow(copies[0].shape[::-1], cv2.CV_32F)
-  (dx, dy), peak = cv2.phaseCorrelate(*copies, window)
-  return (dx * 4, dy * 4), peak
+  return motion.translation(*copies, frame_width=1280)
 
 
 def _degraded(rng, image):

@@ -1,6 +1,7 @@
 """Tests of the prior following the camera (video.motion): the shift's sign and size, the
 moved map, refusals, and VideoState handing the moved prior on."""
 
+import cv2
 import numpy as np
 import pytest
 from skimage import data
@@ -34,6 +35,24 @@ def test_unrelated_frames_give_no_shift():
   assert motion.global_shift(first, second, 256) is None
 
 
+@pytest.mark.parametrize('bars, kept', [(None, -8), (0.0, -7)])
+def test_black_bars_do_not_pull_the_shift_towards_none(bars, kept):
+  """Pillarbox bars' static edges pull a pan of 8 px to 7 when they are kept
+  (border_level 0); left out (the default), the pan is found."""
+  image = cv2.resize(data.astronaut(), (1400, 800), interpolation=cv2.INTER_CUBIC)
+  frames = [image[40:760, 60:1340].copy(), image[40:760, 68:1348].copy()]
+  for frame in frames:
+    frame[:, :160], frame[:, -160:] = 0, 0
+  config = motion.MotionConfig() if bars is None else motion.MotionConfig(border_level=bars)
+  copies = [motion.motion_copy(frame, 320) for frame in frames]
+  assert motion.global_shift(*copies, frame_width=1280, config=config) == (kept, 0)
+
+
+def test_a_black_frame_gives_no_shift():
+  black = np.zeros((150, 200), np.float32)
+  assert motion.global_shift(black, black, 400) is None
+
+
 def test_the_moved_map_is_the_shifted_values_with_nan_where_nothing_was_seen():
   values = np.arange(12, dtype=np.float32).reshape(3, 4)
   moved = motion.shift_map(values, 1, -1)  # out[y, x] = values[y + 1, x - 1].
@@ -48,6 +67,8 @@ def test_a_bad_config_is_refused():
     motion.MotionConfig(width=4)
   with pytest.raises(ValueError, match='min_response'):
     motion.MotionConfig(min_response=1.0)
+  with pytest.raises(ValueError, match='border_level'):
+    motion.MotionConfig(border_level=-0.1)
 
 
 @pytest.mark.parametrize('enabled', [True, False])
