@@ -73,8 +73,8 @@ def define_output_dir() -> None:
 @functools.lru_cache(maxsize=None)
 def define_output_options() -> None:
   """How results are written (`media.OutputOptions`): --layout, --max_display_disparity,
-  --segment_frames, --temporal, --temporal_prior, --output_format (mixstereo-unmix and
-  mixstereo-batch)."""
+  --segment_frames, --keep_video_bits, --temporal, --temporal_prior, --output_format
+  (mixstereo-unmix and mixstereo-batch)."""
   options = defaults(media.OutputOptions)
   flags.DEFINE_enum('layout', options['layout'], media.LAYOUTS,
                     'Views as two files (separate), side by side (sbs), side by side at '
@@ -87,6 +87,11 @@ def define_output_options() -> None:
                        'Videos are written in resumable segments of this many frames: '
                        'running the same command again after an interruption continues '
                        'from the last finished segment.')
+  flags.DEFINE_boolean('keep_video_bits', jobs.VideoConfig.keep_bits,
+                       'Videos of more than 8 bits per sample (a 10-bit phone or HDR video): '
+                       "write the views' video at 10 bits (H.264 High 10: VLC, mpv, Kodi "
+                       'play it, QuickTime and browsers do not); --nokeep_video_bits writes '
+                       'it at 8 bits, which every player plays.')
   flags.DEFINE_boolean('temporal', temporal.TemporalConfig.enabled,
                        'Videos: decide the encoding and the disparity range once per shot '
                        '(scene cuts found from colour histograms) and search each frame '
@@ -117,7 +122,8 @@ def output_options(config: Optional[predictors.PredictorConfig] = None
       dataclasses.asdict(config), weights=predictors.weights_identity(config))
   return media.OutputOptions(
       layout=FLAGS.layout, max_display_disparity=FLAGS.max_display_disparity,
-      video_config=jobs.VideoConfig(FLAGS.segment_frames), settings=settings,
+      video_config=jobs.VideoConfig(FLAGS.segment_frames,
+                                    keep_bits=FLAGS.keep_video_bits), settings=settings,
       temporal_config=temporal.TemporalConfig(enabled=FLAGS.temporal,
                                               use_prior=FLAGS.temporal_prior),
       formats=tuple(FLAGS.output_format))

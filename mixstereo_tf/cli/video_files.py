@@ -247,20 +247,16 @@ def display_range(unmixer: predictors.Unmixer, opened: Dict[str, object]
 def _job(item: input_listing.MediaItem, outputs: Dict[str, str], settings: Dict[str, object],
          video_config: jobs.VideoConfig, layout: str, opened: Optional[Opening]
          ) -> jobs.VideoJob:
-  """A video's job (`jobs.VideoJob`): side by side and top-bottom tagged as stereo, the
-  views kept above 8 bits (`_deep_views`), the disparity's colour map tagged sRGB."""
+  """A video's job (`jobs.VideoJob`): side by side and top-bottom tagged as stereo; the
+  views (the layout's) kept above 8 bits (`jobs.VideoJob.deep`) where `opened` found such
+  samples and made its views of them, and video_config.keep_bits asks for them; the
+  disparity's colour map tagged sRGB."""
+  deep = video_config.keep_bits and opened and opened.bits > 8 and opened.view_bits > 8
+  views = ('left', 'right') if layout == 'separate' else (layout,)
   return jobs.VideoJob(item.path, outputs, settings, video_config,
                        {layout: media.STEREO_MODES[layout]}
                        if layout in media.STEREO_MODES else {},
-                       _deep_views(layout, opened), ('disparity',))
-
-
-def _deep_views(layout: str, opened: Optional[Opening]) -> Tuple[str, ...]:
-  """The outputs that keep a video's samples of more than 8 bits (`jobs.VideoJob.deep`):
-  the views' (the layout's), where `opened` found such samples and made its views of them."""
-  if not opened or opened.bits <= 8 or opened.view_bits <= 8:
-    return ()
-  return ('left', 'right') if layout == 'separate' else (layout,)
+                       views if deep else (), ('disparity',))
 
 
 def _view_bits(outputs: Dict[str, str], job: jobs.VideoJob,
@@ -270,6 +266,8 @@ def _view_bits(outputs: Dict[str, str], job: jobs.VideoJob,
   if job.deep:
     bits = encoders.encoder_for(outputs[job.deep[0]], bits=16).bits
     return bits, '' if bits > 8 else "this container's codec has no more"
+  if not job.config.keep_bits:
+    return 8, 'asked: --nokeep_video_bits, for players without 10-bit H.264'
   return 8, ('this method makes 8-bit views' if opened and opened.view_bits <= 8
              else 'read at 8 bits')
 

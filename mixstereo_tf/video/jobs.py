@@ -50,9 +50,13 @@ class VideoConfig:
     segment_frames: frames per resumable segment.
     queue_depth: frames decoded ahead of, and frames waiting to be encoded after, the
       one being rendered (`pipelining`).
+    keep_bits: a video of more than 8 bits per sample keeps them in its views' video
+      (`VideoJob.deep`: H.264 High 10, which VLC, mpv and Kodi play, QuickTime and browsers
+      do not); False: 8-bit views, which every player plays.
   """
   segment_frames: int = 60
   queue_depth: int = 4
+  keep_bits: bool = True
 
   def __post_init__(self):
     if self.segment_frames < 1:
@@ -70,7 +74,7 @@ class VideoJob:
     outputs: {key: final output path}; every path has the same extension (its container).
     settings: JSON-serialisable description of everything that changes the frames (the
       unmixer, the layout, ...); finished segments are reused only when it is equal.
-    config: segment length.
+    config: segments, queues, the bits kept (`VideoConfig`).
     stereo_modes: {key: `encoders.STEREO_MODES` name} of the outputs tagged as stereo
       (frame-packing SEI, Matroska StereoMode).
     deep: the outputs that keep an input's samples of more than 8 bits: such an input's

@@ -131,3 +131,11 @@ def test_temporal_prior_reaches_the_videos_temporal_config():
     temporal_prior.parse(False)
     config = cli_flags.output_options().temporal_config
     assert config.enabled and not config.use_prior
+
+
+def test_keep_video_bits_reaches_the_video_config():
+  cli_flags.define_output_options()
+  with _parsing('keep_video_bits') as keep:
+    assert cli_flags.output_options().video_config.keep_bits  # The default: kept.
+    keep.parse(False)
+    assert not cli_flags.output_options().video_config.keep_bits

@@ -546,6 +546,22 @@ def test_a_10_bit_video_keeps_its_bits_in_the_views(tmp_path, extension):
     assert video.streams.video[0].codec_context.pix_fmt in ('yuv420p', 'yuvj420p')
 
 
+def test_a_10_bit_videos_views_are_written_at_8_bits_when_asked(tmp_path):
+  """--nokeep_video_bits (`jobs.VideoConfig.keep_bits`): 8-bit H.264 views, which every
+  player plays, and the info says why."""
+  _ten_bit_anaglyph_video(tmp_path / 'hdr.mp4', frames=2)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', disparity_range=(-4, 4)))
+  options = media.OutputOptions('sbs', video_config=jobs.VideoConfig(keep_bits=False))
+  report = unmix_files.unmix_inputs(unmixer, str(tmp_path / 'hdr.mp4'), str(tmp_path / 'out'),
+                                    options)
+  assert report.failures == []
+  info = json.loads((tmp_path / 'out' / 'hdr_info.json').read_text())
+  assert info['views_bit_depth'] == 8 and '--nokeep_video_bits' in info['bit_depth']
+  with av.open(str(tmp_path / 'out' / 'hdr_sbs.mp4')) as video:
+    assert video.streams.video[0].codec_context.pix_fmt == 'yuv420p'
+
+
 def test_an_hdr_videos_views_keep_its_colour_tags_and_its_colour_map_is_tagged_srgb(
     tmp_path):
   """An HLG video (BT.2020 primaries, transfer 18): its views' RGB is the input's, so they
