@@ -36,10 +36,11 @@ class MotionConfig:
     min_response: the smallest phase-correlation peak (0..1) taken as a translation.
       Measured on 1280x720 frames of 36 images (`experiments/results/motion_response.md`):
       unrelated pairs peak at 0.02 (median) to 0.20; one moved by up to 30 px, blurred
-      with noise of 8 levels, at 0.50 (a colour wheel without texture, 3.9 px off) to
+      with noise of 8 levels, at 0.53 (a colour wheel without texture, 2.2 px off) to
       0.99; a 2% zoom at 0.66 or more, a 1-degree turn at 0.78 or more.
     border_level: rows and columns of the copies darker than this ([0, 1]) at the frame's
-      edges are black bars, left out (static edges that pulled a pan of 8 px to 0-7 px).
+      edges are black bars, left out (their static edges pulled a pan of 8 px to 5-7 px
+      on pillarboxed 1280x720 photo frames, one to (-1, 2)).
   """
   enabled: bool = True
   width: int = 320
@@ -68,13 +69,14 @@ def motion_copy(image: np.ndarray, width: int) -> np.ndarray:
 
 
 def translation(previous: np.ndarray, current: np.ndarray, frame_width: int,
-                border_level: float = 0.06) -> Tuple[Tuple[float, float], float]:
+                config: MotionConfig = MotionConfig()) -> Tuple[Tuple[float, float], float]:
   """((dx, dy) frame pixels, sub-pixel; the phase-correlation peak, 0..1) of two
-  `motion_copy`s of one shape, their dark borders left out (`_content_box`); ((0, 0), 0)
-  where nothing is left. The frame shows at (x, y) what the previous one showed at
-  (x - dx, y - dy); frame_width: the frames' width, pixels (the copies' scale)."""
+  `motion_copy`s of one shape, their borders darker than config.border_level left out
+  (`_content_box`); ((0, 0), 0) where nothing is left. The frame shows at (x, y) what the
+  previous one showed at (x - dx, y - dy); frame_width: the frames' width, pixels (the
+  copies' scale)."""
   scale = frame_width / previous.shape[1]
-  box = _content_box(np.maximum(previous, current), border_level)
+  box = _content_box(np.maximum(previous, current), config.border_level)
   if box is None:
     return (0.0, 0.0), 0.0
   previous, current = previous[box], current[box]
@@ -87,7 +89,7 @@ def translation(previous: np.ndarray, current: np.ndarray, frame_width: int,
 def global_shift(previous: np.ndarray, current: np.ndarray, frame_width: int,
                  config: MotionConfig = MotionConfig()) -> Optional[Tuple[int, int]]:
   """`translation` in whole pixels; None where its peak is below config.min_response."""
-  (dx, dy), peak = translation(previous, current, frame_width, config.border_level)
+  (dx, dy), peak = translation(previous, current, frame_width, config)
   if peak < config.min_response:
     return None
   return int(round(dx)), int(round(dy))
