@@ -56,16 +56,17 @@ def video_quality(method: str, frames_per_shot: int = 20) -> dict:
   return result
 
 
-def _write_clip(path: str, size, frames: int, bits: int = 8) -> None:
-  """The clip upscaled to `size`; `bits` 10: as 10-bit H.264 (High 10, through PyAV
-  itself: an earlier tree's writer takes 8-bit frames only), its frames upscaled from
-  16-bit copies."""
+def _write_clip(path: str, size, frames: int, bits: int = 8,
+                mixture: str = 'anaglyph') -> None:
+  """The clip (encoded as `mixture`) upscaled to `size`; `bits` 10: as 10-bit H.264 (High
+  10, through PyAV itself: an earlier tree's writer takes 8-bit frames only), its frames
+  upscaled from 16-bit copies."""
   # pylint: disable=g-import-not-at-top
   import av
   import numpy as np
   from experiments import temporal as clip_lib
   from mixstereo_tf.video import streams
-  clip = [image for image, *_ in clip_lib.make_clip(frames)[:frames]]
+  clip = [image for image, *_ in clip_lib.make_clip(frames, mixture)[:frames]]
   if bits == 8:
     with streams.VideoWriter(path, fractions.Fraction(25)) as writer:
       for index, image in enumerate(clip):
@@ -105,9 +106,10 @@ def _left_psnr(path: str, size, frames: int) -> float:
 
 
 def video_speed(method: str, width: int, height: int, frames: int = 12,
-                bits: int = 8) -> dict:
-  """Frames/s of `unmix_inputs` on a `frames`-frame clip (`bits` per sample), without and
-  with the prior, and its left views' PSNR (`_left_psnr`)."""
+                bits: int = 8, mixture: str = 'anaglyph') -> dict:
+  """Frames/s of `unmix_inputs` on a `frames`-frame clip (`bits` per sample, encoded as
+  `mixture`: the colour anaglyph detected by --mixture=auto, another encoding named),
+  without and with the prior, and its left views' PSNR (`_left_psnr`)."""
   # pylint: disable=g-import-not-at-top
   from mixstereo_tf.unmixing import predictors
   from mixstereo_tf.video import temporal
@@ -117,8 +119,9 @@ def video_speed(method: str, width: int, height: int, frames: int = 12,
   root = tempfile.mkdtemp()
   try:
     path = os.path.join(root, 'clip.mp4')
-    _write_clip(path, (width, height), frames, bits)
-    unmixer = predictors.build_unmixer(predictors.PredictorConfig(mixture='auto',
+    _write_clip(path, (width, height), frames, bits, mixture)
+    named = 'auto' if mixture == 'anaglyph' else mixture
+    unmixer = predictors.build_unmixer(predictors.PredictorConfig(mixture=named,
                                                                   **METHODS[method]))
     _, decoded = streams.open_video(path)
     unmixer(next(iter(decoded)).image)  # Warm-up: numba's cache, tracing.

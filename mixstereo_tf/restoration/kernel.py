@@ -28,43 +28,58 @@ def _observed(value):
 
 
 @numba.njit(error_model='numpy')
-def _clipped_inverse(mixture, y, x, own, observation_weight, pull, gram, cofactor, inverse):
-  """Dubois encodings: writes into `inverse` [3, 3] the inverse of w_obs sum_c [observed
-  c] A_own[c]^T A_own[c] + pull I (cofactors, float64; gram and cofactor: float64 [3, 3]
-  scratch)."""
-  gram[:] = 0.0
-  for c in range(3):
-    if not _observed(mixture[y, x, c]):
-      continue
-    for i in range(3):
-      for j in range(3):
-        gram[i, j] += observation_weight * own[c, i] * own[c, j]
-  for i in range(3):
-    gram[i, i] += pull
-  for i in range(3):
-    for j in range(3):
-      a, b = (i + 1) % 3, (i + 2) % 3
-      c, d = (j + 1) % 3, (j + 2) % 3
-      cofactor[i, j] = gram[a, c] * gram[b, d] - gram[a, d] * gram[b, c]
-  determinant = gram[0, 0] * cofactor[0, 0] + gram[0, 1] * cofactor[0, 1] + (
-      gram[0, 2] * cofactor[0, 2])
-  for i in range(3):
-    for j in range(3):
-      inverse[i, j] = cofactor[j, i] / determinant
+def _observed_pattern(mixture, y, x):
+  """Bit c set where mixture channel c is an observation (`_observed`): 0..7."""
+  return ((1 if _observed(mixture[y, x, 0]) else 0) |
+          (2 if _observed(mixture[y, x, 1]) else 0) |
+          (4 if _observed(mixture[y, x, 2]) else 0))
+
+
+@numba.njit(error_model='numpy')
+def _clipped_inverses(own, observation_weight, prior_weight, match_weight):
+  """Dubois encodings: float32 [2, 8, 3, 3], [k, pattern] the inverse of w_obs sum_c
+  [bit c of pattern] A_own[c]^T A_own[c] + (w_prior + k w_match) I (cofactors, float64):
+  every normal matrix a pixel can have, by whether it is matched (k) and which of its
+  mixture channels are observations (`_observed_pattern`), so no pixel inverts one."""
+  out = np.empty((2, 8, 3, 3), np.float32)
+  gram, cofactor = np.empty((3, 3), np.float64), np.empty((3, 3), np.float64)
+  for k in range(2):
+    for pattern in range(8):
+      gram[:] = 0.0
+      for c in range(3):
+        if not pattern >> c & 1:
+          continue
+        for i in range(3):
+          for j in range(3):
+            gram[i, j] += observation_weight * own[c, i] * own[c, j]
+      for i in range(3):
+        gram[i, i] += prior_weight + match_weight * k
+      for i in range(3):
+        for j in range(3):
+          a, b = (i + 1) % 3, (i + 2) % 3
+          c, d = (j + 1) % 3, (j + 2) % 3
+          cofactor[i, j] = gram[a, c] * gram[b, d] - gram[a, d] * gram[b, c]
+      determinant = gram[0, 0] * cofactor[0, 0] + gram[0, 1] * cofactor[0, 1] + (
+          gram[0, 2] * cofactor[0, 2])
+      for i in range(3):
+        for j in range(3):
+          out[k, pattern, i, j] = cofactor[j, i] / determinant
+  return out
 
 
 @numba.njit(error_model='numpy')
 def _update_view(y, view, other_view, mixture, offset, consistent, prior, other, own,
-                 inverses, copied, weights, clip):
+                 inverses, copied, weights, clipped):
   """One over-relaxed step of row y of one view, in place: the per-pixel normal equations'
   solution of w_obs A_own^T (m - A_other v_other) + w_match [consistent] v_other(x +
   offset) + w_prior prior; channels the mixture copies (copied[i] >= 0) set to it.
   weights = (w_obs, w_match, w_prior, relaxation); inverses[k]: the normal matrix's
-  inverse for unmatched (k = 0) and matched (1) pixels, or per pixel where `clip`.
-  Per-pixel values live in scalars (registers), not in small arrays."""
+  inverse for unmatched (k = 0) and matched (1) pixels; clipped (Dubois encodings, where
+  clipped mixture channels are no observations: `_clipped_inverses`, else empty):
+  clipped[k, pattern] instead. Per-pixel values live in scalars (registers), not in small
+  arrays."""
   observation_weight, match_weight, prior_weight, omega = weights
-  inverse = np.empty((3, 3), np.float32)
-  gram, cofactor = np.empty((3, 3), np.float64), np.empty((3, 3), np.float64)
+  clip = clipped.shape[0] > 0
   one = np.float32(1.0)
   # The matrices in scalars: loads from arrays the loop writes to could alias.
   p00, p01, p02 = other[0, 0], other[0, 1], other[0, 2]
@@ -80,12 +95,12 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
     e2 = mixture[y, x, 2] - (p20 * v0 + p21 * v1 + p22 * v2)
     matched = consistent[y, x]
     k = 1 if matched else 0
+    pattern = 7
     if clip:
-      e0 = e0 if _observed(mixture[y, x, 0]) else np.float32(0.0)
-      e1 = e1 if _observed(mixture[y, x, 1]) else np.float32(0.0)
-      e2 = e2 if _observed(mixture[y, x, 2]) else np.float32(0.0)
-      _clipped_inverse(mixture, y, x, own, observation_weight,
-                       prior_weight + match_weight * k, gram, cofactor, inverse)
+      pattern = _observed_pattern(mixture, y, x)
+      e0 = e0 if pattern & 1 else np.float32(0.0)
+      e1 = e1 if pattern & 2 else np.float32(0.0)
+      e2 = e2 if pattern & 4 else np.float32(0.0)
     x0, x1, f = _linear_taps(view.shape[1], x, offset[y, x])
     h0 = observation_weight * (q00 * e0 + q10 * e1 + q20 * e2) + prior_weight * prior[y, x, 0]
     h1 = observation_weight * (q01 * e0 + q11 * e1 + q21 * e2) + prior_weight * prior[y, x, 1]
@@ -99,7 +114,8 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
         view[y, x, i] = mixture[y, x, copied[i]]
       else:
         if clip:
-          solved = inverse[i, 0] * h0 + inverse[i, 1] * h1 + inverse[i, 2] * h2
+          solved = (clipped[k, pattern, i, 0] * h0 + clipped[k, pattern, i, 1] * h1 +
+                    clipped[k, pattern, i, 2] * h2)
         else:  # Indexed, not through a view: numba counts the references of views.
           solved = inverses[k, i, 0] * h0 + inverses[k, i, 1] * h1 + inverses[k, i, 2] * h2
         view[y, x, i] += omega * (solved - view[y, x, i])
@@ -121,12 +137,16 @@ def solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, matrice
   pixel finds the other view; matrices = (A_L, A_R); finished rows are clipped to
   [0, 1]. Rows are independent (the warps are horizontal), so row blocks run in parallel
   and each stays in cache."""
+  clipped = [np.empty((0, 8, 3, 3), np.float32) for _ in range(2)]
+  if clip:
+    clipped = [_clipped_inverses(matrices[v], weights[0], weights[2], weights[1])
+               for v in range(2)]  # weights = (w_obs, w_match, w_prior, relaxation).
   for y in range(y0, y1):
     for _ in range(iterations):
       _update_view(y, left, right, mixture, offsets[0], consistent[0], priors[0],
-                   matrices[1], matrices[0], inverses[0], copied[0], weights, clip)
+                   matrices[1], matrices[0], inverses[0], copied[0], weights, clipped[0])
       _update_view(y, right, left, mixture, offsets[1], consistent[1], priors[1],
-                   matrices[0], matrices[1], inverses[1], copied[1], weights, clip)
+                   matrices[0], matrices[1], inverses[1], copied[1], weights, clipped[1])
     _clip_row(y, left)  # The result is clipped to [0, 1].
     _clip_row(y, right)
 
