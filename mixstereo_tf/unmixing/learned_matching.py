@@ -167,13 +167,17 @@ def estimate_range(descriptors: Descriptors, image: np.ndarray, name: str,
 def learned_unmix(descriptors: Descriptors, image: np.ndarray, name: str,
                   search: Tuple[int, int], hint: Optional[hints.FrameHint] = None,
                   config: LearnedMatchConfig = LearnedMatchConfig()) -> Dict[str, object]:
-  """The stage on a uint8 anaglyph (steps 1-4): `steps.classical_unmix`'s outputs."""
+  """The stage on a uint8 anaglyph (steps 1-4): `steps.classical_unmix`'s outputs; the
+  hint's on_disparity told the disparities before the views are restored (a video's
+  next frame starts then, `video.frame_pipeline`)."""
   family = families.of(name)
   if hint is not None and hint.prior is not None:
     out = family.classical(image, name, search, hint)
     return {key: out[key] for key in _KEYS}
   mixture01 = image_range.u8_to_unit(image)
   matched = match(descriptors, mixture01, name, *search, config, family.matching(hint))
+  if hint is not None and hint.on_disparity is not None:
+    hint.on_disparity({key: matched[key] for key in _KEYS[2:]})
   views_from = hints.views_image(image, hint)
   restored = family.restore(image_range.to_unit(views_from), name, matched['disparity_left'],
                             matched['disparity_right'])

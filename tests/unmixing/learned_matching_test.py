@@ -63,7 +63,12 @@ def test_reduced_scale_route_stays_close(pair):
 def test_learned_unmix_restores_views_and_takes_a_video_prior(pair):
   image = np.rint(255 * _gray_anaglyph(pair)).astype(np.uint8)
   search = (int(pair['disparity_left'].min()) - 3, int(pair['disparity_left'].max()) + 3)
-  out = learned_matching.learned_unmix(_patch_descriptors, image, 'gray', search)
+  told = []  # A video frame without a prior tells its disparities before its views.
+  out = learned_matching.learned_unmix(_patch_descriptors, image, 'gray', search,
+                                       hints.FrameHint(on_disparity=told.append))
+  assert len(told) == 1 and set(told[0]) == {'disparity_left', 'disparity_right',
+                                             'consistent_left'}
+  np.testing.assert_array_equal(told[0]['disparity_left'], out['disparity_left'])
   assert out['left'].dtype == np.uint8 and out['left'].shape == (96, 160, 3)
   assert set(out) == {'left', 'right', 'disparity_left', 'disparity_right', 'consistent_left'}
   hint = hints.FrameHint(prior=out['disparity_left'])
