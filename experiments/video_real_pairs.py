@@ -5,7 +5,7 @@ r"""Camera pans cut from real stereo pairs: what the video prior, moved with the
 
 Scenes with ground truth, none a training source: Motorcycle (`realworld.scenes`, 741 x
 500), and from --shared_dir the SceneFlow frame and the KITTI object frame (sparse lidar
-truth). Each becomes a 10-frame red-cyan anaglyph video of crops (at most 1280 x 720)
+truth). Each becomes a 24-frame red-cyan anaglyph video of crops (at most 1280 x 720)
 panning 4 px a frame, Gaussian noise of 2 levels new every frame (seed 0), unmixed in order
 through `frame_pipeline` as the video path runs them (`--mixture=anaglyph`), by the
 shipped default and by the classical method, per shot: with the prior moved (the default),
@@ -39,7 +39,7 @@ cli_flags.define_shared_dir()
 flags.DEFINE_string('video_real_pairs_output', 'experiments/results/video_real_pairs.md',
                     'Markdown report.')
 FLAGS = flags.FLAGS
-FRAMES, PAN, NOISE = 10, 4, 2.0
+FRAMES, PAN, NOISE = 24, 4, 2.0
 VARIANTS = (('moved prior (default)', temporal.TemporalConfig()),
             ('prior in place', temporal.TemporalConfig(
                 motion=motion.MotionConfig(enabled=False))),
