@@ -5,9 +5,10 @@ colour profile, whether colour is stored at half resolution and how many images 
 holds. A file holding more than the one
 picture the tools unmix is named, not read silently:
   * an animated GIF, WebP or PNG (APNG) is refused: only its first frame would be read;
-  * an MPO stereo pair (a 3D camera's, typed `Multi-Frame Image: (Disparity)`) is refused:
-    it holds the two views already, there is nothing to unmix. A camera's JPEG whose other
-    image is a preview (typed 'Large Thumbnail') is an ordinary photo;
+  * an MPO stereo pair (a 3D camera's, typed `Multi-Frame Image: (Disparity)`) or a HEIF
+    stereo pair (a phone's spatial photo: a 'ster' entity group) is refused: it holds the
+    two views already, there is nothing to unmix. A camera's JPEG whose other image is a
+    preview (typed 'Large Thumbnail') is an ordinary photo;
   * a TIFF with several full-resolution pages (a scanner's multi-page file) has its first
     page unmixed, with a warning giving the count (reduced-resolution pages, a TIFF's
     thumbnails, are not counted); a HEIF holding several images (a burst) its primary one.
@@ -47,7 +48,8 @@ class ImageHeader:
       which RGB outputs cannot carry (PNG forbids it, colour managers refuse it). The views
       keep the input's pixel values, so they are in its colour space and carry its profile.
     frames: images the file holds (an animation's frames, an MPO's images, TIFF pages).
-    stereo_views: images of an MPO marked as views of a stereo pair (0 for other files).
+    stereo_views: images of an MPO marked as views of a stereo pair, or of a HEIF stereo
+      pair group (`image_io.heif_stereo_views`); 0 for other files.
     pages: a TIFF's full-resolution pages, a HEIF's images (1 for other files).
     chroma_halved: colour stored at half the width or less (`image_io.chroma_halved`).
   """
@@ -93,7 +95,8 @@ def header(path: str) -> ImageHeader:
       profile = image.info.get('icc_profile') or None
       halved = image_io.chroma_halved_of(image, path)
       frames = int(getattr(image, 'n_frames', 1))
-      stereo = _stereo_views(image, frames)
+      stereo = (image_io.heif_stereo_views(path) if image.format == 'HEIF' and frames > 1
+                else _stereo_views(image, frames))
       pages = (_tiff_pages(image, frames) if image.format == 'TIFF' and frames > 1 else
                frames if image.format == 'HEIF' else 1)
   except (OSError, ValueError, SyntaxError, EOFError):
@@ -106,9 +109,11 @@ def header(path: str) -> ImageHeader:
 def _refuse_other_images(path: str, found: ImageHeader) -> None:
   """ValueError naming a file whose other images would be lost (see the module's text)."""
   if found.stereo_views > 1:
-    raise ValueError(f'{path} is an MPO stereo pair ({found.stereo_views} views): it holds '
-                     'the two views already, not a mixture of them; there is nothing to '
-                     'unmix.')
+    views = found.stereo_views
+    kind = (f'a HEIF stereo pair (a spatial photo of {views} views)'
+            if path.lower().endswith(_HEIF) else f'an MPO stereo pair ({views} views)')
+    raise ValueError(f'{path} is {kind}: it holds the two views already, not a mixture of '
+                     'them; there is nothing to unmix.')
   if found.frames > 1 and os.path.splitext(path)[1].lower() in _ANIMATED:
     raise ValueError(f'{path} is an animated image ({found.frames} frames); only its first '
                      'frame would be read. Convert it to a video to unmix every frame, e.g. '

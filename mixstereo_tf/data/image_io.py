@@ -200,6 +200,27 @@ def chroma_halved_of(image: Image.Image, path: str) -> bool:
   return _lossy_webp(path)
 
 
+def heif_stereo_views(path: str) -> int:
+  """The images of a HEIF stereo pair (an iPhone spatial photo: a left and a right eye's
+  picture linked by a 'ster' entity group, HEIF 23008-12 6.8.2, in the 'grpl' box of the
+  first 1 MiB); 0 where the file has no such group."""
+  with open(path, 'rb') as f:
+    head = f.read(1 << 20)
+  at = head.find(b'grpl')
+  if at < 4:
+    return 0
+  end = min(len(head), at - 4 + int.from_bytes(head[at - 4:at], 'big'))
+  child = at + 4
+  while child + 20 <= end:  # EntityToGroupBox: size, type, version and flags, id, count.
+    size = int.from_bytes(head[child:child + 4], 'big')
+    if head[child + 4:child + 8] == b'ster':
+      return int.from_bytes(head[child + 16:child + 20], 'big')
+    if size < 8:
+      return 0
+    child += size
+  return 0
+
+
 def _av1_halved(path: str) -> bool:
   """Whether an AVIF's AV1 sequence (its 'av1C' box, AV1-ISOBMFF 2.3.3) stores colour at
   half the width (chroma_subsampling_x); False where the box is not in the first 64 KiB."""

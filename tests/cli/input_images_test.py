@@ -189,6 +189,34 @@ def test_a_phone_heic_is_read_upright_and_a_burst_unmixes_its_primary_image(tmp_
   assert 'burst.heic holds 2 images: only its primary image is unmixed' in caplog.text
 
 
+def _stereo_group(entities=(1, 2)) -> bytes:
+  """A 'grpl' box holding one 'ster' entity group (HEIF 23008-12 6.8.2) of `entities`."""
+  ster = (b'\0\0\0\0' + (1).to_bytes(4, 'big') + len(entities).to_bytes(4, 'big') +
+          b''.join(e.to_bytes(4, 'big') for e in entities))
+  ster = (8 + len(ster)).to_bytes(4, 'big') + b'ster' + ster
+  return (8 + len(ster)).to_bytes(4, 'big') + b'grpl' + ster
+
+
+def test_a_heif_stereo_pair_is_refused_and_a_burst_is_not(tmp_path):
+  """Two images linked by a 'ster' entity group (a phone's spatial photo) are a stereo
+  pair: refused like an MPO; the same two images without the group are a burst."""
+  picture = np.arange(16 * 24 * 3, dtype=np.uint8).reshape(16, 24, 3)
+  pair = pillow_heif.from_bytes(mode='RGB', size=(24, 16), data=picture.tobytes())
+  pair.add_frombytes(mode='RGB', size=(24, 16), data=picture[:, ::-1].tobytes())
+  pair.save(str(tmp_path / 'burst.heic'), quality=90)
+  # The group is appended as a top-level box: libheif reads the images as before.
+  spatial = tmp_path / 'spatial.heic'
+  spatial.write_bytes((tmp_path / 'burst.heic').read_bytes() + _stereo_group())
+  assert image_io.heif_stereo_views(str(tmp_path / 'burst.heic')) == 0
+  assert image_io.heif_stereo_views(str(spatial)) == 2
+  found = input_images.header(str(spatial))
+  assert found.stereo_views == 2 and found.pages == 2
+  refused = r'spatial.heic is a HEIF stereo pair \(a spatial photo of 2 views\)'
+  with pytest.raises(ValueError, match=refused):
+    input_images.read_image(str(spatial))
+  assert input_images.read_image(str(tmp_path / 'burst.heic')).shape == (16, 24, 3)
+
+
 def test_reduced_resolution_tiff_pages_are_not_pages(tmp_path, caplog):
   path = str(tmp_path / 'with_thumbnail.tif')
   thumbnail = _picture(1, (6, 8, 3))
