@@ -36,7 +36,7 @@ def _observed_pattern(mixture, y, x):
 
 
 @numba.njit(error_model='numpy')
-def _clipped_inverses(own, observation_weight, prior_weight, match_weight):
+def clipped_inverses(own, observation_weight, prior_weight, match_weight):
   """Dubois encodings: float32 [2, 8, 3, 3], [k, pattern] the inverse of w_obs sum_c
   [bit c of pattern] A_own[c]^T A_own[c] + (w_prior + k w_match) I (cofactors, float64):
   every normal matrix a pixel can have, by whether it is matched (k) and which of its
@@ -75,7 +75,7 @@ def _update_view(y, view, other_view, mixture, offset, consistent, prior, other,
   offset) + w_prior prior; channels the mixture copies (copied[i] >= 0) set to it.
   weights = (w_obs, w_match, w_prior, relaxation); inverses[k]: the normal matrix's
   inverse for unmatched (k = 0) and matched (1) pixels; clipped (Dubois encodings, where
-  clipped mixture channels are no observations: `_clipped_inverses`, else empty):
+  clipped mixture channels are no observations: `clipped_inverses`, else empty):
   clipped[k, pattern] instead. Per-pixel values live in scalars (registers), not in small
   arrays."""
   observation_weight, match_weight, prior_weight, omega = weights
@@ -131,16 +131,13 @@ def _clip_row(y, view):
 
 @numba.njit(nogil=True, cache=True, error_model='numpy')
 def solve_rows(y0, y1, iterations, mixture, offsets, consistent, priors, matrices,
-                inverses, copied, weights, clip, left, right):
+                inverses, copied, weights, clipped, left, right):
   """`iterations` alternations of both views over rows [y0, y1), in place. Index 0 of
   each pair is the left view's, 1 the right's; offsets = (-d_L, d_R), where each view's
-  pixel finds the other view; matrices = (A_L, A_R); finished rows are clipped to
-  [0, 1]. Rows are independent (the warps are horizontal), so row blocks run in parallel
+  pixel finds the other view; matrices = (A_L, A_R); clipped: each view's
+  `clipped_inverses` (Dubois encodings) or empty [0, 8, 3, 3] arrays; finished rows are
+  clipped to [0, 1]. Rows are independent (the warps are horizontal), so row blocks run in parallel
   and each stays in cache."""
-  clipped = [np.empty((0, 8, 3, 3), np.float32) for _ in range(2)]
-  if clip:
-    clipped = [_clipped_inverses(matrices[v], weights[0], weights[2], weights[1])
-               for v in range(2)]  # weights = (w_obs, w_match, w_prior, relaxation).
   for y in range(y0, y1):
     for _ in range(iterations):
       _update_view(y, left, right, mixture, offsets[0], consistent[0], priors[0],

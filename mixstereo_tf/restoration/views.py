@@ -137,8 +137,11 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
     arguments = inputs + (tuple(inverses), tuple(copied), weights, left, right)
   else:
     solve = kernel.solve_rows
-    arguments = inputs + (matrices, tuple(inverses), tuple(copied), weights,
-                          bool(spec.clip), left, right)
+    observation, match, prior = weights[:3]
+    clipped = tuple(kernel.clipped_inverses(own, observation, prior, match) if spec.clip
+                    else np.empty((0, 8, 3, 3), np.float32) for own in matrices)
+    arguments = inputs + (matrices, tuple(inverses), tuple(copied), weights, clipped,
+                          left, right)
   height, threads = mixture.shape[0], workers.usable_cpus(config.threads)
   workers.run_tasks(lambda block: solve(*block, *arguments),
                     workers.row_blocks(height, 4 * threads), threads)

@@ -243,12 +243,12 @@ def test_the_colour_line_pass_keeps_a_right_match_and_skips_network_priors_unles
 
 
 def test_the_dubois_inverses_are_those_of_every_observation_pattern():
-  """`kernel._clipped_inverses`: per matched flag k and pattern of observed channels, the
+  """`kernel.clipped_inverses`: per matched flag k and pattern of observed channels, the
   inverse of w_obs sum_c [observed c] A[c]^T A[c] + (w_prior + k w_match) I, computed once
   instead of per pixel and iteration."""
   from mixstereo_tf.restoration import kernel  # pylint: disable=g-import-not-at-top
   own = np.asarray(mixtures.get_mixture('dubois').left_matrix, np.float32)
-  table = kernel._clipped_inverses(own, 30.0, 0.1, 1.0)
+  table = kernel.clipped_inverses(own, 30.0, 0.1, 1.0)
   for k in (0, 1):
     for pattern in range(8):
       observed = np.array([pattern >> c & 1 for c in range(3)], np.float64)
