@@ -7,12 +7,12 @@ Scenes with ground truth, none a training source: Motorcycle (`realworld.scenes`
 500), and from --shared_dir the SceneFlow frame and the KITTI object frame (sparse lidar
 truth). Each becomes a 24-frame red-cyan anaglyph video of crops (at most 1280 x 720)
 panning 4 px a frame, Gaussian noise of 2 levels new every frame (seed 0), unmixed in order
-through `frame_pipeline` as the video path runs them (`--mixture=anaglyph`), by the
-shipped default and by the classical method, per shot: with the prior moved (the default),
-with the prior left in place, and without a prior (`--notemporal_prior`). Scores: the
-views' RGB PSNR against the true crops (the 64 columns nearest the side a match can leave
-left out), bad-1 on the pixels with truth, frames/s of the loop (2 cores, one run).
-Writes experiments/results/video_real_pairs.md.
+through `frame_pipeline` as the video path runs them (`temporal.unmix_clip`;
+`--mixture=anaglyph`), by the shipped default and by the classical method, per shot: with
+the prior moved (the default), with the prior left in place, and without a prior
+(`--notemporal_prior`). Scores: the views' RGB PSNR against the true crops (the 64
+columns nearest the side a match can leave left out), bad-1 on the pixels with truth,
+frames/s of the loop (2 cores, one run). Writes experiments/results/video_real_pairs.md.
 """
 
 import os
@@ -29,11 +29,11 @@ from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import real_pairs
 from mixstereo_tf.evaluation import realworld
 from mixstereo_tf.unmixing import predictors
-from mixstereo_tf.video import frame_pipeline
 from mixstereo_tf.video import motion
 from mixstereo_tf.video import temporal
 
 from experiments import markdown
+from experiments import temporal as clip_lib
 
 cli_flags.define_shared_dir()
 flags.DEFINE_string('video_real_pairs_output', 'experiments/results/video_real_pairs.md',
@@ -81,9 +81,7 @@ def _psnr(view, truth, keep):
 def _scores(unmixer, frames, truths, config):
   """(left PSNR, right PSNR, bad-1 %, frames/s) of the clip unmixed with `config`."""
   start = time.perf_counter()
-  with frame_pipeline.FramePipeline(unmixer, temporal.VideoState(config)) as pipeline:
-    pending = [pipeline.submit(frame) for frame in frames]
-  outputs = [p.result() for p in pending]
+  outputs, _ = clip_lib.unmix_clip(unmixer, frames, config)
   seconds = time.perf_counter() - start
   left = np.mean([_psnr(o['left'], t[0], np.s_[:, 64:]) for o, t in zip(outputs, truths)])
   right = np.mean([_psnr(o['right'], t[1], np.s_[:, :-64]) for o, t in zip(outputs, truths)])
