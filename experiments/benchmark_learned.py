@@ -5,7 +5,7 @@ and a 4000x3000 photo (`photo_12mp.py`: wall seconds, CPU seconds, peak resident
 each measurement in its own process.
 
     python -m experiments.benchmark_learned [--before_checkout=DIR] [--nolearned_photos]
-        [--learned_video_bits=10] [--learned_video_mixture=dubois]
+        [--learned_video_bits=10] [--nolearned_video_keep_bits] [--learned_video_mixture=dubois]
 
 With --before_checkout (a checkout of an earlier commit, e.g. `git worktree add DIR REV`)
 each row's video is also run in that checkout (its package and experiments) in the same
@@ -24,6 +24,8 @@ from experiments import checkouts  # Defines --before_checkout.
 
 flags.DEFINE_integer('learned_video_bits', 8, 'Bits per sample of the video clip (10: '
                      'H.264 High 10, as a 10-bit phone or HDR video).')
+flags.DEFINE_bool('learned_video_keep_bits', True, 'Views of a 10-bit clip written at 10 '
+                  'bits; --nolearned_video_keep_bits: at 8, as --nokeep_video_bits.')
 flags.DEFINE_string('learned_video_mixture', 'anaglyph', 'Encoding of the video clip '
                     '(anaglyph: detected by --mixture=auto; another: named).')
 flags.DEFINE_bool('learned_photos', True, 'Also each row\'s 4000x3000 photo (minutes a '
@@ -41,7 +43,8 @@ def _video(method, checkout=''):
   given)."""
   return checkouts.measure('benchmark_video', f'b.video_speed({method!r}, 1280, 720, '
                            f'bits={FLAGS.learned_video_bits}, '
-                           f'mixture={FLAGS.learned_video_mixture!r})', checkout)
+                           f'mixture={FLAGS.learned_video_mixture!r}, '
+                           f'keep_bits={FLAGS.learned_video_keep_bits})', checkout)
 
 
 def _photo(method):

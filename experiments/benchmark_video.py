@@ -106,15 +106,17 @@ def _left_psnr(path: str, size, frames: int) -> float:
 
 
 def video_speed(method: str, width: int, height: int, frames: int = 12,
-                bits: int = 8, mixture: str = 'anaglyph') -> dict:
+                bits: int = 8, mixture: str = 'anaglyph', keep_bits: bool = True) -> dict:
   """Frames/s of `unmix_inputs` on a `frames`-frame clip (`bits` per sample, encoded as
   `mixture`: the colour anaglyph detected by --mixture=auto, another encoding named),
-  without and with the prior, and its left views' PSNR (`_left_psnr`)."""
+  without and with the prior, and its left views' PSNR (`_left_psnr`); `keep_bits`:
+  `jobs.VideoConfig.keep_bits` (False: --nokeep_video_bits)."""
   # pylint: disable=g-import-not-at-top
   from mixstereo_tf.unmixing import predictors
   from mixstereo_tf.video import temporal
   from mixstereo_tf.cli import media
   from mixstereo_tf.cli import unmix_files
+  from mixstereo_tf.video import jobs
   from mixstereo_tf.video import streams
   root = tempfile.mkdtemp()
   try:
@@ -131,7 +133,8 @@ def video_speed(method: str, width: int, height: int, frames: int = 12,
     for name, enabled in QUALITY_VARIANTS:
       output_dir = os.path.join(root, name.replace(' ', '_'))
       report = unmix_files.unmix_inputs(unmixer, path, output_dir, media.OutputOptions(
-          layout='sbs', temporal_config=temporal.TemporalConfig(enabled=enabled)))
+          layout='sbs', temporal_config=temporal.TemporalConfig(enabled=enabled),
+          video_config=jobs.VideoConfig(keep_bits=keep_bits)))
       if report.failures or report.frames != frames:
         raise RuntimeError(f'unmix_inputs: {report}')
       result[name] = {'fps': report.frames_per_second,

@@ -117,9 +117,9 @@ def unmix_item(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outpu
     display = ((0.0, float(options.max_display_disparity)) if options.max_display_disparity
                else video_files.display_range(unmixer, opened.info))
     return video_files.unmix_video(
-        unmixer, item, output_dir, options.layout, display,
+        unmixer, item, opened, output_dir, options.layout, display,
         options.settings or video_files.default_settings(unmixer), options.video_config,
-        progress_stream, report, options.temporal_config, options.formats, request, opened)
+        progress_stream, report, options.temporal_config, options.formats, request)
   return _unmix_image(unmixer, item, output_dir, options.layout,
                       options.max_display_disparity, report, options.formats, request)
 

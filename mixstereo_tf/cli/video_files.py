@@ -134,12 +134,12 @@ def _drawn_when_done(pending, state: Dict[str, object], layout: str,
   return images
 
 
-def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, output_dir: str,
-                layout: str, display: Tuple[float, float], settings: Dict[str, object],
-                video_config: jobs.VideoConfig, progress_stream: Optional[TextIO],
+def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, opened: Opening,
+                output_dir: str, layout: str, display: Tuple[float, float],
+                settings: Dict[str, object], video_config: jobs.VideoConfig,
+                progress_stream: Optional[TextIO],
                 report, temporal_config: temporal.TemporalConfig,
-                formats: Tuple[str, ...] = (), request: Optional[Dict] = None,
-                opened: Optional[Opening] = None) -> int:
+                formats: Tuple[str, ...] = (), request: Optional[Dict] = None) -> int:
   """Unmixes every frame of a video into layout, disparity and `formats` videos (resumable,
   `video.jobs`; side by side and top-bottom tagged so; views kept above 8 bits), writes
   `<name>_info.json` (with `request`; `opened`'s info, the `opening` frame's, when this
@@ -148,8 +148,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
   anaglyph found read as `opened`'s encoding until a shot finds one) and `frame_pipeline`
   (`opened`'s frame not unmixed again), then drawn and written on the writer's thread."""
   start = time.perf_counter()
-  known = opened.info if opened else {}
-  shots = temporal.VideoState(temporal_config, known.get('mixture'))
+  shots = temporal.VideoState(temporal_config, opened.info.get('mixture'))
   outputs, drawn, skipped = _video_outputs(item, output_dir, layout, formats)
   state = {'bar': None, 'done': 0, 'rendered': 0, 'info': None, 'shots': []}
   pipeline = frame_pipeline.FramePipeline(unmixer, shots)
@@ -164,7 +163,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
     index = state['done'] + shots.frames  # This run's frames begun before this one.
     fields = frame_fields(state['chroma_halved'])
     pending = pipeline.submit(frame, index % video_config.segment_frames == 0,
-                              opened and opened.take(index), **fields)
+                              opened.take(index), **fields)
     report.unmix_seconds += time.perf_counter() - unmix_start
     return _drawn_when_done(pending, state, layout, display, drawn, shots.started_shot())
 
@@ -182,7 +181,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
       state['bar'].close()
   info = done['info']
   info_file.write_info(output_dir, item, dict(
-      state['info'] or known, frames=done['frames'], resumed_frames=done['resumed_frames'],
+      state['info'] or opened.info, frames=done['frames'], resumed_frames=done['resumed_frames'],
       frame_rate=str(info.frame_rate), rotation=info.rotation, turned_upright=info.turned,
       display_range=[round(v, 3) for v in display], temporal=temporal_config.enabled,
       scene_cuts=[state['done'] + index for index in shots.cuts],
@@ -190,7 +189,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, outp
       audio_streams=info.audio_streams, seconds=round(time.perf_counter() - start, 3),
       files=[os.path.basename(path) for path in outputs.values()],
       **({'skipped_formats': skipped} if skipped else {}),
-      **_notes(info, done['frames'], item.path, _view_bits(outputs, job, opened))), request)
+      **_notes(info, done['frames'], item.path, _view_bits(outputs, job))), request)
   return state['rendered']
 
 
@@ -245,13 +244,13 @@ def display_range(unmixer: predictors.Unmixer, opened: Dict[str, object]
 
 
 def _job(item: input_listing.MediaItem, outputs: Dict[str, str], settings: Dict[str, object],
-         video_config: jobs.VideoConfig, layout: str, opened: Optional[Opening]
+         video_config: jobs.VideoConfig, layout: str, opened: Opening
          ) -> jobs.VideoJob:
   """A video's job (`jobs.VideoJob`): side by side and top-bottom tagged as stereo; the
   views (the layout's) kept above 8 bits (`jobs.VideoJob.deep`) where `opened` found such
   samples and made its views of them, and video_config.keep_bits asks for them; the
   disparity's colour map tagged sRGB."""
-  deep = video_config.keep_bits and opened and opened.bits > 8 and opened.view_bits > 8
+  deep = video_config.keep_bits and opened.bits > 8 and opened.view_bits > 8
   views = ('left', 'right') if layout == 'separate' else (layout,)
   return jobs.VideoJob(item.path, outputs, settings, video_config,
                        {layout: media.STEREO_MODES[layout]}
@@ -259,17 +258,15 @@ def _job(item: input_listing.MediaItem, outputs: Dict[str, str], settings: Dict[
                        views if deep else (), ('disparity',))
 
 
-def _view_bits(outputs: Dict[str, str], job: jobs.VideoJob,
-               opened: Optional[Opening]) -> Tuple[int, str]:
+def _view_bits(outputs: Dict[str, str], job: jobs.VideoJob) -> Tuple[int, str]:
   """(Bits per sample of the views' videos, why not more where the video has more): the
-  input's as encoded (`jobs.VideoJob.deep`), else 8."""
+  input's as encoded (`jobs.VideoJob.deep`), else 8 (asked, or the method's views)."""
   if job.deep:
     bits = encoders.encoder_for(outputs[job.deep[0]], bits=16).bits
     return bits, '' if bits > 8 else "this container's codec has no more"
   if not job.config.keep_bits:
     return 8, 'asked: --nokeep_video_bits, for players without 10-bit H.264'
-  return 8, ('this method makes 8-bit views' if opened and opened.view_bits <= 8
-             else 'read at 8 bits')
+  return 8, 'this method makes 8-bit views'
 
 
 def _notes(info, frames: int, path: str, view_bits: Tuple[int, str]) -> Dict[str, object]:

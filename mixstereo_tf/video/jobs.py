@@ -77,9 +77,9 @@ class VideoJob:
     config: segments, queues, the bits kept (`VideoConfig`).
     stereo_modes: {key: `encoders.STEREO_MODES` name} of the outputs tagged as stereo
       (frame-packing SEI, Matroska StereoMode).
-    deep: the outputs that keep an input's samples of more than 8 bits: such an input's
-      frames reach `render` as uint16 and these outputs are encoded at its bits
-      (`encoders.encoder_for`); the others at 8.
+    deep: the outputs that keep an input's samples of more than 8 bits, encoded at its
+      bits (`encoders.encoder_for`); the others at 8. Such an input's frames reach
+      `render` as uint16 either way (`run`).
     colour_maps: the outputs drawn in sRGB colours whatever the input's (a disparity's
       colour map): tagged BT.709 (`SRGB_TAGS`), not with the input's primaries and
       transfer, which an HDR input's (BT.2020, HLG or PQ) would make players misshow.
@@ -251,10 +251,12 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Rendered],
 
   Args:
     job: the input, outputs and settings.
-    render: RGB input frame (uint8; uint16 for `job.deep`, `VideoJob`) -> {output key:
-      RGB frame (uint8, or uint16 for a deep output)}, or a call returning
-      them (`Rendered`, called on the writer's thread in frame order); a frame's outputs may
-      differ in size from each other but not between frames.
+    render: RGB input frame (uint8; uint16 from an input of more than 8 bits per sample,
+      whatever `job.deep` keeps, as a video's opening frame was unmixed from,
+      `cli.video_files.opening`) -> {output key: RGB frame, uint8 or uint16 (written at 8
+      bits unless the key is deep)}, or a call returning them (`Rendered`, called on the
+      writer's thread in frame order); a frame's outputs may differ in size from each
+      other but not between frames.
     on_start: called with the VideoInfo and the number of frames already done before any
       frame is rendered (e.g. to start a progress bar).
 
@@ -268,7 +270,7 @@ def run(job: VideoJob, render: Callable[[np.ndarray], Rendered],
   manifest = load_progress(job)
   done = sum(entry['frames'] for entry in manifest['segments'])
   try:
-    info, frames = streams.open_video(job.input_path, skip=done, deep=bool(job.deep))
+    info, frames = streams.open_video(job.input_path, skip=done, deep=True)
   except ValueError:
     if not manifest['segments']:  # Nothing to resume: no folder left behind.
       shutil.rmtree(job.folder, ignore_errors=True)
