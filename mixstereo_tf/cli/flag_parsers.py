@@ -1,6 +1,7 @@
 """Parsers of flag values that need more than absl's types: --swap_eyes (a boolean or
-'auto'), --mixing_weight ('auto' or a number in (0, 1)) and --middlebury_scale items
-(scene:scale). Each raises an error naming the flag and the value at fault.
+'auto'), --output_format (names, repeated or comma-separated), --mixing_weight ('auto' or a
+number in (0, 1)) and --middlebury_scale items (scene:scale). Each raises an error naming
+the flag and the value at fault.
 """
 
 from typing import Optional, Sequence, Tuple
@@ -26,6 +27,33 @@ class SwapEyesParser(flags.ArgumentParser):
 
   def flag_type(self):
     return 'bool or auto'
+
+
+class NameListParser(flags.ArgumentParser):
+  """One occurrence of a repeatable flag that also takes comma-separated names
+  (--output_format=mpo,jps as --output_format=mpo --output_format=jps): the list of its
+  names, each one of `names`; the flag's value is a list of such lists (`flattened`)."""
+
+  def __init__(self, names: Sequence[str]):
+    super().__init__()
+    self.names = tuple(names)
+
+  def parse(self, argument):
+    """[name, ...] of 'name[,name...]' (a list given as a default is checked as it is)."""
+    items = argument if isinstance(argument, (list, tuple)) else str(argument).split(',')
+    items = [str(item).strip() for item in items]
+    for item in items:
+      if item not in self.names:
+        raise ValueError(f'{item!r} is not one of {", ".join(self.names)}')
+    return items
+
+  def flag_type(self):
+    return 'comma-separated list of ' + '|'.join(self.names)
+
+
+def flattened(value: Sequence[Sequence[str]]) -> Tuple[str, ...]:
+  """The names of a NameListParser flag's value, in the order given."""
+  return tuple(name for names in value for name in names)
 
 
 def parse_mixing_weight(text: Optional[str]):

@@ -104,12 +104,13 @@ def define_output_options() -> None:
                        'others); --notemporal_prior matches every frame whole (the learned '
                        'stage on each: better disparities and views, slower), the '
                        "shot's encoding and range kept (experiments/results/temporal.md).")
-  flags.DEFINE_multi_enum('output_format', list(options['formats']),
-                          stereo_formats.FORMAT_NAMES,
-                          'Also write the pair in this stereo format (repeat for several): ' +
-                          '; '.join(f'{name}: {f.description}' for name, f in
-                                    stereo_formats.FORMATS.items()) +
-                          '. Videos: rgbd and the anaglyphs (the others are skipped).')
+  flags.DEFINE_multi(flag_parsers.NameListParser(stereo_formats.FORMAT_NAMES),
+                     flags.CsvListSerializer(','), 'output_format',
+                     [list(options['formats'])],
+                     'Also write the pair in these stereo formats (comma-separated, or the '
+                     'flag repeated): ' + '; '.join(f'{name}: {f.description}' for name, f in
+                                                     stereo_formats.FORMATS.items()) +
+                     '. Videos: rgbd and the anaglyphs (the others are skipped).')
 
 
 def output_options(config: Optional[predictors.PredictorConfig] = None
@@ -126,7 +127,7 @@ def output_options(config: Optional[predictors.PredictorConfig] = None
                                     keep_bits=FLAGS.keep_video_bits), settings=settings,
       temporal_config=temporal.TemporalConfig(enabled=FLAGS.temporal,
                                               use_prior=FLAGS.temporal_prior),
-      formats=tuple(FLAGS.output_format))
+      formats=flag_parsers.flattened(FLAGS.output_format))
 
 
 @functools.lru_cache(maxsize=None)

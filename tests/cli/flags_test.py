@@ -50,9 +50,12 @@ def _parsing(name):
 def test_output_format_is_repeatable_and_reaches_output_options():
   cli_flags.define_output_options()
   with _parsing('output_format') as output_format:
+    assert cli_flags.output_options().formats == ()  # The default: none.
     output_format.parse('mpo')
     output_format.parse('anaglyph_dubois')
     assert cli_flags.output_options().formats == ('mpo', 'anaglyph_dubois')
+    output_format.parse(' jps,wiggle')  # Comma-separated, as users type lists.
+    assert cli_flags.output_options().formats == ('mpo', 'anaglyph_dubois', 'jps', 'wiggle')
     assert cli_flags.output_options().settings is None
     settings = cli_flags.output_options(predictors.PredictorConfig(pretrained='anaglyph')).settings
     assert settings['pretrained'] == 'anaglyph'  # The config's fields and its weights'.
@@ -62,8 +65,8 @@ def test_output_format_is_repeatable_and_reaches_output_options():
     assert default == cli_flags.output_options(spelt).settings  # A rerun asks the same.
     classical = predictors.PredictorConfig('classical', mixture='auto')
     assert cli_flags.output_options(classical).settings['pretrained'] is None
-    with pytest.raises(flags.IllegalFlagValueError, match='wiggle'):
-      output_format.parse('gif')
+    with pytest.raises(flags.IllegalFlagValueError, match="'gif' is not one of.*wiggle"):
+      output_format.parse('mpo,gif')
     error = flag_errors.usage_error(ValueError("OutputOptions.formats: 'jps' twice"))
     assert str(error) == "--output_format: 'jps' twice"
 
