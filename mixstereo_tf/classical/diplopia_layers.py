@@ -22,10 +22,10 @@ those frequencies are unobservable and the prior sets them.
 `estimate_weight`: an edge of the left view at x shows twice in I: at x with weight a (the
 left view's copy) and at x - d_L(x) with weight 1 - a (the right view's, positive
 disparities). Where both copies are clear edges of one sign, |g(x)| / (|g(x)| +
-|g(x - d_L)|) of the horizontal gradient g of I is a; the weighted median over such pairs
-(weights: the smaller magnitude, so clear echoes count most) estimates it. Second-order
-statistics cannot: the power spectrum a^2 + (1 - a)^2 + 2 a (1 - a) cos(w d) is the same
-for a and 1 - a.
+|g(x - d_L)|) of the horizontal gradient g of I is a; the peak of its histogram over such
+pairs (weights: the smaller magnitude, so clear echoes count most), told apart from the
+spread of unrelated pairs around 1/2, estimates it. Second-order statistics cannot: the
+power spectrum a^2 + (1 - a)^2 + 2 a (1 - a) cos(w d) is the same for a and 1 - a.
 """
 
 import dataclasses
@@ -34,6 +34,7 @@ from typing import Dict, Optional, Tuple
 
 import cv2
 import numpy as np
+import scipy.optimize
 
 from mixstereo_tf.classical import layers_kernel
 from mixstereo_tf.classical import parallel_sgm
@@ -217,9 +218,10 @@ def estimate_weight(mixture01: np.ndarray, d_left: np.ndarray, consistent: np.nd
   Pairs: consistent left pixels x with d = round(d_L(x)) >= `min_lag` (nearer copies'
   gradients overlap), |g(x)| + |g(x - d)| at least the `quantile` of |g|, one sign, and
   isolated: |g(x + d)| and |g(x - 2 d)| (where a third copy of an unrelated edge would show)
-  below `isolation` times the weaker copy. a is the mode of |g(x)| / (|g(x)| + |g(x - d)|)
-  (histogram of 0.01 bins over [0.05, 0.95] weighted by the weaker copy, Gaussian-smoothed
-  by 3 bins): pairs of unrelated edges spread around 1/2, true echoes pile up at a.
+  below `isolation` times the weaker copy. a is the centre of the peak that true echoes
+  make in the histogram of |g(x)| / (|g(x)| + |g(x - d)|) (0.01 bins over [0.05, 0.95]
+  weighted by the weaker copy) beside the spread of unrelated edge pairs around 1/2
+  (`echo_peak`).
 
   Args:
     mixture01: float [H, W, 3] (or [H, W]) in [0, 1].
@@ -246,9 +248,34 @@ def estimate_weight(mixture01: np.ndarray, d_left: np.ndarray, consistent: np.nd
   if np.count_nonzero(chosen) < min_pairs:
     return fallback
   ratio = here[chosen] / (here[chosen] + there[chosen])
-  counts, _ = np.histogram(ratio, bins=90, range=(0.05, 0.95), weights=weaker[chosen])
-  kernel = np.exp(-0.5 * (np.arange(-8, 9) / 3.0) ** 2)
-  return float(0.05 + 0.01 * (np.argmax(np.convolve(counts, kernel, 'same')) + 0.5))
+  counts, _ = np.histogram(ratio, bins=RATIO_BINS.size, range=(0.05, 0.95),
+                           weights=weaker[chosen])
+  return echo_peak(counts)
+
+
+# The ratio histogram's bin centres, and the spreads fitted by `echo_peak` (chosen on
+# validation double images: docs/LEARNED_DIPLOPIA.md, "Estimating a").
+RATIO_BINS = 0.05 + 0.01 * (np.arange(90) + 0.5)
+BACKGROUND_SPREADS = tuple(0.04 + 0.02 * k for k in range(9))  # 0.04 to 0.2.
+ECHO_SPREAD = 0.03
+
+
+def echo_peak(counts: np.ndarray) -> float:
+  """The echo ratio a of a histogram over RATIO_BINS: the centre of the peak N(a,
+  ECHO_SPREAD) that, beside unrelated pairs' spread around 1/2 (N(1/2, s), s one of
+  BACKGROUND_SPREADS), fits the normalised histogram best in least squares with
+  non-negative weights. The mode alone was pulled towards 1/2 by those pairs where true
+  echoes are few (small images)."""
+  target = counts / max(float(counts.sum()), 1e-12)
+  echoes = np.exp(-0.5 * ((RATIO_BINS[None, :] - RATIO_BINS[:, None]) / ECHO_SPREAD) ** 2)
+  best, found = np.inf, 0.5
+  for spread in BACKGROUND_SPREADS:
+    background = np.exp(-0.5 * ((RATIO_BINS - 0.5) / spread) ** 2)
+    for centre, echo in zip(RATIO_BINS, echoes):
+      residual = scipy.optimize.nnls(np.stack([background, echo], axis=1), target)[1]
+      if residual < best:
+        best, found = residual, float(centre)
+  return found
 
 
 AUTO = 'auto'  # A mixing weight estimated from the image (`estimate_weight`).

@@ -32,6 +32,18 @@ def test_the_weight_comes_from_the_echoes_of_edges(weight):
   assert found == pytest.approx(weight, abs=0.03)
 
 
+@pytest.mark.parametrize('weight', [0.3, 0.5, 0.7])
+def test_the_echo_peak_stands_out_of_unrelated_pairs_around_one_half(weight):
+  """A small image's histogram: unrelated edge pairs spread around 1/2 and outweigh the
+  true echoes' peak at a; the fit finds the peak where the mode stays at the spread's top."""
+  bins = diplopia_layers.RATIO_BINS
+  counts = (100 * np.exp(-0.5 * ((bins - 0.5) / 0.13) ** 2)
+            + 30 * np.exp(-0.5 * ((bins - weight) / 0.03) ** 2))
+  if weight != 0.5:
+    assert abs(bins[np.argmax(counts)] - 0.5) < 0.05  # The mode misses it.
+  assert diplopia_layers.echo_peak(counts) == pytest.approx(weight, abs=0.01)
+
+
 def test_without_echoes_the_weight_stays_one_half():
   flat = np.full((_H, _W, 3), 0.5)
   assert diplopia_layers.estimate_weight(flat, np.full((_H, _W), 5.0),
