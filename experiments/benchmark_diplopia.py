@@ -39,6 +39,7 @@ from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import diplopia_layers
 from mixstereo_tf.classical import diplopia_range
+from mixstereo_tf.classical import diplopia_weight
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import unmix_files
@@ -131,7 +132,7 @@ def stage_seconds(image, costs, density):
                                      threads=workers.usable_cpus(0))
   times['sgm'] = time.perf_counter() - start
   start = time.perf_counter()
-  weight = diplopia_layers.estimate_weight(image01, matched['disparity_left'],
+  weight = diplopia_weight.estimate_weight(image01, matched['disparity_left'],
                                            matched['consistent_left'])
   times['weight'] = time.perf_counter() - start
   start = time.perf_counter()

@@ -33,6 +33,7 @@ import numpy as np
 from mixstereo_tf.classical import diplopia_cepstrum
 from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.classical import diplopia_weight
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.classical import working_scale
@@ -119,7 +120,7 @@ def check_size(shape: Tuple[int, ...], config: DiplopiaConfig) -> None:
 def _self_match(image, config, weight, costs, prior, prior_window):
   """Step 2 and the weight on the copy reduced to `config.max_width` (`working_scale`):
   ({'disparity_left', 'disparity_right'} at full size, (the a used, a note or None):
-  `diplopia_layers.resolve_weight`)."""
+  `diplopia_weight.resolve_weight`)."""
   matching = config.matching
   copy = working_scale.reduce(image, working_scale.factor(image.shape[1], config.max_width),
                               (matching.min_disparity, matching.max_disparity), prior)
@@ -140,7 +141,7 @@ def _self_match(image, config, weight, costs, prior, prior_window):
                                      threads=workers.usable_cpus(0),
                                      max_strip_mib=config.max_strip_mib)
   del volume  # H x W x D bytes, not held through the layer solve.
-  resolved = diplopia_layers.resolve_weight(weight, copy.image, matched['disparity_left'],
+  resolved = diplopia_weight.resolve_weight(weight, copy.image, matched['disparity_left'],
                                             matched['consistent_left'])  # (a, note).
   if resolved[1]:
     logging.warning('--mixing_weight=auto: %s.', resolved[1])
@@ -177,7 +178,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
       the views, so disparities are positive by convention; lag 0 matches every image to
       itself); None: the config's range.
     config: parameters (default `DiplopiaConfig()`).
-    weight: a; None: 1/2, 'auto': estimated (`diplopia_layers.resolve_weight`).
+    weight: a; None: 1/2, 'auto': estimated (`diplopia_weight.resolve_weight`).
     costs: (mixture float [H, W, 3] in [0, 1], config) -> the uint8 [H, W, D] self-matching
       volume over config.matching's lags (None: `diplopia_costs.zncc_costs`; a learned
       stage's otherwise).
@@ -195,7 +196,7 @@ def unmix_diplopia(mixture, disparity_range: Optional[Tuple[int, int]] = None,
     left layer sampled at x + d_R, as 'right' (`separate_layers`); 'disparity_left',
     'disparity_right': float32 [H, W], pixels, positive; 'disparity_range': the (min, max)
     searched; 'mixing_weight': the a used; 'mixing_weight_note' where 'auto' found no
-    clear echo and used 1/2 (`diplopia_layers.NO_ECHO`).
+    clear echo and used 1/2 (`diplopia_weight.NO_ECHO`).
 
   Raises:
     ValueError: a range with min < 1 or min >= max, no lag of it within the image, or a

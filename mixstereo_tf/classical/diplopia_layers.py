@@ -1,5 +1,5 @@
-"""The two layers of a double image I = a L + (1 - a) R given its disparities, and the
-mixing weight a from the image's echoes.
+"""The two layers of a double image I = a L + (1 - a) R given its disparities
+(the weight a: `diplopia_weight`).
 
 With the right pixel x matching the left pixel x + d_R(x) (docs/DESIGN.md), R(x) =
 L(x + d_R(x)) wherever the right pixel is visible in the left view, so
@@ -18,24 +18,15 @@ a L) / (1 - a), what the mixture leaves of L (`onto_mixture`; L sampled at x + d
 `LayerConfig.right_from_mixture` off, wrong where R shows what L hides). The 2-tap
 filter a + (1 - a) e^{i w d} is zero only for a = 1/2 (at w = pi (2k + 1) / d): there
 those frequencies are unobservable and the prior sets them.
-
-`estimate_weight`: an edge of the left view at x shows twice in I: at x with weight a (the
-left view's copy) and at x - d_L(x) with weight 1 - a (the right view's, positive
-disparities). Where both copies are clear edges of one sign, |g(x)| / (|g(x)| +
-|g(x - d_L)|) of the horizontal gradient g of I is a; the peak of its histogram over such
-pairs (weights: the smaller magnitude, so clear echoes count most), told apart from the
-spread of unrelated pairs around 1/2, estimates it. Second-order statistics cannot: the
-power spectrum a^2 + (1 - a)^2 + 2 a (1 - a) cos(w d) is the same for a and 1 - a.
 """
 
 import dataclasses
 import math
-from typing import Dict, Optional, Tuple
+from typing import Dict, Tuple
 
-import cv2
 import numpy as np
-import scipy.optimize
 
+from mixstereo_tf.classical import diplopia_weight
 from mixstereo_tf.classical import layers_kernel
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.core import workers
@@ -75,14 +66,6 @@ class LayerConfig:
   def __post_init__(self):
     if not self.smoothness > 0:
       raise ValueError(f'smoothness must be positive, got {self.smoothness!r}.')
-
-
-def check_weight(weight: float) -> float:
-  """`weight` as a float in (0, 1), or ValueError naming it."""
-  if not 0.0 < float(weight) < 1.0:
-    raise ValueError(f'The mixing weight a of I = a L + (1 - a) R must lie in (0, 1), got '
-                     f'{weight!r}.')
-  return float(weight)
 
 
 def _taps(d_right: np.ndarray, wide: int):
@@ -146,7 +129,7 @@ def separate_layers(mixture01: np.ndarray, d_right: np.ndarray,
     at x + d_R (the right layer without `right_from_mixture`; the shipped refiners'
     input).
   """
-  weight = check_weight(weight)
+  weight = diplopia_weight.check_weight(weight)
   h, w, channels = mixture01.shape
   extra = int(np.ceil(max(float(d_right.max()), 0.0))) + 2
   x0, frac = _taps(d_right, w + extra)
@@ -188,7 +171,7 @@ def onto_mixture(mixture01: np.ndarray, left: np.ndarray, right: np.ndarray, wei
   Returns:
     (left, right) float32 [H, W, 3] in [0, 1].
   """
-  weight = check_weight(weight)
+  weight = diplopia_weight.check_weight(weight)
   if not right_share > 0:
     raise ValueError(f'right_share must be positive, got {right_share!r}.')
   residual = (np.asarray(mixture01, np.float32) - np.float32(weight) * left
@@ -200,98 +183,3 @@ def onto_mixture(mixture01: np.ndarray, left: np.ndarray, right: np.ndarray, wei
     to_left, to_right = weight / norm, (1.0 - weight) * right_share / norm
   return tuple(np.clip(view + np.float32(share) * residual, 0.0, 1.0).astype(np.float32)
                for view, share in ((left, to_left), (right, to_right)))
-
-
-def _lagged(values: np.ndarray, lag: np.ndarray):
-  """values[y, x + lag[y, x]] (clipped) and whether x + lag lies inside the row."""
-  width = values.shape[1]
-  column = np.arange(width)[None, :] + lag
-  inside = (column >= 0) & (column < width)
-  return np.take_along_axis(values, np.clip(column, 0, width - 1), axis=1), inside
-
-
-def estimate_weight(mixture01: np.ndarray, d_left: np.ndarray, consistent: np.ndarray,
-                    quantile: float = 0.9, isolation: float = 0.25, min_lag: int = 5,
-                    min_pairs: int = 30, fallback: Optional[float] = 0.5) -> Optional[float]:
-  """The left view's weight a of a double image (module docstring).
-
-  Pairs: consistent left pixels x with d = round(d_L(x)) >= `min_lag` (nearer copies'
-  gradients overlap), |g(x)| + |g(x - d)| at least the `quantile` of |g|, one sign, and
-  isolated: |g(x + d)| and |g(x - 2 d)| (where a third copy of an unrelated edge would show)
-  below `isolation` times the weaker copy. a is the centre of the peak that true echoes
-  make in the histogram of |g(x)| / (|g(x)| + |g(x - d)|) (0.01 bins over [0.05, 0.95]
-  weighted by the weaker copy) beside the spread of unrelated edge pairs around 1/2
-  (`echo_peak`).
-
-  Args:
-    mixture01: float [H, W, 3] (or [H, W]) in [0, 1].
-    d_left: float [H, W], pixels, positive: left pixel x matches right pixel x - d_L.
-    consistent: bool [H, W], left pixels whose disparity passed the left-right check.
-    quantile, isolation, min_lag: the pairs' selection (above).
-    min_pairs: with fewer pairs the image shows no clear echo: `fallback` is returned.
-
-  Returns:
-    a in [0.05, 0.95], or `fallback`.
-  """
-  gray = np.asarray(mixture01, np.float32)
-  gray = gray.mean(axis=-1) if gray.ndim == 3 else gray
-  grad = cv2.Sobel(cv2.GaussianBlur(gray, (0, 0), 0.7), cv2.CV_32F, 1, 0, ksize=3)
-  lag = np.rint(np.nan_to_num(d_left)).astype(np.int64)
-  echo, inside = _lagged(grad, -lag)
-  after, inside_after = _lagged(grad, lag)
-  before, inside_before = _lagged(grad, -2 * lag)
-  here, there = np.abs(grad), np.abs(echo)
-  weaker = np.minimum(here, there)
-  chosen = (consistent & inside & inside_after & inside_before & (lag >= min_lag) &
-            (here + there >= np.quantile(here, quantile)) & (grad * echo > 0) &
-            (np.abs(after) < isolation * weaker) & (np.abs(before) < isolation * weaker))
-  if np.count_nonzero(chosen) < min_pairs:
-    return fallback
-  ratio = here[chosen] / (here[chosen] + there[chosen])
-  counts, _ = np.histogram(ratio, bins=RATIO_BINS.size, range=(0.05, 0.95),
-                           weights=weaker[chosen])
-  return echo_peak(counts)
-
-
-# The ratio histogram's bin centres, and the spreads fitted by `echo_peak` (chosen on
-# validation double images: docs/LEARNED_DIPLOPIA.md, "Estimating a").
-RATIO_BINS = 0.05 + 0.01 * (np.arange(90) + 0.5)
-BACKGROUND_SPREADS = tuple(0.04 + 0.02 * k for k in range(9))  # 0.04 to 0.2.
-ECHO_SPREAD = 0.03
-
-
-def echo_peak(counts: np.ndarray) -> float:
-  """The echo ratio a of a histogram over RATIO_BINS: the centre of the peak N(a,
-  ECHO_SPREAD) that, beside unrelated pairs' spread around 1/2 (N(1/2, s), s one of
-  BACKGROUND_SPREADS), fits the normalised histogram best in least squares with
-  non-negative weights. The mode alone was pulled towards 1/2 by those pairs where true
-  echoes are few (small images)."""
-  target = counts / max(float(counts.sum()), 1e-12)
-  echoes = np.exp(-0.5 * ((RATIO_BINS[None, :] - RATIO_BINS[:, None]) / ECHO_SPREAD) ** 2)
-  best, found = np.inf, 0.5
-  for spread in BACKGROUND_SPREADS:
-    background = np.exp(-0.5 * ((RATIO_BINS - 0.5) / spread) ** 2)
-    for centre, echo in zip(RATIO_BINS, echoes):
-      residual = scipy.optimize.nnls(np.stack([background, echo], axis=1), target)[1]
-      if residual < best:
-        best, found = residual, float(centre)
-  return found
-
-
-AUTO = 'auto'  # A mixing weight estimated from the image (`estimate_weight`).
-# Said where AUTO found too few echo pairs to estimate a from (`resolve_weight`).
-NO_ECHO = ('no clear echo to estimate it from (too few isolated echo pairs): 1/2 used; '
-           'name the weight (--mixing_weight) if known')
-
-
-def resolve_weight(weight, mixture01: np.ndarray, d_left: np.ndarray,
-                   consistent: np.ndarray) -> Tuple[float, Optional[str]]:
-  """(The weight a to separate with, a note or None): None -> 1/2 (`--mixture=diplopia`
-  exactly), AUTO -> `estimate_weight` (noted NO_ECHO where it found too few pairs and fell
-  back to 1/2), a number in (0, 1) -> itself (ValueError otherwise)."""
-  if weight is None:
-    return 0.5, None
-  if weight != AUTO:
-    return check_weight(weight), None
-  found = estimate_weight(mixture01, d_left, consistent, fallback=None)
-  return (0.5, NO_ECHO) if found is None else (found, None)

@@ -9,7 +9,7 @@ from typing import Optional, Sequence, Tuple
 from absl import app
 from absl import flags
 
-from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.classical import diplopia_weight
 from mixstereo_tf.unmixing import eye_order
 
 
@@ -59,10 +59,10 @@ def flattened(value: Sequence[Sequence[str]]) -> Tuple[str, ...]:
 def parse_mixing_weight(text: Optional[str]):
   """--mixing_weight: None (unset: 1/2), 'auto', or a number in (0, 1); UsageError naming
   the flag otherwise."""
-  if text is None or text.strip().lower() == diplopia_layers.AUTO:
-    return None if text is None else diplopia_layers.AUTO
+  if text is None or text.strip().lower() == diplopia_weight.AUTO:
+    return None if text is None else diplopia_weight.AUTO
   try:
-    return diplopia_layers.check_weight(float(text))
+    return diplopia_weight.check_weight(float(text))
   except ValueError as e:
     raise app.UsageError(f"--mixing_weight: expected 'auto' or a number in (0, 1), got "
                          f'{text!r} ({e})') from None

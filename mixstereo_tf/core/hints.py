@@ -38,7 +38,7 @@ class FrameHint:
       with one (black frames, fades, titles); None: such a frame fails.
     mixing_weight: double images: the left view's weight a of I = a L + (1 - a) R; None:
       1/2 (`--mixture=diplopia` exactly); 'auto': estimated from the frame; a number in
-      (0, 1): that weight (`classical.diplopia_layers.resolve_weight`).
+      (0, 1): that weight (`classical.diplopia_weight.resolve_weight`).
     unread: an output the caller does not read ('disparity_right': a video's frames,
       which write the views and the left disparity): a stage may return its first stage's
       value there instead of refining it (`refiner_stage.refiner_unmix`); None: every output.

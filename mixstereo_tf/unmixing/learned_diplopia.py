@@ -10,7 +10,7 @@ Here:
      (1 - cosine(here(x), there(x - d))) x `cost_scale` (`feature_costs.cosine_costs`), uint8;
   3. then as the classical method (`diplopia.unmix_diplopia` with these costs): SGM with
      its left-right check and filling, the mixing weight (1/2, given, or estimated:
-     `diplopia_layers.resolve_weight`) and the regularised layer separation.
+     `diplopia_weight.resolve_weight`) and the regularised layer separation.
 Disparities are positive by convention (docs/DESIGN.md): the copy further right is the
 left eye's.
 """

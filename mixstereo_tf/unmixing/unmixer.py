@@ -12,7 +12,7 @@ import numpy as np
 import tensorflow as tf
 
 from mixstereo_tf.artifacts import runs
-from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.classical import diplopia_weight
 from mixstereo_tf.core import hints
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import mixture_choice
@@ -86,12 +86,12 @@ class PredictorConfig:
       raise ValueError('PredictorConfig.max_network_pixels must be a whole number of at '
                        f'least 1 (or None: no limit), got {self.max_network_pixels!r}.')
     weight = self.mixing_weight
-    if weight is None or weight == diplopia_layers.AUTO:
+    if weight is None or weight == diplopia_weight.AUTO:
       return
     try:
       if isinstance(weight, (bool, str)):  # Not a number ('auto' returned above).
         raise TypeError(weight)
-      diplopia_layers.check_weight(weight)
+      diplopia_weight.check_weight(weight)
     except (TypeError, ValueError):
       raise ValueError(f"PredictorConfig.mixing_weight must be None, 'auto' or a number in "
                        f'(0, 1), got {weight!r}.') from None

@@ -5,7 +5,7 @@ from absl import logging
 import numpy as np
 import pytest
 
-from mixstereo_tf.classical import diplopia_layers
+from mixstereo_tf.classical import diplopia_weight
 from mixstereo_tf.core import image_range
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import steps
@@ -130,10 +130,10 @@ def test_a_16_bit_double_image_keeps_its_samples_where_any_disparity_fits():
 
 def test_an_auto_weight_that_found_no_echo_says_it_used_one_half():
   """`--mixing_weight=auto` on a double image without isolated edges (a smooth gradient)
-  falls back to 1/2; the info says so (`diplopia_layers.NO_ECHO`), a named weight not."""
+  falls back to 1/2; the info says so (`diplopia_weight.NO_ECHO`), a named weight not."""
   y, x = np.mgrid[:48, :96]
   smooth = np.dstack([40 + x, 60 + y, np.full((48, 96), 90)]).astype(np.uint8)
-  for weight, note in (('auto', diplopia_layers.NO_ECHO), (0.3, None)):
+  for weight, note in (('auto', diplopia_weight.NO_ECHO), (0.3, None)):
     info = predictors.build_unmixer(predictors.PredictorConfig(
         'classical', mixture='diplopia', mixing_weight=weight,
         disparity_range=(1, 8)))(smooth)['info']
