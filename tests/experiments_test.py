@@ -388,3 +388,16 @@ def test_a_markdown_report_ends_with_one_newline_in_a_new_folder(tmp_path, capsy
     markdown.write(str(path), lines)
     assert path.read_text() == '# Title\n\na line\n'
     assert capsys.readouterr().out == '# Title\n\na line\n'
+
+
+def test_weight_validation_scores_the_estimates_and_the_true_weight():
+  """On the drawn echo scene (known shift) both estimates land near a = 0.3 and the true a's
+  views are the reference the others are read against."""
+  from experiments import weight_validation  # pylint: disable=import-outside-toplevel
+  from tests.classical import double_images  # pylint: disable=import-outside-toplevel
+  left, right = (np.rint(view * 255).astype(np.uint8) for view in double_images.steps_pair())
+  found = weight_validation.score(left, right, 0.3)
+  assert set(found) == set(weight_validation.ESTIMATES)
+  assert found['true a'][0] == 0.3
+  assert found['fitted peak (shipped)'][0] == pytest.approx(0.3, abs=0.03)
+  assert found['true a'][1] >= found['mode (before)'][1] - 0.5
