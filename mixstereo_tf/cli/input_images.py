@@ -31,8 +31,7 @@ from mixstereo_tf.data import image_io
 _ORIENTATIONS = {2: lambda a: a[:, ::-1], 3: lambda a: a[::-1, ::-1], 4: lambda a: a[::-1],
                  5: lambda a: a.transpose(1, 0, 2), 6: lambda a: np.rot90(a, -1),
                  7: lambda a: np.rot90(a, 2).transpose(1, 0, 2), 8: lambda a: np.rot90(a, 1)}
-_ANIMATED = ('.gif', '.webp', '.png', '.apng')
-_HEIF = ('.heic', '.heif', '.hif')
+_ANIMATED = ('GIF', 'WEBP', 'PNG')  # Pillow's formats that animate (APNG reads as PNG).
 _MPO_STEREO = 'Multi-Frame Image: (Disparity)'  # Pillow's name of MP type 0x020002.
 _TIFF_REDUCED = 1  # NewSubfileType (tag 254) bit 0: a reduced-resolution copy.
 
@@ -52,6 +51,8 @@ class ImageHeader:
       pair group (`image_io.heif_stereo_views`); 0 for other files.
     pages: a TIFF's full-resolution pages, a HEIF's images (1 for other files).
     chroma_halved: colour stored at half the width or less (`image_io.chroma_halved`).
+    format: Pillow's name of the file's format ('JPEG', 'MPO', 'HEIF', ...), whatever
+      its extension says; '' for a file Pillow cannot read.
   """
   orientation: int = 1
   icc_profile: Optional[bytes] = None
@@ -59,6 +60,7 @@ class ImageHeader:
   stereo_views: int = 0
   pages: int = 1
   chroma_halved: bool = False
+  format: str = ''
 
 
 def _tiff_pages(image: Image.Image, frames: int) -> int:
@@ -103,7 +105,7 @@ def header(path: str) -> ImageHeader:
     return ImageHeader()
   return ImageHeader(orientation if orientation in _ORIENTATIONS else 1,
                      profile if profile and profile[16:20] == b'RGB ' else None,
-                     frames, stereo, pages, halved)
+                     frames, stereo, pages, halved, image.format or '')
 
 
 def _refuse_other_images(path: str, found: ImageHeader) -> None:
@@ -111,14 +113,14 @@ def _refuse_other_images(path: str, found: ImageHeader) -> None:
   if found.stereo_views > 1:
     views = found.stereo_views
     kind = (f'a HEIF stereo pair (a spatial photo of {views} views)'
-            if path.lower().endswith(_HEIF) else f'an MPO stereo pair ({views} views)')
+            if found.format == 'HEIF' else f'an MPO stereo pair ({views} views)')
     raise ValueError(f'{path} is {kind}: it holds the two views already, not a mixture of '
                      'them; there is nothing to unmix.')
-  if found.frames > 1 and os.path.splitext(path)[1].lower() in _ANIMATED:
+  if found.frames > 1 and found.format in _ANIMATED:
     raise ValueError(f'{path} is an animated image ({found.frames} frames); only its first '
                      'frame would be read. Convert it to a video to unmix every frame, e.g. '
                      f'ffmpeg -i {path} -pix_fmt yuv420p out.mp4')
-  if found.pages > 1 and path.lower().endswith(_HEIF):
+  if found.pages > 1 and found.format == 'HEIF':
     logging.warning('%s holds %d images: only its primary image is unmixed. Convert each '
                     'to a PNG to unmix the others.', path, found.pages)
   elif found.pages > 1:
@@ -145,7 +147,7 @@ def read_upright(path: str, found: Optional[ImageHeader] = None, deep: bool = Fa
   image = image_io.as_rgb(raw, path, alpha)
   image = image if deep else image_range.eight_bits(image)
   del raw
-  if found.orientation == 1 or os.path.splitext(path)[1].lower() in image_io.TIFF_EXTENSIONS:
+  if found.orientation == 1 or found.format == 'TIFF':
     return image, found.orientation, lost  # TIFF decoders apply the tag (`read_raw`).
   return (np.ascontiguousarray(_ORIENTATIONS[found.orientation](image)), found.orientation,
           lost)

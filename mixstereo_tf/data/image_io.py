@@ -38,7 +38,6 @@ def check_file(path: str) -> None:
 
 # Pillow modes -> the mode whose pixels `read_raw` returns (8/16-bit gray, RGB, RGBA).
 _PILLOW_MODES = {'L': 'L', 'LA': 'LA', 'I;16': 'I;16', 'RGB': 'RGB', 'RGBA': 'RGBA'}
-TIFF_EXTENSIONS = ('.tif', '.tiff')
 
 
 def _read_with_pillow(path: str) -> Optional[np.ndarray]:

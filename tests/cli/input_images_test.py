@@ -35,11 +35,13 @@ def test_rotated_tiff_reads_upright(tmp_path, orientation, stored):
   # TIFF decoders apply the orientation tag themselves; OpenCV 5.0 cannot decode the
   # tags that transpose (6, 8), which Pillow then reads. The tag is applied once.
   upright = np.random.default_rng(orientation).integers(0, 256, (12, 16, 3), dtype=np.uint8)
-  path = str(tmp_path / f'phone_{orientation}.tiff')
-  Image.fromarray(upright).transpose(stored).save(path, tiffinfo={0x0112: orientation})
-  image, found, _ = input_images.read_upright(path)
-  assert found == orientation
-  np.testing.assert_array_equal(image, upright)
+  for name in (f'phone_{orientation}.tiff', f'misnamed_{orientation}.jpg'):
+    path = str(tmp_path / name)  # By its format, not its extension.
+    Image.fromarray(upright).transpose(stored).save(path, format='TIFF',
+                                                    tiffinfo={0x0112: orientation})
+    image, found, _ = input_images.read_upright(path)
+    assert found == orientation
+    np.testing.assert_array_equal(image, upright)
 
 
 @pytest.mark.parametrize('orientation', range(1, 9))
@@ -125,6 +127,10 @@ def test_an_animated_png_is_refused_like_a_gif(tmp_path):
   _picture(0).save(path, save_all=True, append_images=[_picture(1)])
   with pytest.raises(ValueError, match=r'wiggle\.png is an animated image \(2 frames\)'):
     input_images.read_image(path)
+  misnamed = str(tmp_path / 'wiggle.jpg')  # The format, not the extension, decides.
+  _picture(0).save(misnamed, format='GIF', save_all=True, append_images=[_picture(1)])
+  with pytest.raises(ValueError, match=r'wiggle\.jpg is an animated image \(2 frames\)'):
+    input_images.read_image(misnamed)
   _picture(0).save(tmp_path / 'still.png')
   assert input_images.read_image(str(tmp_path / 'still.png')).shape == (24, 32, 3)
 
@@ -215,6 +221,12 @@ def test_a_heif_stereo_pair_is_refused_and_a_burst_is_not(tmp_path):
   with pytest.raises(ValueError, match=refused):
     input_images.read_image(str(spatial))
   assert input_images.read_image(str(tmp_path / 'burst.heic')).shape == (16, 24, 3)
+  # Named by what it holds, not by its extension (a renamed or mislabelled download).
+  misnamed = tmp_path / 'spatial.jpg'
+  misnamed.write_bytes(spatial.read_bytes())
+  assert input_images.header(str(misnamed)).format == 'HEIF'
+  with pytest.raises(ValueError, match=r'spatial.jpg is a HEIF stereo pair'):
+    input_images.read_image(str(misnamed))
 
 
 def test_reduced_resolution_tiff_pages_are_not_pages(tmp_path, caplog):
