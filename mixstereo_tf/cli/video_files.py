@@ -259,11 +259,13 @@ def _job(item: input_listing.MediaItem, outputs: Dict[str, str], settings: Dict[
 
 
 def _view_bits(outputs: Dict[str, str], job: jobs.VideoJob) -> Tuple[int, str]:
-  """(Bits per sample of the views' videos, why not more where the video has more): the
-  input's as encoded (`jobs.VideoJob.deep`), else 8 (asked, or the method's views)."""
+  """(Bits per sample of the views' videos, their encoder's label where more than 8, else
+  why not more): the input's as encoded (`jobs.VideoJob.deep`), else 8 (asked, or the
+  method's views)."""
   if job.deep:
-    bits = encoders.encoder_for(outputs[job.deep[0]], bits=16).bits
-    return bits, '' if bits > 8 else "this container's codec has no more"
+    encoder = encoders.encoder_for(outputs[job.deep[0]], bits=16)
+    return encoder.bits, encoder.label if encoder.bits > 8 else (
+        f"this container's codec, {encoder.label}, has no more")
   if not job.config.keep_bits:
     return 8, 'asked: --nokeep_video_bits, for players without 10-bit H.264'
   return 8, 'this method makes 8-bit views'
@@ -274,7 +276,7 @@ def _notes(info, frames: int, path: str, view_bits: Tuple[int, str]) -> Dict[str
   {'ended_early': ...} (also logged) when the video ended well before the frames its
   container declares (a cut or damaged file: what decoded is written); for samples of
   more than 8 bits {'bit_depth': what was kept of them}, 'views_bit_depth': the views'
-  videos' (`view_bits`: with why not more; logged where it is 8)."""
+  videos' (`view_bits`: with their encoder, or why not more; logged where it is 8)."""
   notes = {}
   if info.width % 2 or info.height % 2:
     notes['padding'] = (f'{info.width}x{info.height} frames: an output video whose width or '
@@ -285,13 +287,13 @@ def _notes(info, frames: int, path: str, view_bits: Tuple[int, str]) -> Dict[str
                             'its container declares (a cut or damaged file?); the decoded '
                             'ones are written')
     logging.warning('%s.', notes['ended_early'])
-  bits, short = view_bits
+  bits, said = view_bits
   if info.bits > 8:
     notes['views_bit_depth'] = bits
     notes['bit_depth'] = f'{path} stores {info.bits}-bit samples: ' + (
         f'matched at 8 bits, its views made from 16-bit samples and written at {bits} '
-        '(H.264 High 10); the disparity video and other formats at 8' if bits > 8
-        else f'its views were written at 8 bits ({short})')
+        f'({said}); the disparity video and other formats at 8' if bits > 8
+        else f'its views were written at 8 bits ({said})')
     if bits == 8:
       logging.warning('%s.', notes['bit_depth'])
   return notes

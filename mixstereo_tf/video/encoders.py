@@ -12,12 +12,13 @@ from typing import Dict, Optional, Tuple
 class EncoderSettings:
   """How a container is encoded: codec, pixel format, codec options, and the RGB -> YUV
   matrix and range, both used and tagged (FFmpeg's AVColorSpace / AVColorRange numbers:
-  1 BT.709 / limited, 5 BT.601 / full)."""
+  1 BT.709 / limited, 5 BT.601 / full), and its name as players list it (`label`)."""
   codec: str
   pix_fmt: str
   options: Tuple[Tuple[str, str], ...] = ()
   matrix: int = 1
   color_range: int = 1
+  label: str = ''
 
   @property
   def bits(self) -> int:
@@ -38,7 +39,8 @@ class EncoderSettings:
 # at HD sizes, where FFmpeg's default conversion wrote BT.601: green 255 showed as 215);
 # AVI's Motion JPEG is JFIF's full-range BT.601.
 _H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'veryfast'),
-                                               ('x264-params', 'mbtree=0')))
+                                               ('x264-params', 'mbtree=0')),
+                        label='H.264 High')
 # Frames of more than 8 bits per sample (a 10-bit phone or HDR video's views) in MP4, MOV
 # and MKV: the same H.264 at 10 bits (High 10). Measured on a 2560x720 photo frame, 8 frames
 # on 2 cores: 39.3 dB PSNR at 375 KiB and 0.05 s a frame, where 8 bits gave 36.5 dB at 383
@@ -46,10 +48,11 @@ _H264 = EncoderSettings('libx264', 'yuv420p', (('crf', '18'), ('preset', 'veryfa
 # 39.4 dB at 317 KiB and 0.12 s, but PyAV's MP4 / MOV muxing of it failed ('Not yet
 # implemented in FFmpeg') in 160 of 200 one-frame files of a ramp (x264: none), so it is
 # not used. High 10 plays in FFmpeg-based players (VLC, mpv, Kodi), not QuickTime or browsers.
-DEEP = dataclasses.replace(_H264, pix_fmt='yuv420p10le')
+DEEP = dataclasses.replace(_H264, pix_fmt='yuv420p10le', label='H.264 High 10')
 ENCODERS: Dict[str, EncoderSettings] = {
     '.mp4': _H264, '.mov': _H264, '.mkv': _H264,
-    '.avi': EncoderSettings('mjpeg', 'yuvj420p', (('qmin', '1'), ('qmax', '2')), 5, 2),
+    '.avi': EncoderSettings('mjpeg', 'yuvj420p', (('qmin', '1'), ('qmax', '2')), 5, 2,
+                            'Motion JPEG'),
 }
 
 

@@ -536,11 +536,12 @@ def test_a_10_bit_video_keeps_its_bits_in_the_views(tmp_path, extension):
   levels = len(np.unique(left[:, 8:-8] >> 6))  # In 10-bit steps.
   error = np.abs(left.astype(float) - ramp)[:, 8:-8] / 64
   if extension == '.mp4':
-    assert info['views_bit_depth'] == 10 and 'written at 10' in info['bit_depth']
+    assert info['views_bit_depth'] == 10 and 'written at 10 (H.264 High 10)' in info['bit_depth']
     assert (codec, pix_fmt) == ('h264', 'yuv420p10le') and levels > 300, (pix_fmt, levels)
     assert np.median(error) <= 4, np.median(error)  # Two lossy encodes: < 1 8-bit step.
   else:
     assert info['views_bit_depth'] == 8 and 'written at 8' in info['bit_depth']
+    assert "codec, Motion JPEG, has no more" in info['bit_depth']
     assert codec == 'mjpeg' and levels <= 140, levels
   with av.open(str(tmp_path / 'out' / f'hdr_disparity{extension}')) as video:
     assert video.streams.video[0].codec_context.pix_fmt in ('yuv420p', 'yuvj420p')
