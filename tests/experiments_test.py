@@ -401,3 +401,21 @@ def test_weight_validation_scores_the_estimates_and_the_true_weight():
   assert found['true a'][0] == 0.3
   assert found['fitted peak (shipped)'][0] == pytest.approx(0.3, abs=0.03)
   assert found['true a'][1] >= found['mode (before)'][1] - 0.5
+
+
+def test_panoramas_score_a_strip_under_both_plans():
+  """A 20 x 480 strip (24 : 1) of the detection scenes: planned by frames it is read as the
+  anaglyph it is; by the whole width its 320-px copy is 13 px high, and refused."""
+  from experiments import panoramas  # pylint: disable=import-outside-toplevel
+  from mixstereo_tf.core import planning_copies  # pylint: disable=import-outside-toplevel
+  from tests.unmixing import detection_test  # pylint: disable=import-outside-toplevel
+  left, right, truth = detection_test._pair(height=20, width=480)  # pylint: disable=protected-access
+  pair = {'left': left, 'right': right, 'disparity_left': truth.astype(np.float32),
+          'nonocc_left': np.ones(truth.shape, bool)}
+  try:
+    table = panoramas.detections([pair])
+  finally:
+    planning_copies.WIDEST_ASPECT = panoramas.PLANS['by frame (shipped)']
+  assert '| anaglyph | 1 / 0 / 0 | 0 / 1 / 0 |' in table
+  cell = panoramas.score(pair, 'auto', 'classical')
+  assert cell.startswith('anaglyph, [') and cell.endswith(' s'), cell

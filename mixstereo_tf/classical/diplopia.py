@@ -38,6 +38,7 @@ from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.classical import working_scale
 from mixstereo_tf.core import image_range
+from mixstereo_tf.core import planning_copies
 from mixstereo_tf.core import workers
 
 Costs = Callable[[np.ndarray, 'DiplopiaConfig'], np.ndarray]
@@ -69,10 +70,11 @@ class DiplopiaConfig:
     cepstrum: the regional echo score added to the costs (`diplopia_cepstrum`, since
       2026-11-29: validation bad-1 30.4 -> 24.3%; weight 0 turns it off).
     max_width: the self-matching (costs, SGM, the weight) runs on a copy reduced
-      ceil(W / max_width) times (`working_scale`; 0: never), the layers at full size. 1280,
-      chosen on large validation double images (docs/LEARNED_DIPLOPIA.md "Large images":
-      bad-1 54.1 -> 43.6% at 1920 x 1080, 84.4 -> 52.2% at 4000 x 3000); frames up to 1280
-      px wide, the evaluation frames and 720p video, are not reduced.
+      ceil(W / max_width) times (`working_scale`; 0: never; W a frame's width:
+      `planning_copies`), the layers at full size. 1280, chosen on large validation
+      double images (docs/LEARNED_DIPLOPIA.md "Large images": bad-1 54.1 -> 43.6% at
+      1920 x 1080, 84.4 -> 52.2% at 4000 x 3000); frames up to 1280 px wide, the
+      evaluation frames and 720p video, are not reduced.
     max_float_mib, max_strip_mib: memory bounds. Above max_float_mib of float32 costs
       (4 H W D bytes) the ZNCC kernel runs twice (per-lag means, then the uint8 volume:
       the same volume); SGM runs in strips of at most max_strip_mib of path sums
@@ -122,7 +124,8 @@ def _self_match(image, config, weight, costs, prior, prior_window):
   ({'disparity_left', 'disparity_right'} at full size, (the a used, a note or None):
   `diplopia_weight.resolve_weight`)."""
   matching = config.matching
-  copy = working_scale.reduce(image, working_scale.factor(image.shape[1], config.max_width),
+  copy = working_scale.reduce(image, working_scale.factor(
+      planning_copies.frame_width(image.shape), config.max_width),
                               (matching.min_disparity, matching.max_disparity), prior)
   config = dataclasses.replace(config, matching=dataclasses.replace(
       matching, min_disparity=copy.search[0], max_disparity=copy.search[1]))

@@ -16,6 +16,7 @@ from mixstereo_tf.classical import diplopia
 from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.core import image_range
+from mixstereo_tf.core import planning_copies
 
 # The SGM penalties (P1, P2) of `estimate_range`, those its density threshold was chosen
 # with: the matching's 16 / 160 left one of 16 validation double images with a bound
@@ -29,10 +30,10 @@ def estimate_range(mixture, config: Optional[diplopia.DiplopiaConfig] = None, wi
   """The (positive) disparity range of a double image from the image alone.
 
   The self-matching of `diplopia`'s step 2 over lags [1, fraction * width] on a
-  copy area-downsampled to `width` px; among the left-right consistent disparities, those
-  whose 5-lag window holds >= `density` of them (surfaces; false matches spread over the
-  search), widened by `margin` px of the copy and scaled back (as
-  `matcher.estimate_range` does for anaglyphs). `density` 2 %, not the anaglyphs' 1 %: a
+  copy area-downsampled to `width` px (a frame's: `planning_copies`); among the left-right
+  consistent disparities, those whose 5-lag window holds >= `density` of them (surfaces;
+  false matches spread over the search), widened by `margin` px of the copy and scaled
+  back (as `matcher.estimate_range` does for anaglyphs). `density` 2 %, not the anaglyphs' 1 %: a
   double image's self-matching leaves more false consistent matches; on 12 photo-warp
   pairs (training data, 640 px wide, true maxima 67-85 px) the bound over the true 99.5th
   percentile had median 1.95x (up to 3.2x) at 1 % and 1.11x (0.93x-2.65x) at 2 %. The
@@ -48,11 +49,11 @@ def estimate_range(mixture, config: Optional[diplopia.DiplopiaConfig] = None, wi
   diplopia.check_size(np.shape(mixture), config)
   gray = diplopia_costs.gray_255(image_range.as_unit_float(mixture, 'mixture'))
   full_width = gray.shape[1]
-  scale = max(1.0, full_width / width)
+  scale = max(1.0, planning_copies.frame_width(gray.shape) / width)
   if scale > 1.0:
-    gray = cv2.resize(gray, (width, max(1, round(gray.shape[0] / scale))),
-                      interpolation=cv2.INTER_AREA)
-  reach = max(2, round(fraction * gray.shape[1]))
+    gray = cv2.resize(gray, (max(1, round(full_width / scale)),
+                             max(1, round(gray.shape[0] / scale))), interpolation=cv2.INTER_AREA)
+  reach = max(2, planning_copies.reach(gray.shape, fraction))
   config = dataclasses.replace(config, matching=dataclasses.replace(
       config.matching, min_disparity=1, max_disparity=reach, p1=RANGE_PENALTIES[0],
       p2=RANGE_PENALTIES[1]))

@@ -34,6 +34,7 @@ import numpy as np
 from mixstereo_tf.classical import fast_postprocess
 from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.classical import search_windows
+from mixstereo_tf.core import planning_copies
 from mixstereo_tf.core import workers
 
 
@@ -55,8 +56,8 @@ class MatcherConfig:
       `sgm.match` (one strip holds 2 bytes per searched cell of the image).
     strip_overlap: rows a strip adds above and below for its vertical paths.
     max_strip_mib: aggregated costs of one strip when strips = 0, MiB.
-    range_width: `estimate_range` searches an area-downsampled copy this wide, pixels.
-    range_fraction: `estimate_range` searches +- this fraction of that width.
+    range_width, range_fraction: `estimate_range` searches an area-downsampled copy this
+      wide, pixels (a frame's: `planning_copies`), over +- this fraction of that width.
     range_density: `estimate_range` keeps the disparities d whose window [d - 2, d + 2]
       holds at least this share of the left-right consistent pixels ...
     range_margin: ... widened by this many pixels of the downsampled copy on each side.
@@ -138,12 +139,9 @@ def _search_range(min_disparity, max_disparity, width: int) -> Tuple[int, int]:
 
 def coarse_factor(height: int, width: int, min_disparity: int, max_disparity: int,
                   config: MatcherConfig) -> int:
-  """1 for a full search, else the coarse-to-fine downsampling factor `match` uses.
-
-  The smallest power of 2, f, with H * W * D / f^3 <= config.full_search_cells (the
-  reduced image has 1/f^2 of the pixels and 1/f of the disparities), and no larger than
-  keeps the reduced image at least twice the census window on each side.
-  """
+  """1 for a full search, else `match`'s coarse-to-fine factor: the smallest power of 2, f,
+  with H W D / f^3 <= config.full_search_cells (1/f^2 of the pixels, 1/f of the
+  disparities), keeping the reduced image at least twice the census window on each side."""
   cells = height * width * (max_disparity - min_disparity + 1)
   factor = 1
   while (cells > config.full_search_cells * factor ** 3 and
@@ -238,14 +236,14 @@ def match(left, right, min_disparity: int, max_disparity: int,
 
 def range_copy(images, config: MatcherConfig = MatcherConfig()):
   """(copies, scale, reach) of `estimate_range`'s search: [H, W, K] `images` area-downsampled
-  to config.range_width px wide (narrower ones as they are), the factor back to full size,
-  and the searched +- reach, pixels of the copy."""
-  w = images[0].shape[1]
-  if w > config.range_width:
-    images = [_downsample(x, w / config.range_width) for x in images]
-  small_width = images[0].shape[1]
-  return images, w / small_width, min(small_width - 1,
-                                      max(1, round(config.range_fraction * small_width)))
+  to config.range_width px a frame (`planning_copies`; narrower ones as they are), the
+  factor back to full size, and the searched +- reach, pixels of the copy."""
+  w, frame = images[0].shape[1], planning_copies.frame_width(images[0].shape)
+  if frame > config.range_width:
+    images = [_downsample(x, frame / config.range_width) for x in images]
+  small = images[0].shape
+  return images, w / small[1], min(small[1] - 1, max(1, planning_copies.reach(
+      small, config.range_fraction)))
 
 
 def dense_range(found: np.ndarray, reach: int, scale: float, width: int,
@@ -291,7 +289,7 @@ def estimate_range(left, right,
   left, right = _pair(left, right, config)
   h, w = left.shape[:2]
   (left, right), scale, reach = range_copy((left, right), config)
-  if scale > 1 and left.shape[0] < config.census_height:
+  if scale > 1 and left.shape[0] < config.census_height:  # A narrow range_width's copy.
     raise ValueError(f'a {h}x{w} image downsampled to MatcherConfig.range_width = '
                      f'{config.range_width} is {left.shape[0]} px high, less than '
                      f'MatcherConfig.census_height = {config.census_height}: too thin to '

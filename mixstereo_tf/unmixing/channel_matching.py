@@ -1,7 +1,7 @@
 """An anaglyph's channels matched against each other on a reduced copy: what encoding
 detection (`detection`) measures its displacements, colours and Dubois leak on.
 
-    small = downsampled(image, 320)                  # float32 0..255, <= 320 px wide
+    small = downsampled(image, 320)                  # float32 0..255, 320 px a frame
     ys, xs, xr = eye_match(small, 0, span(small, 0.2))  # red's pixels and their matches
 
 The census matcher (`classical.matcher`) compares each pixel only with its own
@@ -11,17 +11,18 @@ match; channels of different views are displaced by the disparities.
 
 from typing import Tuple
 
-import cv2
 import numpy as np
 
 from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import planning_copies
 
 Matched = Tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 def downsampled(image: np.ndarray, width: int) -> np.ndarray:
   """float32 [h, w, 3] on 0..255 of an RGB image (uint8, or float in [0, 1]),
-  area-downsampled to at most `width` columns.
+  area-downsampled to at most `width` columns a frame (`planning_copies`: a panorama wider
+  than 4 : 1 keeps more).
 
   Raises:
     ValueError: an image that is not [H, W, 3].
@@ -30,16 +31,12 @@ def downsampled(image: np.ndarray, width: int) -> np.ndarray:
   if image.ndim != 3 or image.shape[2] != 3:
     raise ValueError(f'detect needs an [H, W, 3] RGB image, got shape {image.shape}.')
   image = image.astype(np.float32) * (1.0 if image.dtype == np.uint8 else 255.0)
-  h, w = image.shape[:2]
-  if w > width:
-    image = cv2.resize(image, (width, max(1, round(h * width / w))),
-                       interpolation=cv2.INTER_AREA)
-  return np.ascontiguousarray(image)
+  return np.ascontiguousarray(planning_copies.area_copy(image, width))
 
 
 def span(small: np.ndarray, fraction: float) -> Tuple[int, int]:
-  """(-r, r): disparities within `fraction` of the copy's width (at least 2 px)."""
-  reach = max(2, round(fraction * small.shape[1]))
+  """(-r, r): disparities within `fraction` of the copy's frame width (at least 2 px)."""
+  reach = max(2, planning_copies.reach(small.shape, fraction))
   return -reach, reach
 
 

@@ -43,6 +43,7 @@ from typing import Dict, Optional, Tuple
 import numpy as np
 
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.core import planning_copies
 from mixstereo_tf.core import workers
 from mixstereo_tf.restoration import dubois_leak
 from mixstereo_tf.unmixing import channel_matching
@@ -59,7 +60,7 @@ class DetectConfig:
   """Parameters of `detect` (module docstring); chosen on training scenes.
 
   Attributes:
-    width: the analysed copy's width, pixels.
+    width: the analysed copy's width, pixels (a frame's: `planning_copies`).
     reach_fraction: channels are matched over +- this fraction of that width.
     min_family_score: below this family score the image is not an anaglyph.
     family_softness: the logistic's scale on the family margin.
@@ -173,12 +174,14 @@ def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
 def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int,
                matched: channel_matching.Matched, config: DetectConfig) -> np.ndarray:
   """`dubois_leak.observed` (step 3) on a copy of `image` at most config.ghost_width px
-  and config.ghost_max_fraction of the image's width wide, its eyes matched anew there
+  and config.ghost_max_fraction of the image's width wide (a frame's: `planning_copies`
+  copies a panorama as a row of frames), its eyes matched anew there
   (in 2 strips) over the dense range of `matched`'s disparities scaled to it
   (`channel_matching.rescaled_search`); on `small` and its `matched` pixels when that
   copy is no wider."""
   wide = channel_matching.downsampled(
-      image, min(config.ghost_width, int(image.shape[1] * config.ghost_max_fraction)))
+      image, min(config.ghost_width,
+                 int(planning_copies.frame_width(image.shape) * config.ghost_max_fraction)))
   if wide.shape[1] > small.shape[1]:
     search = channel_matching.rescaled_search(
         matched, channel_matching.span(small, config.reach_fraction),
@@ -244,7 +247,7 @@ def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detectio
   small = channel_matching.downsampled(image, config.width)
   if min(small.shape[:2]) < 16:
     raise ValueError(f'detect needs an image of at least 16x16 px after downsampling to '
-                     f'{config.width} px wide; got {small.shape[1]}x{small.shape[0]}.')
+                     f'{config.width} px a frame; got {small.shape[1]}x{small.shape[0]}.')
   brightness = float(np.percentile(small.max(axis=-1), 99.0)) / 255.0
   if brightness < config.min_brightness:
     return Detection(None, 0.0, f'too dark to tell its encoding (99% of the pixels below '

@@ -37,6 +37,7 @@ from mixstereo_tf.classical import matcher
 from mixstereo_tf.classical import sgm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
+from mixstereo_tf.core import planning_copies
 
 AUTO = 'auto'
 # PredictorConfig.swap_eyes: the eyes as given (left eye in the red / first filter's
@@ -78,12 +79,10 @@ class EyeOrder:
 
 
 def _eyes(image: np.ndarray, name: str, width: int) -> Tuple[np.ndarray, np.ndarray]:
-  """(left-eye, right-eye) channels on 0..255, float32 [h, w, k], at most `width` wide."""
+  """(left-eye, right-eye) channels on 0..255, float32 [h, w, k], at most `width` wide a
+  frame (`planning_copies`)."""
   left, right = anaglyph.eye_images(image_range.u8_to_unit(image), name)
-  height, full = left.shape[:2]
-  if full > width:
-    size = (width, max(1, round(height * width / full)))
-    left, right = (cv2.resize(x, size, interpolation=cv2.INTER_AREA) for x in (left, right))
+  left, right = (planning_copies.area_copy(x, width) for x in (left, right))
   fix = lambda x: np.ascontiguousarray(x[..., None] if x.ndim == 2 else x, np.float32)
   return fix(left), fix(right)
 
@@ -151,7 +150,8 @@ def detect(image: np.ndarray, name: str, config: EyeOrderConfig = EyeOrderConfig
   `chroma_halved` (a 4:2:0 JPEG, `hints.FrameHint.chroma_halved`): analysed at most at
   half its width, the colour's resolution, where the colour steps across a band's ends
   are the eyes' own and not the luminance's, which mixes both."""
-  width = min(config.width, -(-image.shape[1] // 2)) if chroma_halved else config.width
+  frame = planning_copies.frame_width(image.shape)
+  width = min(config.width, -(-frame // 2)) if chroma_halved else config.width
   left, right = _eyes(image, name, width)
   low, high = matcher.estimate_range(left, right)
   matched = matcher.match(left, right, low - 2, high + 2, matcher.MatcherConfig(strips=1))

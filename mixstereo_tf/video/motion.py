@@ -23,6 +23,7 @@ import cv2
 import numpy as np
 
 from mixstereo_tf.core import image_range
+from mixstereo_tf.core import planning_copies
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,13 +57,11 @@ class MotionConfig:
 
 def motion_copy(image: np.ndarray, width: int) -> np.ndarray:
   """float32 [h, w] gray copy of an [H, W, C] frame (uint8, uint16 or [0, 1] float; its
-  channels averaged, [0, 1]), area-reduced to at most `width` px wide (reduced first: a
+  channels averaged, [0, 1]), area-reduced to at most `width` px wide a frame
+  (`planning_copies`; reduced first: a
   720p frame in 2 ms, not the 19 ms of converting it whole)."""
   image = np.asarray(image)
-  h, w = image.shape[:2]
-  if w > width:
-    image = cv2.resize(image, (width, max(1, round(h * width / w))),
-                       interpolation=cv2.INTER_AREA)
+  image = planning_copies.area_copy(image, width)
   gray = image_range.to_unit(image) if image.dtype.kind == 'u' else image
   gray = np.asarray(gray, np.float32)
   return np.ascontiguousarray(gray.mean(axis=-1) if gray.ndim == 3 else gray)

@@ -177,6 +177,20 @@ def test_estimate_range_brackets_the_true_range(d_bg, d_fg, width, range_width):
       low, high)
 
 
+def test_a_strip_is_searched_over_a_frame_not_over_its_width():
+  """A strip 50 times as wide as high (`planning_copies`): searched as it is over a third of a
+  4 : 1 frame, +-32 px; before, its 320-px copy was 6 px high (refused as too thin) and the
+  search reached +-427 px of it."""
+  left, right, truth, _ = _layered(3, 12, height=24, width=1200)
+  copies, scale, reach = matcher.range_copy((left, right))
+  assert copies[0].shape == left.shape and scale == 1 and reach == 32
+  low, high = matcher.estimate_range(left, right)
+  assert low <= 3 and high >= 12 and high - low <= 20, (low, high)
+  wide, _, _, _ = _layered(3, 12, height=100, width=1000)  # 10 : 1, reduced 400 / 320 times.
+  copies, scale, reach = matcher.range_copy((wide, wide))
+  assert copies[0].shape[:2] == (80, 800) and scale == 1.25 and reach == 107
+
+
 def test_dense_range_keeps_the_dense_disparities_widened_and_scaled():
   config = matcher.MatcherConfig(range_density=0.05, range_margin=2.0)
   # 200 matches on surfaces at 3..10 px of the copy, 4 scattered false ones.
@@ -208,9 +222,9 @@ def test_bad_ranges_and_configs_raise():
     matcher.MatcherConfig(p1=20, p2=10)
   with pytest.raises(ValueError, match='MatcherConfig.range_width'):
     matcher.MatcherConfig(range_width=20)
-  with pytest.raises(ValueError, match='MatcherConfig.range_width'):
-    matcher.estimate_range(np.zeros((8, 400)), np.zeros((8, 400)),
-                           matcher.MatcherConfig(range_width=40))
+  with pytest.raises(ValueError, match='MatcherConfig.range_width'):  # A 311 x 7 copy.
+    matcher.estimate_range(np.zeros((9, 400)), np.zeros((9, 400)), matcher.MatcherConfig(
+        census_height=9, census_width=7, range_width=28))
 
 
 def test_a_stored_volume_in_strips_changes_almost_nothing():

@@ -154,9 +154,17 @@ def test_small_or_malformed_images_are_errors():
     detection.detect(np.zeros((8, 8, 3), np.uint8))
 
 
+@pytest.mark.parametrize('name', ['anaglyph', 'gray', 'half_color', 'dubois_ffmpeg'])
+def test_a_strip_is_read_as_a_row_of_frames(name):
+  """A 48 x 1200 strip (25 : 1): its copy is 320 px a 4 : 1 frame (`planning_copies`),
+  1200 x 48 here; 320 px wide in all it was 13 px high, and refused."""
+  left, right, _ = _pair(height=48, width=1200)
+  assert detection.detect(_ours(name, left, right)).name == name
+
+
 @pytest.mark.parametrize('name, low, high', [('dubois_ffmpeg', 0.6, 1.3), ('anaglyph', -0.15, 0.15)])
 def test_the_leak_is_measured_on_a_copy_up_to_ghost_width_and_half_the_image(name, low, high):
-  left, right, _ = _pair(height=120, width=1440)
+  left, right, _ = _pair(height=360, width=1440)  # 4 : 1, one frame (`planning_copies`).
   image = _ours(name, left, right)
   config = detection.DetectConfig()
   small = channel_matching.downsampled(image, config.width)

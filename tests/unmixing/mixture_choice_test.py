@@ -122,8 +122,9 @@ def test_a_named_double_image_says_its_confidence_is_that_it_is_no_anaglyph():
 
 
 def test_a_named_mixture_needs_no_detection_of_a_thin_image():
-  """Detection needs 16 px rows at 320 px wide; a named encoding only warns from it."""
-  thin = np.random.default_rng(0).integers(0, 256, (60, 4440, 3), dtype=np.uint8)
+  """Detection needs 16 px rows (here: 12, at full size: a 48-px frame); a named encoding
+  only warns from it."""
+  thin = np.random.default_rng(0).integers(0, 256, (12, 4440, 3), dtype=np.uint8)
   name, info = mixture_choice.resolve_mixture(thin, 'anaglyph', mixtures.ANAGLYPH_NAMES)
   assert name == 'anaglyph' and info['detected'] is None and '16x16' in info['detection']
   with pytest.raises(ValueError, match=r'16x16 .* cannot be detected on it: name its mixture'):

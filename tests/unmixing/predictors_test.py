@@ -249,7 +249,11 @@ def test_sides_beyond_opencvs_warps_and_thin_ranges_are_named():
   with pytest.raises(ValueError, match=r"1x32767 image: sides of 32767 px or more are beyond "
                                        "OpenCV's image warps"):
     classical(np.zeros((1, 32767, 3), np.uint8))
-  thin = np.random.default_rng(0).integers(0, 256, (60, 6400, 3), dtype=np.uint8)
-  with pytest.raises(ValueError, match=r'too thin to estimate its disparity range; give it '
-                                       r'\(PredictorConfig.disparity_range\)'):
+  thin = np.random.default_rng(0).integers(0, 256, (6, 6400, 3), dtype=np.uint8)
+  with pytest.raises(ValueError, match=r"6x6400 image is smaller than the matcher's census "
+                                       r'window of 7x9 pixels'):
     classical(thin)
+  # 60 x 6400 was too thin for the range's 320-px copy (3 px high); planned as a row of
+  # 240-px frames (`planning_copies`) it is searched as it is over +-80 px.
+  strip = np.random.default_rng(0).integers(0, 256, (60, 6400, 3), dtype=np.uint8)
+  assert classical(strip)['disparity_left'].shape == (60, 6400)
