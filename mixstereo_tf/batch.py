@@ -40,7 +40,7 @@ except ModuleNotFoundError as e:
 
 FLAGS = flags.FLAGS
 
-cli_flags.define_predictor()
+cli_flags.define_unmix_predictor()
 cli_flags.define_input()
 flags.DEFINE_string('input_list', None, 'A text file of input paths, one per line (instead '
                     'of --input; local or on any file system Apache Beam reads; relative '

@@ -30,7 +30,7 @@ from mixstereo_tf.unmixing import predictors
 
 FLAGS = flags.FLAGS
 
-cli_flags.define_predictor()
+cli_flags.define_unmix_predictor()
 cli_flags.define_input()
 cli_flags.define_output_dir()
 cli_flags.require_unless_listing('input', 'output_dir')

@@ -419,3 +419,15 @@ def test_panoramas_score_a_strip_under_both_plans():
   assert '| anaglyph | 1 / 0 / 0 | 0 / 1 / 0 |' in table
   cell = panoramas.score(pair, 'auto', 'classical')
   assert cell.startswith('anaglyph, [') and cell.endswith(' s'), cell
+
+
+def test_halftone_settings_smooth_at_the_true_period_or_pass_the_setting_on():
+  from experiments import halftone as experiment  # pylint: disable=import-outside-toplevel
+  rows = experiment.settings(4.0)
+  assert rows['none'] == 'off' and rows['auto (shipped)'] == 'auto'
+  image = np.zeros((20, 20, 3), np.uint8)
+  image[10, 10] = 255
+  smooth, setting = experiment._smoothed(image, rows['blur 0.5 x period'])  # pylint: disable=protected-access
+  assert setting == 'off' and smooth[10, 10, 0] < 40 and smooth[10, 12, 0] > 0  # Sigma 2 px.
+  assert experiment._smoothed(image, 'auto') == (image, 'auto')  # pylint: disable=protected-access
+  assert {'ours, 3 px', 'ours, 5 px'} <= set(experiment.printers())

@@ -1,6 +1,7 @@
 """Parsers of flag values that need more than absl's types: --swap_eyes (a boolean or
 'auto'), --output_format (names, repeated or comma-separated), --mixing_weight ('auto' or a
-number in (0, 1)) and --middlebury_scale items (scene:scale). Each raises an error naming
+number in (0, 1)), --descreen ('auto', 'off' or a period) and --middlebury_scale items
+(scene:scale). Each raises an error naming
 the flag and the value at fault.
 """
 
@@ -10,6 +11,7 @@ from absl import app
 from absl import flags
 
 from mixstereo_tf.classical import diplopia_weight
+from mixstereo_tf.classical import halftone
 from mixstereo_tf.unmixing import eye_order
 
 
@@ -66,6 +68,17 @@ def parse_mixing_weight(text: Optional[str]):
   except ValueError as e:
     raise app.UsageError(f"--mixing_weight: expected 'auto' or a number in (0, 1), got "
                          f'{text!r} ({e})') from None
+
+
+def parse_descreen(text: str):
+  """--descreen: 'auto', 'off' or a period in pixels (> 1); UsageError naming the flag."""
+  if text.strip().lower() in (halftone.AUTO, halftone.OFF):
+    return text.strip().lower()
+  try:
+    return halftone.check_period(float(text))
+  except ValueError:
+    raise app.UsageError(f"--descreen: expected 'auto', 'off' or a screen period in pixels "
+                         f'above 1, got {text!r}.') from None
 
 
 def parse_scene_scales(items: Sequence[str]) -> Tuple[Tuple[str, float], ...]:

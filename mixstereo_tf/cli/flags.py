@@ -17,6 +17,7 @@ from absl import flags
 
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import pretrained
+from mixstereo_tf.classical import halftone
 from mixstereo_tf.cli import flag_parsers
 from mixstereo_tf.cli import media
 from mixstereo_tf.cli import stereo_formats
@@ -27,7 +28,8 @@ from mixstereo_tf.video import jobs
 from mixstereo_tf.video import temporal
 
 FLAGS = flags.FLAGS
-# The flags of `define_predictor`: one per PredictorConfig field, of the field's name.
+# The flags of `define_predictor` and `define_unmix_predictor` (--descreen): one per
+# PredictorConfig field, of the field's name.
 PREDICTOR_FLAGS = frozenset(f.name for f in dataclasses.fields(predictors.PredictorConfig))
 
 
@@ -262,13 +264,26 @@ def predictor_config() -> predictors.PredictorConfig:
       mixing_weight=flag_parsers.parse_mixing_weight(FLAGS.mixing_weight))
 
 
+@functools.lru_cache(maxsize=None)
+def define_unmix_predictor() -> None:
+  """The predictor group of the tools that unmix files, and --descreen."""
+  define_predictor()
+  flags.DEFINE_string('descreen', halftone.AUTO,
+                      "A scanned print's halftone screen (its dots), smoothed before "
+                      "unmixing: 'auto' finds it per image (a video: per shot) and leaves "
+                      "other images as they are; 'off'; or its period in pixels. The info "
+                      'JSON records the period smoothed (screen_period).')
+
+
 def unmix_predictor_config() -> predictors.PredictorConfig:
-  """`predictor_config` for the tools that unmix files (mixstereo-unmix, mixstereo-batch).
+  """`predictor_config` for the tools that unmix files (mixstereo-unmix, mixstereo-batch),
+  with --descreen.
 
   Raises:
     ValueError: --method=oracle, which needs the clean stereo pair.
   """
-  config = predictor_config()
+  config = dataclasses.replace(predictor_config(),
+                               descreen=flag_parsers.parse_descreen(FLAGS.descreen))
   if config.method == 'oracle':
     raise ValueError('--method=oracle needs the clean stereo pair; it is for evaluation '
                      'only.')

@@ -57,6 +57,9 @@ class FrameHint:
       colour-resolution copy to match (`steps.run` sets it for chroma_halved anaglyphs),
       or uint16, a 16-bit image matched at 8 bits: the views are restored from it, at its
       depth (`views_image`); None: from the image matched.
+    descreen: a printed image's halftone screen (`classical.halftone.resolve`): 'auto'
+      (found from the frame), 'off' or its period in pixels (a video shot's, found on its
+      first frame); None: the unmixer's own setting.
   """
   mixture: Optional[str] = None
   may_be: Optional[str] = None
@@ -73,6 +76,7 @@ class FrameHint:
   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None
   chroma_halved: bool = False
   stored_image: Optional[np.ndarray] = None
+  descreen: Union[None, str, float] = None
 
 
 def views_image(image: np.ndarray, hint: Optional[FrameHint]) -> np.ndarray:

@@ -33,6 +33,7 @@ import numpy as np
 import tensorflow as tf
 
 from mixstereo_tf.classical import diplopia
+from mixstereo_tf.classical import halftone
 from mixstereo_tf.classical import sgbm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
@@ -172,7 +173,8 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
         requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
         solve: Callable[..., Dict[str, object]],
         hint: Optional[hints.FrameHint] = None, swap_eyes=False,
-        mixing_weight=None, plan: Optional[Planner] = None) -> Dict[str, object]:
+        mixing_weight=None, plan: Optional[Planner] = None,
+        descreen=halftone.OFF) -> Dict[str, object]:
   """Steps 1-3 for one image; `default_range(encoding)` is the method's own range, `plan`
   its own range planning (`estimate_range`);
   `solve(image, name, range, hint)` is the method's step 3; `swap_eyes`: one of
@@ -181,9 +183,11 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   hint unless it has its own. A uint16 `image` (a 16-bit file) is detected and matched at
   8 bits (`image_range.eight_bits`); where the family makes its views from the mixture's
   samples (`Family.views_at_depth`) they come from it, as uint16 (the hint's
-  stored_image), else at 8 bits."""
+  stored_image), else at 8 bits. A printed image's halftone screen is smoothed first
+  (`descreen`, the hint's where it has one: `halftone.resolve`)."""
   start = time.perf_counter()
   hint = hint or hints.FrameHint()
+  image, screen = halftone.resolve(image, descreen if hint.descreen is None else hint.descreen)
   deep = image if image.dtype == np.uint16 else None  # 16 bits: views restored from it.
   image = image_range.eight_bits(image)
   if hint.mixing_weight is None and mixing_weight is not None:
@@ -218,7 +222,7 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   if swapped:
     outputs = eye_order.unmirror(outputs)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),
-              prior=hint.prior is not None, **eyes, **outputs.get('info', {}))
+              prior=hint.prior is not None, **eyes, **screen, **outputs.get('info', {}))
   if halved:
     info['matched_at_colour_resolution'] = True  # Stored with half-resolution colour.
   info['seconds'] = round(time.perf_counter() - start, 3)

@@ -13,6 +13,7 @@ import tensorflow as tf
 
 from mixstereo_tf.artifacts import runs
 from mixstereo_tf.classical import diplopia_weight
+from mixstereo_tf.classical import halftone
 from mixstereo_tf.core import hints
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import mixture_choice
@@ -65,6 +66,9 @@ class PredictorConfig:
     mixing_weight: double images: the left view's weight a of I = a L + (1 - a) R; None:
       1/2 (`--mixture=diplopia` exactly), 'auto': estimated per image, or a number in (0, 1)
       (`hints.FrameHint.mixing_weight`).
+    descreen: a printed image's halftone screen, smoothed before anything else
+      (`classical.halftone`): 'off' (the paper's inputs), 'auto' (found per image, a
+      video per shot; the tools' default) or its period in pixels.
   """
   method: str = 'model'
   checkpoint: Optional[str] = None
@@ -76,8 +80,14 @@ class PredictorConfig:
   pretrained: Optional[str] = None
   swap_eyes: Union[bool, str] = False
   mixing_weight: Union[None, float, str] = None
+  descreen: Union[str, float] = halftone.OFF
 
   def __post_init__(self):
+    if self.descreen not in (halftone.AUTO, halftone.OFF):
+      try:
+        halftone.check_period(self.descreen)
+      except (TypeError, ValueError) as e:
+        raise ValueError(f'PredictorConfig.descreen: {e}') from None
     if self.restore_colour not in (None, True, False):
       raise ValueError('PredictorConfig.restore_colour must be None, True or False, got '
                        f'{self.restore_colour!r}.')
@@ -200,7 +210,7 @@ def image_unmixer(method: str, requested: str, allowed: Sequence[str],
   fn = lambda image, hint=None: steps.run(as_rgb(image), requested, allowed,
                                           config.disparity_range, default_range, method,
                                           solve, hint, config.swap_eyes,
-                                          config.mixing_weight, plan)
+                                          config.mixing_weight, plan, config.descreen)
   return Unmixer(fn, method, requested, display, restore)
 
 

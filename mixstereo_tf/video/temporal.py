@@ -38,6 +38,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import cv2
 import numpy as np
 
+from mixstereo_tf.classical import halftone
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.video import motion as motion_lib
@@ -226,6 +227,7 @@ class VideoState:
                      prior_window=(self.config.prior_radius, self.config.prior_spread),
                      full_search_cells=self.config.first_frame_cells if starts else None,
                      mixing_weight=self._shot.get('mixing_weight'),
+                     descreen=self._shot.get('descreen'),
                      fallback_mixture=self.fallback_mixture)
 
   def _moved_prior(self, image: np.ndarray) -> Optional[np.ndarray]:
@@ -250,7 +252,7 @@ class VideoState:
 
   def end(self, outputs: Dict[str, object]) -> None:
     """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range,
-    mixing weight) when it is the shot's first frame that decided its encoding (not one
+    mixing weight, halftone screen) when it is the shot's first frame that decided its encoding (not one
     read as the video's, 'undecided': black or dark frames of a fade), or when its mixture
     is the larger encoding the shot may still be (`hints.FrameHint.may_be`: the shot
     settles on it); and its
@@ -268,7 +270,8 @@ class VideoState:
                     'detection': _detection_of(info),
                     'disparity_range': tuple(int(d) for d in search) if search else None,
                     'swap_eyes': info['eye_order'] == 'swapped' if 'eye_order' in info else None,
-                    'mixing_weight': info.get('mixing_weight')}
+                    'mixing_weight': info.get('mixing_weight'),
+                    'descreen': info.get('screen_period', halftone.OFF)}
     elif self._shot.get('may_be') and info.get('mixture') == self._shot['may_be']:
       self._shot.update(mixture=info['mixture'], may_be=None,  # Settled by this frame.
                         detection=_detection_of(info))

@@ -23,7 +23,7 @@ def test_flag_names_translates_only_known_flags():
   message = "PredictorConfig.mixture=x; PredictorConfig.method='model'; VideoConfig.enabled."
   assert flag_errors.flag_names(message, known=cli_flags.PREDICTOR_FLAGS) == (
       "--mixture=x; --method='model'; VideoConfig.enabled.")
-  cli_flags.define_predictor()
+  cli_flags.define_unmix_predictor()
   assert all(name in flags.FLAGS for name in cli_flags.PREDICTOR_FLAGS)
 
 

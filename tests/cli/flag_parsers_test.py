@@ -24,3 +24,12 @@ def test_mixing_weight_is_auto_a_number_in_the_open_unit_interval_or_unset():
   for text in ('1', '0', 'half'):
     with pytest.raises(app.UsageError, match=rf"--mixing_weight: .*{re.escape(repr(text))}"):
       flag_parsers.parse_mixing_weight(text)
+
+
+def test_descreen_is_auto_off_or_a_period_above_one_pixel():
+  assert flag_parsers.parse_descreen(' Auto') == 'auto'
+  assert flag_parsers.parse_descreen('off') == 'off'
+  assert flag_parsers.parse_descreen('5.5') == 5.5
+  for text in ('1', '-3', 'dots', 'nan'):
+    with pytest.raises(app.UsageError, match='--descreen: .*period'):
+      flag_parsers.parse_descreen(text)

@@ -30,7 +30,7 @@ def test_defaults_come_from_the_config_dataclass():
   assert cli_flags.defaults(predictors.PredictorConfig) == {
       'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,
       'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000,
-      'pretrained': None, 'swap_eyes': False, 'mixing_weight': None}
+      'pretrained': None, 'swap_eyes': False, 'mixing_weight': None, 'descreen': 'off'}
 
 
 @contextlib.contextmanager
@@ -90,7 +90,7 @@ def test_swap_eyes_is_a_boolean_flag_that_also_takes_auto():
 
 
 def test_unmix_predictor_config_refuses_the_oracle():
-  cli_flags.define_predictor()
+  cli_flags.define_unmix_predictor()
   with _parsing('method') as method:
     assert cli_flags.unmix_predictor_config().method == flags.FLAGS.method
     method.parse('oracle')
@@ -113,6 +113,25 @@ def test_help_under_a_console_script_wrapper_shows_the_binarys_docstring(binary)
                           env=dict(os.environ, TF_CPP_MIN_LOG_LEVEL='2'))
   first_line = docstring.strip().splitlines()[0]
   assert first_line in result.stdout + result.stderr
+
+
+def test_the_tools_that_unmix_files_descreen_prints_and_evaluate_does_not():
+  """--descreen belongs to mixstereo-unmix and mixstereo-batch (default 'auto'); the paper's
+  evaluation keeps PredictorConfig's 'off'."""
+  cli_flags.define_unmix_predictor()
+  assert flags.FLAGS['descreen'].default == 'auto'
+  with _parsing('descreen') as descreen:
+    assert cli_flags.unmix_predictor_config().descreen == 'auto'
+    assert cli_flags.predictor_config().descreen == 'off'
+    descreen.parse('4.5')
+    assert cli_flags.unmix_predictor_config().descreen == 4.5
+    descreen.parse('none')
+    with pytest.raises(app.UsageError, match="--descreen: expected 'auto', 'off'"):
+      cli_flags.unmix_predictor_config()
+  for binary, declared in (('unmix', True), ('batch', True), ('evaluate', False)):
+    with open(importlib.util.find_spec(f'mixstereo_tf.{binary}').origin,
+              encoding='utf-8') as f:
+      assert ('define_unmix_predictor()' in f.read()) == declared, binary
 
 
 def test_max_network_pixels_given_for_a_method_without_a_network_is_refused():

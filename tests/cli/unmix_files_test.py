@@ -34,6 +34,7 @@ from mixstereo_tf.core import colormap
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.data import halftone_print
 from mixstereo_tf.data import image_io
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import unmixer
@@ -122,6 +123,25 @@ def test_an_inputs_depth_and_transparency_are_kept_in_its_views(setup, tmp_path)
       np.testing.assert_array_equal(np.asarray(view)[..., 3], bgra[..., 3] // 257)
   with Image.open(tmp_path / 'out' / 'scan16_left.png') as view:
     assert view.mode != 'RGBA'  # Opaque everywhere: no alpha to keep.
+
+
+def test_a_scanned_print_is_descreened_and_its_screen_recorded(tmp_path):
+  """A printed anaglyph saved as a JPEG: the screen found through the JPEG and recorded in
+  the info JSON; an ordinary image records none."""
+  from tests.unmixing import detection_test  # pylint: disable=import-outside-toplevel
+  left, right, _ = detection_test._pair(height=192, width=288)  # pylint: disable=protected-access
+  clean = detection_test._ours('anaglyph', left, right)  # pylint: disable=protected-access
+  Image.fromarray(halftone_print.halftone_print(clean, 4.0)).save(tmp_path / 'scan.jpg',
+                                                                  quality=90)
+  Image.fromarray(clean).save(tmp_path / 'plain.png')
+  classical = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', descreen='auto'))
+  report = unmix_files.unmix_inputs(classical, str(tmp_path), str(tmp_path / 'out'),
+                                    media.OutputOptions('separate'))
+  assert report.failures == []
+  read = lambda name: json.loads((tmp_path / 'out' / f'{name}_info.json').read_text())
+  assert read('scan')['screen_period'] == pytest.approx(4.0, rel=0.03)
+  assert 'screen_period' not in read('plain')
 
 
 def test_a_rerun_into_the_same_folder_leaves_only_its_own_results(setup, tmp_path):

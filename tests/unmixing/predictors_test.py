@@ -10,6 +10,7 @@ import tensorflow as tf
 from mixstereo_tf import models
 from mixstereo_tf.artifacts import graphs
 from mixstereo_tf.artifacts import runs
+from mixstereo_tf.data import halftone_print
 from mixstereo_tf.data import pipeline
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import predictors
@@ -257,3 +258,23 @@ def test_sides_beyond_opencvs_warps_and_thin_ranges_are_named():
   # 240-px frames (`planning_copies`) it is searched as it is over +-80 px.
   strip = np.random.default_rng(0).integers(0, 256, (60, 6400, 3), dtype=np.uint8)
   assert classical(strip)['disparity_left'].shape == (60, 6400)
+
+
+def test_a_scanned_print_is_descreened_when_asked_and_the_paper_default_leaves_it():
+  """A printed anaglyph (4-px cells would hide 14- and 9-px disparities): with
+  descreen='auto' the screen is found and smoothed (info 'screen_period') and most
+  disparities come right; PredictorConfig's default ('off', the paper's path) matches the
+  dots, as does 'off'."""
+  from tests.unmixing import detection_test  # pylint: disable=import-outside-toplevel
+  left, right, truth = detection_test._pair(height=192, width=288)  # pylint: disable=protected-access
+  printed = halftone_print.halftone_print(detection_test._ours('anaglyph', left, right), 4.0)  # pylint: disable=protected-access
+  assert predictors.PredictorConfig().descreen == 'off'
+  bad = {}
+  for setting in ('off', 'auto', 4.0):
+    out = predictors.build_unmixer(predictors.PredictorConfig(
+        'classical', mixture='anaglyph', descreen=setting))(printed)
+    bad[setting] = np.mean(np.abs(out['disparity_left'] - truth)[:, 30:] > 1)
+    assert out['info'].get('screen_period') == (None if setting == 'off' else 4.0)
+  assert bad['auto'] < 0.25 < 0.6 < bad['off'], bad
+  with pytest.raises(ValueError, match="PredictorConfig.descreen: .*'auto', 'off'"):
+    predictors.PredictorConfig(descreen='yes')

@@ -195,6 +195,19 @@ def test_a_double_image_weight_is_estimated_once_per_shot():
   assert state.begin(frame, cut=True).mixing_weight is None
 
 
+def test_a_halftone_screen_is_found_once_per_shot():
+  """The first frame's screen (info 'screen_period'; none found: 'off') is the rest of the
+  shot's descreen setting; a cut finds it anew."""
+  state = temporal.VideoState()
+  frame = np.zeros((8, 8, 3), np.uint8)
+  assert state.begin(frame).descreen is None
+  state.end({'info': {'mixture': 'anaglyph', 'screen_period': 4.5}})
+  assert state.begin(frame).descreen == 4.5
+  assert state.begin(frame, cut=True).descreen is None
+  state.end({'info': {'mixture': 'anaglyph'}})
+  assert state.begin(frame).descreen == 'off'
+
+
 def test_prior_lowers_flicker_on_a_static_noisy_clip():
   frames = _shot(5, 8, pan=0, noise=3.0)
   flicker = {}
