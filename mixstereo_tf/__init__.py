@@ -185,14 +185,14 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
           disparity_range: Union[None, str, Tuple[int, int]] = None,
           restore_colour: Optional[bool] = None, max_network_pixels: Optional[int] = ...,
           swap_eyes: Union[bool, str] = False, mixing_weight: Union[None, float, str] = None,
-          descreen: Union[str, float] = 'auto') -> Unmixed:
+          descreen: Union[str, float] = 'auto', rectify: str = 'auto') -> Unmixed:
   """Separates one mixture image into its two views and their disparities.
 
   The keywords are the `mixstereo-unmix` flags of the same names (`model`: --pretrained),
   with PredictorConfig's defaults (`max_network_pixels=...` stands for its value) except
-  `mixture` and `descreen` ('auto', as in the tool). The unmixer of each set of keywords is
-  built once and kept (the four newest): many images load the model once. The first call
-  imports TensorFlow without its start-up lines, as the tools do (`core.quiet_import`).
+  `mixture`, `descreen` and `rectify` ('auto', as in the tool). The unmixer of each set of
+  keywords is built once and kept (the four newest): many images load the model once. The
+  first call imports TensorFlow quietly, as the tools do (`core.quiet_import`).
 
   Args:
     image: a uint8 (or uint16) RGB [H, W, 3] (alpha of RGBA dropped) or gray [H, W] array
@@ -214,8 +214,8 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
     max_network_pixels: a network's input is reduced to at most this many pixels.
     swap_eyes: True: the left eye in the cyan (second) filter's channels; 'auto': detected.
     mixing_weight: a of double images a L + (1 - a) R (None: 1/2, 'auto': estimated).
-    descreen: a scanned print's halftone screen smoothed first: 'auto' (found), 'off', or
-      its period in pixels (info['screen_period']).
+    descreen: a scan's halftone screen smoothed: 'auto', 'off', a period (screen_period).
+    rectify: 'auto' turns a tilted anaglyph level where that helps (info['tilt']); 'off'.
 
   Returns:
     An `Unmixed`: views and disparities the size of the input, and `info`.
@@ -227,7 +227,7 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
   given = dict(method=method, checkpoint=checkpoint, saved_model=saved_model,
                mixture=mixture, restore_colour=restore_colour, swap_eyes=swap_eyes,
                max_network_pixels=max_network_pixels, pretrained=model,
-               mixing_weight=mixing_weight, descreen=descreen)
+               mixing_weight=mixing_weight, descreen=descreen, rectify=rectify)
   try:
     unmixer = _unmixer(_config(given, disparity_range))
     outputs = unmixer(_image(image), **_stored_hint(image))

@@ -153,10 +153,11 @@ def test_defaults_are_the_predictor_configs():
   defaults = predictors.PredictorConfig()
   for field in dataclasses.fields(predictors.PredictorConfig):
     default = parameters['model' if field.name == 'pretrained' else field.name].default
-    if field.name not in ('mixture', 'descreen') and default is not ...:
+    if field.name not in ('mixture', 'descreen', 'rectify') and default is not ...:
       assert default == getattr(defaults, field.name), field.name
   assert parameters['mixture'].default == 'auto'
-  assert parameters['descreen'].default == 'auto'  # As the tools', not the paper's 'off'.
+  for name in ('descreen', 'rectify'):  # As the tools', not the paper's 'off'.
+    assert parameters[name].default == 'auto' and getattr(defaults, name) == 'off', name
 
 
 def test_importing_the_package_loads_no_tensorflow():

@@ -431,3 +431,19 @@ def test_halftone_settings_smooth_at_the_true_period_or_pass_the_setting_on():
   assert setting == 'off' and smooth[10, 10, 0] < 40 and smooth[10, 12, 0] > 0  # Sigma 2 px.
   assert experiment._smoothed(image, 'auto') == (image, 'auto')  # pylint: disable=protected-access
   assert {'ours, 3 px', 'ours, 5 px'} <= set(experiment.printers())
+
+
+def test_tilt_turns_the_mixture_and_its_truth_alike():
+  from experiments import tilt as experiment  # pylint: disable=import-outside-toplevel
+  from tests.unmixing import detection_test  # pylint: disable=import-outside-toplevel
+  left, right, truth = detection_test._pair(height=60, width=80)  # pylint: disable=protected-access
+  pair = {'left': left, 'right': right, 'disparity_left': truth.astype(np.float32),
+          'nonocc_left': np.ones(truth.shape, bool)}
+  mixture, same = experiment.tilted(pair, 'anaglyph', 0.0, 0.0)
+  np.testing.assert_array_equal(mixture[..., 0], left[..., 0])  # Level: the anaglyph itself.
+  np.testing.assert_array_equal(same['disparity_left'], truth)
+  _, turned = experiment.tilted(pair, 'anaglyph', 10.0, 0.0)
+  assert not turned['known'].all() and turned['known'][25:35, 35:45].all()  # Corners lost.
+  lowered, _ = experiment.tilted(pair, 'anaglyph', 0.0, 1.0)
+  np.testing.assert_array_equal(lowered[1:, :, 0], left[:-1, :, 0])  # The left eye 1 px low.
+  np.testing.assert_array_equal(lowered[..., 1:], mixture[..., 1:])

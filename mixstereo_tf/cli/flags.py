@@ -24,12 +24,12 @@ from mixstereo_tf.cli import stereo_formats
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import predictors
+from mixstereo_tf.unmixing import tilt
 from mixstereo_tf.video import jobs
 from mixstereo_tf.video import temporal
 
 FLAGS = flags.FLAGS
-# The flags of `define_predictor` and `define_unmix_predictor` (--descreen): one per
-# PredictorConfig field, of the field's name.
+# The flags of `define_predictor` and `define_unmix_predictor`: one per PredictorConfig field.
 PREDICTOR_FLAGS = frozenset(f.name for f in dataclasses.fields(predictors.PredictorConfig))
 
 
@@ -260,19 +260,20 @@ def predictor_config() -> predictors.PredictorConfig:
       method=FLAGS.method, checkpoint=FLAGS.checkpoint, saved_model=FLAGS.saved_model,
       mixture=FLAGS.mixture, restore_colour=FLAGS.restore_colour, disparity_range=search,
       max_network_pixels=FLAGS.max_network_pixels, pretrained=FLAGS.pretrained,
-      swap_eyes=FLAGS.swap_eyes,
-      mixing_weight=flag_parsers.parse_mixing_weight(FLAGS.mixing_weight))
+      swap_eyes=FLAGS.swap_eyes, mixing_weight=flag_parsers.parse_mixing_weight(
+          FLAGS.mixing_weight))
 
 
 @functools.lru_cache(maxsize=None)
 def define_unmix_predictor() -> None:
-  """The predictor group of the tools that unmix files, and --descreen."""
+  """The predictor group of the tools that unmix files, and --descreen, --rectify."""
   define_predictor()
-  flags.DEFINE_string('descreen', halftone.AUTO,
-                      "A scanned print's halftone screen (its dots), smoothed before "
-                      "unmixing: 'auto' finds it per image (a video: per shot) and leaves "
-                      "other images as they are; 'off'; or its period in pixels. The info "
-                      'JSON records the period smoothed (screen_period).')
+  flags.DEFINE_string('descreen', halftone.AUTO, "A scanned print's halftone dots, smoothed "
+                      "first: 'auto' finds them per image (a video: per shot); 'off'; or "
+                      'their period in pixels (info: screen_period).')
+  flags.DEFINE_enum('rectify', tilt.AUTO, (tilt.AUTO, tilt.OFF), "'auto': a tilted anaglyph "
+                    '(a crooked scan) turned level where the matcher gains, the outputs '
+                    'turned back (info: tilt).')
 
 
 def unmix_predictor_config() -> predictors.PredictorConfig:
@@ -282,7 +283,7 @@ def unmix_predictor_config() -> predictors.PredictorConfig:
   Raises:
     ValueError: --method=oracle, which needs the clean stereo pair.
   """
-  config = dataclasses.replace(predictor_config(),
+  config = dataclasses.replace(predictor_config(), rectify=FLAGS.rectify,
                                descreen=flag_parsers.parse_descreen(FLAGS.descreen))
   if config.method == 'oracle':
     raise ValueError('--method=oracle needs the clean stereo pair; it is for evaluation '

@@ -43,6 +43,7 @@ from mixstereo_tf.unmixing import disparity_range
 from mixstereo_tf.unmixing import eye_order
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import mixture_choice
+from mixstereo_tf.unmixing import tilt
 
 Range = Union[None, str, Tuple[int, int]]  # disparity_range.parse's values.
 # A method's own range planning: plan(uint8 image, encoding, hint) -> (min, max) pixels.
@@ -169,12 +170,31 @@ def _warn_at_limits(disparity: np.ndarray, search: Tuple[int, int]) -> None:
                     'or let it be estimated.', 100 * share, side, list(search))
 
 
+def _encoding(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
+              hint: hints.FrameHint) -> Tuple[str, Dict[str, object]]:
+  """Step 1: (encoding, info): the hint's (a video shot's, settled where it may be a
+  larger one), else the one asked for or detected (`mixture_choice`)."""
+  if hint.mixture is not None:
+    name, info = hint.mixture, dict(hint.detection or {})
+    if hint.may_be is not None:
+      name, info = mixture_choice.settle(image, name, info, hint.may_be)
+    return name, info
+  name, info = mixture_choice.resolve_mixture(image, requested_mixture, allowed,
+                                              hint.mixing_weight is not None,
+                                              hint.fallback_mixture)
+  if hint.mixing_weight is not None and not families.of(name).weighted:
+    info['mixing_weight_unused'] = hint.mixing_weight
+    logging.warning('The mixing weight %s is not used: mixture %r has none (double '
+                    'images do).', hint.mixing_weight, name)
+  return name, info
+
+
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
         requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
         solve: Callable[..., Dict[str, object]],
         hint: Optional[hints.FrameHint] = None, swap_eyes=False,
         mixing_weight=None, plan: Optional[Planner] = None,
-        descreen=halftone.OFF) -> Dict[str, object]:
+        descreen=halftone.OFF, rectify=tilt.OFF) -> Dict[str, object]:
   """Steps 1-3 for one image; `default_range(encoding)` is the method's own range, `plan`
   its own range planning (`estimate_range`);
   `solve(image, name, range, hint)` is the method's step 3; `swap_eyes`: one of
@@ -184,7 +204,9 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   8 bits (`image_range.eight_bits`); where the family makes its views from the mixture's
   samples (`Family.views_at_depth`) they come from it, as uint16 (the hint's
   stored_image), else at 8 bits. A printed image's halftone screen is smoothed first
-  (`descreen`, the hint's where it has one: `halftone.resolve`)."""
+  (`descreen`, the hint's where it has one: `halftone.resolve`); a tilted anaglyph is
+  turned level once its encoding is known (`rectify`, the hint's first: `tilt.level`) and
+  its outputs turned back last."""
   start = time.perf_counter()
   hint = hint or hints.FrameHint()
   image, screen = halftone.resolve(image, descreen if hint.descreen is None else hint.descreen)
@@ -192,18 +214,10 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   image = image_range.eight_bits(image)
   if hint.mixing_weight is None and mixing_weight is not None:
     hint = dataclasses.replace(hint, mixing_weight=mixing_weight)
-  if hint.mixture is not None:
-    name, info = hint.mixture, dict(hint.detection or {})
-    if hint.may_be is not None:
-      name, info = mixture_choice.settle(image, name, info, hint.may_be)
-  else:
-    name, info = mixture_choice.resolve_mixture(image, requested_mixture, allowed,
-                                                hint.mixing_weight is not None,
-                                                hint.fallback_mixture)
-    if hint.mixing_weight is not None and not families.of(name).weighted:
-      info['mixing_weight_unused'] = hint.mixing_weight
-      logging.warning('The mixing weight %s is not used: mixture %r has none (double '
-                      'images do).', hint.mixing_weight, name)
+  name, info = _encoding(image, requested_mixture, allowed, hint)
+  image, deep, turn_back, turned = tilt.level(
+      image, deep, name, tilt.OFF if not families.of(name).detectable else
+      rectify if hint.rectify is None else hint.rectify)
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)
   if swapped:
     image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)
@@ -221,8 +235,10 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
     _warn_at_limits(outputs['disparity_left'], search)  # Before the eyes are turned back.
   if swapped:
     outputs = eye_order.unmirror(outputs)
+  outputs = turn_back(outputs, swapped)
   info = dict(info, method=method, mixture=name, disparity_range=list(search),
-              prior=hint.prior is not None, **eyes, **screen, **outputs.get('info', {}))
+              prior=hint.prior is not None, **eyes, **screen, **turned,
+              **outputs.get('info', {}))
   if halved:
     info['matched_at_colour_resolution'] = True  # Stored with half-resolution colour.
   info['seconds'] = round(time.perf_counter() - start, 3)

@@ -18,6 +18,7 @@ from mixstereo_tf.core import hints
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import mixture_choice
 from mixstereo_tf.unmixing import steps
+from mixstereo_tf.unmixing import tilt
 
 Outputs = Dict[str, np.ndarray]
 
@@ -69,6 +70,8 @@ class PredictorConfig:
     descreen: a printed image's halftone screen, smoothed before anything else
       (`classical.halftone`): 'off' (the paper's inputs), 'auto' (found per image, a
       video per shot; the tools' default) or its period in pixels.
+    rectify: a tilted anaglyph turned level (`unmixing.tilt`): 'off' (the paper's inputs)
+      or 'auto' (estimated and checked per image, a video per shot; the tools' default).
   """
   method: str = 'model'
   checkpoint: Optional[str] = None
@@ -81,8 +84,12 @@ class PredictorConfig:
   swap_eyes: Union[bool, str] = False
   mixing_weight: Union[None, float, str] = None
   descreen: Union[str, float] = halftone.OFF
+  rectify: str = tilt.OFF
 
   def __post_init__(self):
+    if self.rectify not in (tilt.AUTO, tilt.OFF):
+      raise ValueError(f"PredictorConfig.rectify must be 'auto' or 'off', got "
+                       f'{self.rectify!r}.')
     if self.descreen not in (halftone.AUTO, halftone.OFF):
       try:
         halftone.check_period(self.descreen)
@@ -210,7 +217,8 @@ def image_unmixer(method: str, requested: str, allowed: Sequence[str],
   fn = lambda image, hint=None: steps.run(as_rgb(image), requested, allowed,
                                           config.disparity_range, default_range, method,
                                           solve, hint, config.swap_eyes,
-                                          config.mixing_weight, plan, config.descreen)
+                                          config.mixing_weight, plan, config.descreen,
+                                          config.rectify)
   return Unmixer(fn, method, requested, display, restore)
 
 

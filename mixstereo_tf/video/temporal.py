@@ -227,7 +227,7 @@ class VideoState:
                      prior_window=(self.config.prior_radius, self.config.prior_spread),
                      full_search_cells=self.config.first_frame_cells if starts else None,
                      mixing_weight=self._shot.get('mixing_weight'),
-                     descreen=self._shot.get('descreen'),
+                     descreen=self._shot.get('descreen'), rectify=self._shot.get('rectify'),
                      fallback_mixture=self.fallback_mixture)
 
   def _moved_prior(self, image: np.ndarray) -> Optional[np.ndarray]:
@@ -252,8 +252,9 @@ class VideoState:
 
   def end(self, outputs: Dict[str, object]) -> None:
     """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range,
-    mixing weight, halftone screen) when it is the shot's first frame that decided its encoding (not one
-    read as the video's, 'undecided': black or dark frames of a fade), or when its mixture
+    mixing weight, halftone screen, tilt) when it is the shot's first frame that decided
+    its encoding (not one read as the video's, 'undecided': black or dark frames of a
+    fade), or when its mixture
     is the larger encoding the shot may still be (`hints.FrameHint.may_be`: the shot
     settles on it); and its
     'disparity_left' as the next frame's prior, NaN where its 'consistent_left' (when
@@ -271,7 +272,8 @@ class VideoState:
                     'disparity_range': tuple(int(d) for d in search) if search else None,
                     'swap_eyes': info['eye_order'] == 'swapped' if 'eye_order' in info else None,
                     'mixing_weight': info.get('mixing_weight'),
-                    'descreen': info.get('screen_period', halftone.OFF)}
+                    'descreen': info.get('screen_period', halftone.OFF),
+                    'rectify': tuple(info['tilt']) if 'tilt' in info else 'off'}
     elif self._shot.get('may_be') and info.get('mixture') == self._shot['may_be']:
       self._shot.update(mixture=info['mixture'], may_be=None,  # Settled by this frame.
                         detection=_detection_of(info))

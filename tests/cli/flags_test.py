@@ -30,7 +30,8 @@ def test_defaults_come_from_the_config_dataclass():
   assert cli_flags.defaults(predictors.PredictorConfig) == {
       'method': 'model', 'checkpoint': None, 'saved_model': None, 'mixture': None,
       'restore_colour': None, 'disparity_range': None, 'max_network_pixels': 2_000_000,
-      'pretrained': None, 'swap_eyes': False, 'mixing_weight': None, 'descreen': 'off'}
+      'pretrained': None, 'swap_eyes': False, 'mixing_weight': None, 'descreen': 'off',
+      'rectify': 'off'}
 
 
 @contextlib.contextmanager
@@ -116,13 +117,14 @@ def test_help_under_a_console_script_wrapper_shows_the_binarys_docstring(binary)
 
 
 def test_the_tools_that_unmix_files_descreen_prints_and_evaluate_does_not():
-  """--descreen belongs to mixstereo-unmix and mixstereo-batch (default 'auto'); the paper's
-  evaluation keeps PredictorConfig's 'off'."""
+  """--descreen and --rectify belong to mixstereo-unmix and mixstereo-batch (default
+  'auto'); the paper's evaluation keeps PredictorConfig's 'off'."""
   cli_flags.define_unmix_predictor()
-  assert flags.FLAGS['descreen'].default == 'auto'
+  assert flags.FLAGS['descreen'].default == 'auto' == flags.FLAGS['rectify'].default
   with _parsing('descreen') as descreen:
     assert cli_flags.unmix_predictor_config().descreen == 'auto'
-    assert cli_flags.predictor_config().descreen == 'off'
+    assert cli_flags.unmix_predictor_config().rectify == 'auto'
+    assert cli_flags.predictor_config().descreen == 'off' == cli_flags.predictor_config().rectify
     descreen.parse('4.5')
     assert cli_flags.unmix_predictor_config().descreen == 4.5
     descreen.parse('none')

@@ -195,9 +195,9 @@ def test_a_double_image_weight_is_estimated_once_per_shot():
   assert state.begin(frame, cut=True).mixing_weight is None
 
 
-def test_a_halftone_screen_is_found_once_per_shot():
-  """The first frame's screen (info 'screen_period'; none found: 'off') is the rest of the
-  shot's descreen setting; a cut finds it anew."""
+def test_a_halftone_screen_and_a_tilt_are_found_once_per_shot():
+  """The first frame's screen (info 'screen_period') and turn (info 'tilt'), 'off' where
+  none was found, are the rest of the shot's settings; a cut finds them anew."""
   state = temporal.VideoState()
   frame = np.zeros((8, 8, 3), np.uint8)
   assert state.begin(frame).descreen is None
@@ -205,7 +205,10 @@ def test_a_halftone_screen_is_found_once_per_shot():
   assert state.begin(frame).descreen == 4.5
   assert state.begin(frame, cut=True).descreen is None
   state.end({'info': {'mixture': 'anaglyph'}})
-  assert state.begin(frame).descreen == 'off'
+  assert state.begin(frame).descreen == 'off' and state.begin(frame).rectify == 'off'
+  state.begin(frame, cut=True)
+  state.end({'info': {'mixture': 'anaglyph', 'tilt': [-2.5, 0.25]}})
+  assert state.begin(frame).rectify == (-2.5, 0.25)
 
 
 def test_prior_lowers_flicker_on_a_static_noisy_clip():

@@ -1,0 +1,121 @@
+"""A tilted anaglyph made level before it is unmixed, its outputs turned back after.
+
+    image, deep, back, info = level(image, deep, name, 'auto')  # `steps.run`, step 1b
+    ... outputs = back(outputs)                                 # the input's frame again
+
+The eyes' displacement line comes from `classical.epipolar.estimate`, whose line is tilted
+by up to 1.3 degrees on level frames (matching red against green-blue; docs/DESIGN.md,
+classical: tilted anaglyphs). So it is only taken when it helps the matcher itself: the
+census matcher's left-right consistent share on a copy `width` px a frame (the encoding's
+eye channels, over its own estimated range) must rise by at least min_gain once the image
+is turned and its right eye moved onto the line. On Motorcycle, SceneFlow and the KITTI
+frames (scratch `s27/tilt4.py`) every level frame kept its level (the estimate lost 0.004
+to 0.016), and every frame turned by 3 degrees was turned back (+0.07 to +0.15).
+The disparities of a turned image run along its eyes' line, in pixels.
+"""
+
+import dataclasses
+from typing import Callable, Dict, Optional, Tuple, Union
+
+import numpy as np
+
+from mixstereo_tf.classical import anaglyph
+from mixstereo_tf.classical import epipolar
+from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
+from mixstereo_tf.core import planning_copies
+
+AUTO, OFF = 'auto', 'off'  # --rectify: estimated and checked per image (a video per shot).
+Setting = Union[str, Tuple[float, float]]  # AUTO, OFF or a shot's (angle, offset).
+# Outputs of the right eye, moved with its channels.
+RIGHT_KEYS = ('right', 'disparity_right', 'consistent_right')
+
+
+@dataclasses.dataclass(frozen=True)
+class LevelConfig:
+  """`level`'s parameters: the line's estimate, the copy the matcher checks it on (pixels
+  a frame) and the consistent share it must add (module docstring)."""
+  line: epipolar.EpipolarConfig = epipolar.EpipolarConfig()
+  width: int = 640
+  min_gain: float = 0.002
+
+
+def consistent_share(image: np.ndarray, name: str, width: int) -> float:
+  """The census matcher's left-right consistent share of uint8 anaglyph `image` of
+  encoding `name`, on a copy `width` px a frame, its 8-px border left out."""
+  left, right = anaglyph.eye_images(
+      image_range.u8_to_unit(planning_copies.area_copy(image, width)), name)
+  left, right = (np.float32(x) for x in (left, right))
+  low, high = matcher.estimate_range(left, right)
+  consistent = matcher.match(left, right, low, high)['consistent_left']
+  return float(consistent[8:-8, 8:-8].mean())
+
+
+def choose(image: np.ndarray, name: str,
+           config: LevelConfig = LevelConfig()) -> Optional[epipolar.Tilt]:
+  """The tilt to level uint8 anaglyph `image` by, None where it is level or none helps."""
+  left, right = anaglyph.eye_images(image_range.u8_to_unit(image), name)
+  tilt = epipolar.estimate(left.mean(axis=-1), right.mean(axis=-1), config.line)
+  if not epipolar.worth_rectifying(tilt, config.line):
+    return None
+  turned, _ = epipolar.rectify(image, tilt, _right_channels(name))
+  gain = (consistent_share(turned, name, config.width) -
+          consistent_share(image, name, config.width))
+  return tilt if gain >= config.min_gain else None
+
+
+def _right_channels(name: str) -> Tuple[int, ...]:
+  return tuple(mixtures.get_mixture(name).eye_channels[1])
+
+
+def _back(outputs: Dict[str, object], back: Callable[..., np.ndarray],
+          shape: Tuple[int, int], name: str, originals: Tuple[np.ndarray, ...],
+          swapped: bool) -> Dict[str, object]:
+  """The outputs of the turned canvas (arrays of its `shape`) in the input's frame, the
+  views' channels the encoding copies taken from the input itself (`originals`: the image
+  and its 16-bit samples, matched to the views' dtype; `swapped`: eyes exchanged), not
+  resampled twice."""
+  result = {}
+  for key, value in outputs.items():
+    if isinstance(value, np.ndarray) and value.shape[:2] == shape:
+      turned = back(value.astype(np.float32) if value.dtype == bool else value,
+                    right=key in RIGHT_KEYS)
+      value = turned > 0.5 if value.dtype == bool else turned
+    result[key] = value
+  spec = mixtures.get_mixture(name)
+  copies = {'left': spec.left_channels, 'right': spec.right_channels}
+  if swapped:
+    copies = {'left': copies['right'], 'right': copies['left']}
+  for key, copied in copies.items():
+    if key not in result:
+      continue
+    source = [x for x in originals if x is not None and x.dtype == result[key].dtype]
+    for view_channel, mixture_channel in copied.items():
+      if source:
+        result[key][..., view_channel] = source[0][..., mixture_channel]
+  return result
+
+
+def level(image: np.ndarray, deep: Optional[np.ndarray], name: str, setting: Setting,
+          config: LevelConfig = LevelConfig()):
+  """(image, deep, back, info): uint8 anaglyph `image` (and its 16-bit samples `deep`, or
+  None) turned level under `setting` (AUTO: `choose`; OFF; a shot's (angle, offset));
+  back(outputs, swapped=False) brings a dict of their outputs to the input's frame; info
+  {'tilt': [angle degrees, offset pixels]} where turned, else {}."""
+  unchanged = lambda outputs, swapped=False: outputs
+  if setting == OFF:
+    return image, deep, unchanged, {}
+  if setting == AUTO:
+    tilt = choose(image, name, config)
+  else:
+    tilt = epipolar.Tilt(float(setting[0]), float(setting[1]), 0)
+  if tilt is None:
+    return image, deep, unchanged, {}
+  right = _right_channels(name)
+  turned, back = epipolar.rectify(image, tilt, right)
+  originals = (image, deep)
+  deep = None if deep is None else epipolar.rectify(deep, tilt, right)[0]
+  info = {'tilt': [round(tilt.angle, 3), round(tilt.offset, 3)]}
+  return turned, deep, lambda outputs, swapped=False: _back(
+      outputs, back, turned.shape[:2], name, originals, swapped), info
