@@ -15,6 +15,10 @@ unmixes each with `--rectify=off` and `--rectify=auto`, scored in the turned fra
    scores; the decision rule (`LevelConfig.min_gain`) was set before this table
    (module docstring of `unmixing/tilt.py`).
 2. The real pairs at hand, read after: Motorcycle, SceneFlow.
+3. False turns: `tilt.choose` on level anaglyphs only: 16 more validation warps (`SIZES`,
+   disparities up to 77 px, window-aligned by chance) in `FALSE_TURN_ENCODINGS`, every
+   other one through a quality-85 JPEG, and the KITTI frames at hand
+   (`--tilt_kitti_dirs`); each it would turn is listed.
 """
 
 import os
@@ -32,12 +36,17 @@ from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import photo_warps
 from mixstereo_tf.evaluation import metrics
+from mixstereo_tf.unmixing import tilt
 
 from experiments import halftone as printed  # The real pairs at hand, their flag.
 from experiments import markdown
 from experiments import validation  # --photo_dir, the pairs.
 
 flags.DEFINE_integer('tilt_pairs', 6, 'Validation photo warps of part 1.')
+flags.DEFINE_list('tilt_kitti_dirs', ['../shared/stereo_samples/kitti_object_velodyne',
+                                       '../shared/stereo_samples/kitti2015_aanet_000151'],
+                  'Folders of KITTI pairs (left.png / right.png or image_2.png / image_3.png) '
+                  'of part 3.')
 flags.DEFINE_string('tilt_output', 'experiments/results/tilt.md', 'Markdown report.')
 FLAGS = flags.FLAGS
 
@@ -45,6 +54,8 @@ WARP = photo_warps.WarpConfig(height=320, width=640, max_disparity=64, window_pr
 ANGLES = (0.0, 0.5, 1.0, 2.0, 4.0)
 OFFSET = 1.5  # Pixels the left eye's ink is printed below the right's.
 SETTINGS = ('off', 'auto')
+SIZES = ((256, 512), (320, 640), (480, 960), (540, 960))
+FALSE_TURN_ENCODINGS = ('anaglyph', 'half_color', 'dubois_ffmpeg', 'green_magenta')
 
 
 def tilted(pair: dict, encoding: str, angle: float, offset: float) -> tuple:
@@ -105,16 +116,57 @@ def table(pairs: dict, encodings: tuple) -> list:
   return lines + ['']
 
 
+def _kitti(folder: str) -> dict:
+  names = [('left.png', 'right.png'), ('image_2.png', 'image_3.png')]
+  found = next(n for n in names if os.path.exists(os.path.join(folder, n[0])))
+  left, right = (cv2.imread(os.path.join(folder, n))[..., ::-1].copy() for n in found)
+  return {'left': left, 'right': right}
+
+
+def false_turns(atlas) -> list:
+  """Part 3's lines."""
+  images = {}
+  for index in range(16):
+    height, width = SIZES[index % len(SIZES)]
+    pair = photo_warps.warped_pair(validation.PHOTO_SEED + 500 + index, photo_warps.WarpConfig(
+        height=height, width=width, max_disparity=96), atlas)
+    for encoding in FALSE_TURN_ENCODINGS:
+      mixture, truth = tilted(pair, encoding, 0.0, 0.0)
+      if index % 2:
+        _, data = cv2.imencode('.jpg', mixture[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, 85])
+        mixture = cv2.imdecode(data, cv2.IMREAD_COLOR)[..., ::-1].copy()
+      images[f'warp {index} ({width} x {height}{", JPEG" if index % 2 else ""}), '
+             f'{encoding}'] = (mixture, encoding, truth)
+  for folder in FLAGS.tilt_kitti_dirs:
+    pair = _kitti(folder)
+    for encoding in FALSE_TURN_ENCODINGS[:3]:
+      mixed = mixtures.mix(encoding, image_range.u8_to_signed(pair['left']),
+                           image_range.u8_to_signed(pair['right']))
+      images[f'{os.path.basename(folder)}, {encoding}'] = (
+          image_range.signed_to_u8(mixed.numpy()), encoding, None)
+  turned = []
+  for name, (mixture, encoding, truth) in images.items():
+    found = tilt.choose(mixture, encoding)
+    if found is not None:
+      cost = '' if truth is None else ' (bad-1, views: off %.1f%%, %.2f / %.2f dB; auto ' \
+          '%.1f%%, %.2f / %.2f dB)' % tuple(value for setting in SETTINGS for value in
+                                             scores(mixture, truth, encoding, setting)[1:])
+      turned.append(f'{name} by {found.angle:.2f} degrees, {found.offset:.2f} px{cost}')
+  return ['## 3. False turns', '', f'Of {len(images)} level anaglyphs `--rectify=auto` would '
+          f'turn {len(turned)}' + (': ' + '; '.join(turned) + '.' if turned else '.'), '']
+
+
 def main(argv):
   del argv
   start = time.perf_counter()
-  warps = dict(enumerate(validation.photo_pairs(WARP, FLAGS.tilt_pairs,
-                                                validation.required_atlas())))
+  atlas = validation.required_atlas()
+  warps = dict(enumerate(validation.photo_pairs(WARP, FLAGS.tilt_pairs, atlas)))
   body = ['## 1. Validation photo warps', '',
           f'{len(warps)} warps, colour and Dubois anaglyphs; mean bad-1, left / right PSNR.',
           ''] + table(warps, ('anaglyph', 'dubois_ffmpeg'))
   for name, pair in printed.real_pairs().items():
     body += [f'## 2. {name}, colour anaglyph', ''] + table({name: pair}, ('anaglyph',))
+  body += false_turns(atlas)
   markdown.write(FLAGS.tilt_output, [
       '# Tilted anaglyphs: turned level or not', '',
       f'Written by `python -m experiments.tilt {" ".join(sys.argv[1:])}` in '
