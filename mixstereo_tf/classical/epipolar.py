@@ -143,11 +143,12 @@ def worth_rectifying(tilt: Optional[Tilt], config: EpipolarConfig = EpipolarConf
 
 
 def rectify(image: np.ndarray, tilt: Tilt, right_channels: Sequence[int]
-            ) -> Tuple[np.ndarray, Callable[..., np.ndarray]]:
+            ) -> Tuple[np.ndarray, Callable[..., np.ndarray], Callable[..., np.ndarray]]:
   """(the image turned by tilt.angle onto a canvas holding all of it, its right-eye
   channels moved down by tilt.offset; `back(array, right=False)`, which brings an array
   of that canvas (a view, a disparity map) back to the image's frame, moving a right-eye
-  one up first). Edges are replicated."""
+  one up first; `forth(map)`, which turns a float map of the image's frame (a left
+  disparity) onto the canvas, NaN where the image has none). Edges are replicated."""
   height, width = image.shape[:2]
   turn = cv2.getRotationMatrix2D((width / 2, height / 2), tilt.angle, 1.0)
   cos, sin = abs(turn[0, 0]), abs(turn[0, 1])
@@ -166,4 +167,6 @@ def rectify(image: np.ndarray, tilt: Tilt, right_channels: Sequence[int]
     array = lift(array, -tilt.offset) if right and tilt.offset else array
     return warp(array, until, (width, height))
 
-  return level, back
+  forth = lambda x: cv2.warpAffine(np.float32(x), turn, size, flags=cv2.INTER_LINEAR,
+                                   borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+  return level, back, forth

@@ -22,6 +22,7 @@ import numpy as np
 from mixstereo_tf.classical import anaglyph
 from mixstereo_tf.classical import epipolar
 from mixstereo_tf.classical import matcher
+from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.core import planning_copies
@@ -59,7 +60,7 @@ def choose(image: np.ndarray, name: str,
   tilt = epipolar.estimate(left.mean(axis=-1), right.mean(axis=-1), config.line)
   if not epipolar.worth_rectifying(tilt, config.line):
     return None
-  turned, _ = epipolar.rectify(image, tilt, _right_channels(name))
+  turned = epipolar.rectify(image, tilt, _right_channels(name))[0]
   gain = (consistent_share(turned, name, config.width) -
           consistent_share(image, name, config.width))
   return tilt if gain >= config.min_gain else None
@@ -98,24 +99,29 @@ def _back(outputs: Dict[str, object], back: Callable[..., np.ndarray],
 
 
 def level(image: np.ndarray, deep: Optional[np.ndarray], name: str, setting: Setting,
-          config: LevelConfig = LevelConfig()):
-  """(image, deep, back, info): uint8 anaglyph `image` (and its 16-bit samples `deep`, or
-  None) turned level under `setting` (AUTO: `choose`; OFF; a shot's (angle, offset));
+          hint: hints.FrameHint, config: LevelConfig = LevelConfig()):
+  """(image, deep, hint, back, info): uint8 anaglyph `image` (and its 16-bit samples
+  `deep`, or None) turned level under `setting` (AUTO: `choose`; OFF; a shot's (angle,
+  offset)), the `hint`'s prior turned with it and its on_disparity given maps turned back;
   back(outputs, swapped=False) brings a dict of their outputs to the input's frame; info
   {'tilt': [angle degrees, offset pixels]} where turned, else {}."""
   unchanged = lambda outputs, swapped=False: outputs
   if setting == OFF:
-    return image, deep, unchanged, {}
+    return image, deep, hint, unchanged, {}
   if setting == AUTO:
     tilt = choose(image, name, config)
   else:
     tilt = epipolar.Tilt(float(setting[0]), float(setting[1]), 0)
   if tilt is None:
-    return image, deep, unchanged, {}
+    return image, deep, hint, unchanged, {}
   right = _right_channels(name)
-  turned, back = epipolar.rectify(image, tilt, right)
+  turned, back, forth = epipolar.rectify(image, tilt, right)
   originals = (image, deep)
   deep = None if deep is None else epipolar.rectify(deep, tilt, right)[0]
-  info = {'tilt': [round(tilt.angle, 3), round(tilt.offset, 3)]}
-  return turned, deep, lambda outputs, swapped=False: _back(
-      outputs, back, turned.shape[:2], name, originals, swapped), info
+  undo = lambda outputs, swapped=False: _back(outputs, back, turned.shape[:2], name,
+                                              originals, swapped)
+  told = hint.on_disparity
+  hint = dataclasses.replace(
+      hint, prior=None if hint.prior is None else forth(hint.prior),
+      on_disparity=None if told is None else lambda maps: told(undo(maps)))
+  return turned, deep, hint, undo, {'tilt': [round(tilt.angle, 3), round(tilt.offset, 3)]}

@@ -52,12 +52,16 @@ def test_rectify_turns_the_eyes_level_and_back_undoes_it():
   left, right = _pair(3.0, 1.5)
   image = np.dstack([left, right, right]).astype(np.uint8)
   tilt = epipolar.estimate(left, right)
-  level, back = epipolar.rectify(image, tilt, [1, 2])
+  level, back, forth = epipolar.rectify(image, tilt, [1, 2])
   assert level.shape[0] > image.shape[0] and level.shape[1] > image.shape[1]  # Whole.
   again = epipolar.estimate(level[..., 0].astype(np.float32),
                             level[..., 1].astype(np.float32))
   assert abs(again.angle) < 0.25 and abs(again.offset) < 0.3  # Level now.
   inner = (slice(20, -20), slice(20, -20))
+  ramp = np.float32(np.arange(360))[None].repeat(240, 0)  # A map of the image's frame.
+  there = forth(ramp)
+  assert there.shape == level.shape[:2] and np.isnan(there[0, 0])  # A corner: none.
+  np.testing.assert_allclose(back(there)[inner], ramp[inner], atol=0.5)
   for channel, right_eye in ((0, False), (1, True)):
     undone = back(level[..., channel], right=right_eye)
     assert undone.shape == image.shape[:2]

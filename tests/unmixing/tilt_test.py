@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 import skimage.data
 
+from mixstereo_tf.core import hints
 from mixstereo_tf.unmixing import predictors
 from mixstereo_tf.unmixing import tilt
 from tests.unmixing import detection_test
@@ -15,7 +16,8 @@ def _anaglyph(angle: float):
   turned alike (nearest; NaN unknown)."""
   left, right, truth = skimage.data.stereo_motorcycle()
   half = lambda x: cv2.resize(x, (370, 250), interpolation=cv2.INTER_AREA)
-  image = detection_test._ours('anaglyph', half(left), half(right))  # pylint: disable=protected-access
+  ours = detection_test._ours  # pylint: disable=protected-access
+  image = ours('anaglyph', half(left), half(right))
   truth = cv2.resize(np.float32(truth), (370, 250), interpolation=cv2.INTER_NEAREST) / 2
   turn = cv2.getRotationMatrix2D((185, 125), angle, 1.0)
   warp = lambda x, how: cv2.warpAffine(x, turn, (370, 250), flags=how,
@@ -25,11 +27,12 @@ def _anaglyph(angle: float):
 
 def test_a_level_anaglyph_is_left_alone_and_off_does_nothing():
   image, _ = _anaglyph(0.0)
-  same, deep, back, info = tilt.level(image, None, 'anaglyph', tilt.AUTO)
-  assert same is image and deep is None and info == {}
+  hint = hints.FrameHint()
+  same, deep, same_hint, back, info = tilt.level(image, None, 'anaglyph', tilt.AUTO, hint)
+  assert same is image and deep is None and same_hint is hint and info == {}
   outputs = {'left': image}
   assert back(outputs) is outputs
-  assert tilt.level(image, None, 'anaglyph', tilt.OFF)[0] is image
+  assert tilt.level(image, None, 'anaglyph', tilt.OFF, hint)[0] is image
 
 
 def test_a_turned_anaglyph_is_turned_level_and_its_outputs_back():
@@ -56,7 +59,8 @@ def test_a_turned_anaglyph_is_turned_level_and_its_outputs_back():
 
 def test_a_shots_turn_is_applied_as_given_and_bad_settings_are_refused():
   image, _ = _anaglyph(4.0)
-  turned, _, back, info = tilt.level(image, None, 'anaglyph', (-4.0, 0.0))
+  turned, _, _, back, info = tilt.level(image, None, 'anaglyph', (-4.0, 0.0),
+                                        hints.FrameHint())
   assert info == {'tilt': [-4.0, 0.0]} and turned.shape[0] > image.shape[0]
   outputs = back({'left': turned, 'consistent_left': np.ones(turned.shape[:2], bool),
                   'info': {'x': 1}})
@@ -64,3 +68,22 @@ def test_a_shots_turn_is_applied_as_given_and_bad_settings_are_refused():
   assert outputs['consistent_left'].dtype == bool
   with pytest.raises(ValueError, match="PredictorConfig.rectify must be 'auto' or 'off'"):
     predictors.PredictorConfig(rectify='yes')
+
+
+def test_a_video_frame_of_a_turned_shot_takes_its_prior_and_gives_its_maps_in_its_frame():
+  """A shot's later frame: its prior (the previous frame's left disparity, in the input's
+  frame) is turned with the image, and the early maps the video loop takes as the next
+  prior (`FrameHint.on_disparity`) come back in the input's frame."""
+  image, _ = _anaglyph(3.0)
+  unmixer = predictors.build_unmixer(predictors.PredictorConfig(
+      'classical', mixture='anaglyph', rectify='auto'))
+  first = unmixer(image)
+  told = []
+  hint = hints.FrameHint(mixture='anaglyph', rectify=tuple(first['info']['tilt']),
+                         disparity_range=tuple(first['info']['disparity_range']),
+                         prior=first['disparity_left'], prior_window=(4, 4),
+                         on_disparity=told.append)
+  second = unmixer(image, hint=hint)
+  assert second['info']['prior'] and second['info']['tilt'] == first['info']['tilt']
+  assert told and told[0]['disparity_left'].shape == image.shape[:2]
+  assert np.mean(np.abs(second['disparity_left'] - first['disparity_left']) <= 1) > 0.9
