@@ -216,8 +216,7 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
     hint = dataclasses.replace(hint, mixing_weight=mixing_weight)
   name, info = _encoding(image, requested_mixture, allowed, hint)
   image, deep, hint, turn_back, turned = tilt.level(
-      image, deep, name, tilt.OFF if not families.of(name).detectable else
-      rectify if hint.rectify is None else hint.rectify, hint)
+      image, deep, name, rectify if hint.rectify is None else hint.rectify, hint)
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)
   if swapped:
     image, hint = eye_order.mirror(image), eye_order.mirror_hint(hint)

@@ -53,17 +53,30 @@ def consistent_share(image: np.ndarray, name: str, width: int) -> float:
   return float(consistent[8:-8, 8:-8].mean())
 
 
+def _estimate(image: np.ndarray, name: str, config: LevelConfig) -> Optional[epipolar.Tilt]:
+  """The line's tilt of uint8 anaglyph `image` (its eyes' channels averaged), None where it
+  is too small to be worth a turn (`epipolar.worth_rectifying`)."""
+  left, right = (np.float32(image[..., list(eye)]).mean(axis=-1)
+                 for eye in mixtures.get_mixture(name).eye_channels)
+  tilt = epipolar.estimate(left, right, config.line)
+  return tilt if epipolar.worth_rectifying(tilt, config.line) else None
+
+
+def _helps(image: np.ndarray, turned: np.ndarray, name: str, config: LevelConfig) -> bool:
+  """Whether the matcher's consistent share rises by config.min_gain once turned."""
+  gain = (consistent_share(turned, name, config.width) -
+          consistent_share(image, name, config.width))
+  return gain >= config.min_gain
+
+
 def choose(image: np.ndarray, name: str,
            config: LevelConfig = LevelConfig()) -> Optional[epipolar.Tilt]:
   """The tilt to level uint8 anaglyph `image` by, None where it is level or none helps."""
-  left, right = anaglyph.eye_images(image_range.u8_to_unit(image), name)
-  tilt = epipolar.estimate(left.mean(axis=-1), right.mean(axis=-1), config.line)
-  if not epipolar.worth_rectifying(tilt, config.line):
+  tilt = _estimate(image, name, config)
+  if tilt is None:
     return None
   turned = epipolar.rectify(image, tilt, _right_channels(name))[0]
-  gain = (consistent_share(turned, name, config.width) -
-          consistent_share(image, name, config.width))
-  return tilt if gain >= config.min_gain else None
+  return tilt if _helps(image, turned, name, config) else None
 
 
 def _right_channels(name: str) -> Tuple[int, ...]:
@@ -89,33 +102,35 @@ def _back(outputs: Dict[str, object], back: Callable[..., np.ndarray],
   if swapped:
     copies = {'left': copies['right'], 'right': copies['left']}
   for key, copied in copies.items():
-    if key not in result:
-      continue
-    source = [x for x in originals if x is not None and x.dtype == result[key].dtype]
-    for view_channel, mixture_channel in copied.items():
-      if source:
-        result[key][..., view_channel] = source[0][..., mixture_channel]
+    source = [x for x in originals if key in result and x is not None and
+              x.dtype == result[key].dtype]
+    for view_channel, mixture_channel in copied.items() if source else ():
+      result[key][..., view_channel] = source[0][..., mixture_channel]
   return result
 
 
 def level(image: np.ndarray, deep: Optional[np.ndarray], name: str, setting: Setting,
           hint: hints.FrameHint, config: LevelConfig = LevelConfig()):
-  """(image, deep, hint, back, info): uint8 anaglyph `image` (and its 16-bit samples
-  `deep`, or None) turned level under `setting` (AUTO: `choose`; OFF; a shot's (angle,
-  offset)), the `hint`'s prior turned with it and its on_disparity given maps turned back;
-  back(outputs, swapped=False) brings a dict of their outputs to the input's frame; info
-  {'tilt': [angle degrees, offset pixels]} where turned, else {}."""
-  unchanged = lambda outputs, swapped=False: outputs
-  if setting == OFF:
-    return image, deep, hint, unchanged, {}
+  """(image, deep, hint, back, info): uint8 `image` of encoding `name` (and its 16-bit
+  samples `deep`, or None) turned level under `setting` (AUTO: `choose`; OFF; a shot's
+  (angle, offset)) where it is an anaglyph, the `hint`'s prior turned with it and its
+  on_disparity given maps turned back; back(outputs, swapped=False) brings a dict of their
+  outputs to the input's frame; info {'tilt': [angle degrees, offset pixels]} where
+  turned, else {}."""
+  unchanged = image, deep, hint, lambda outputs, swapped=False: outputs, {}
+  if setting == OFF or not mixtures.get_mixture(name).is_anaglyph:
+    return unchanged
+  right = _right_channels(name)
   if setting == AUTO:
-    tilt = choose(image, name, config)
+    tilt = _estimate(image, name, config)
+    if tilt is None:
+      return unchanged
+    turned, back, forth = epipolar.rectify(image, tilt, right)
+    if not _helps(image, turned, name, config):
+      return unchanged
   else:
     tilt = epipolar.Tilt(float(setting[0]), float(setting[1]), 0)
-  if tilt is None:
-    return image, deep, hint, unchanged, {}
-  right = _right_channels(name)
-  turned, back, forth = epipolar.rectify(image, tilt, right)
+    turned, back, forth = epipolar.rectify(image, tilt, right)
   originals = (image, deep)
   deep = None if deep is None else epipolar.rectify(deep, tilt, right)[0]
   undo = lambda outputs, swapped=False: _back(outputs, back, turned.shape[:2], name,
