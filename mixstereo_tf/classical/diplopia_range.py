@@ -33,11 +33,11 @@ def estimate_range(mixture, config: Optional[diplopia.DiplopiaConfig] = None, wi
   copy area-downsampled to `width` px (a frame's: `planning_copies`); among the left-right
   consistent disparities, those whose 5-lag window holds >= `density` of them (surfaces;
   false matches spread over the search), widened by `margin` px of the copy and scaled
-  back (as `matcher.estimate_range` does for anaglyphs). `density` 2 %, not the anaglyphs' 1 %: a
-  double image's self-matching leaves more false consistent matches; on 12 photo-warp
-  pairs (training data, 640 px wide, true maxima 67-85 px) the bound over the true 99.5th
-  percentile had median 1.95x (up to 3.2x) at 1 % and 1.11x (0.93x-2.65x) at 2 %. The
-  matching runs with `RANGE_PENALTIES`, whatever `config`'s.
+  back (as `matcher.estimate_range` does for anaglyphs). `density` 2 %, not the
+  anaglyphs' 1 %: a double image's self-matching leaves more false consistent matches; on
+  12 photo-warp pairs (training data, 640 px wide, true maxima 67-85 px) the bound over
+  the true 99.5th percentile had median 1.95x (up to 3.2x) at 1 % and 1.11x (0.93x-2.65x)
+  at 2 %. The matching runs with `RANGE_PENALTIES`, whatever `config`'s.
 
   Returns:
     (min, max) ints with 1 <= min < max: the whole search when nothing is consistent.

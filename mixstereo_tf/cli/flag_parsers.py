@@ -1,8 +1,7 @@
 """Parsers of flag values that need more than absl's types: --swap_eyes (a boolean or
 'auto'), --output_format (names, repeated or comma-separated), --mixing_weight ('auto' or a
 number in (0, 1)), --descreen ('auto', 'off' or a period) and --middlebury_scale items
-(scene:scale). Each raises an error naming
-the flag and the value at fault.
+(scene:scale). Each raises an error naming the flag and the value at fault.
 """
 
 from typing import Optional, Sequence, Tuple

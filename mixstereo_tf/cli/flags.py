@@ -278,7 +278,7 @@ def define_unmix_predictor() -> None:
 
 def unmix_predictor_config() -> predictors.PredictorConfig:
   """`predictor_config` for the tools that unmix files (mixstereo-unmix, mixstereo-batch),
-  with --descreen.
+  with --descreen and --rectify.
 
   Raises:
     ValueError: --method=oracle, which needs the clean stereo pair.

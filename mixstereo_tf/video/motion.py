@@ -58,8 +58,8 @@ class MotionConfig:
 def motion_copy(image: np.ndarray, width: int) -> np.ndarray:
   """float32 [h, w] gray copy of an [H, W, C] frame (uint8, uint16 or [0, 1] float; its
   channels averaged, [0, 1]), area-reduced to at most `width` px wide a frame
-  (`planning_copies`; reduced first: a
-  720p frame in 2 ms, not the 19 ms of converting it whole)."""
+  (`planning_copies`; reduced first: a 720p frame in 2 ms, not the 19 ms of converting it
+  whole)."""
   image = np.asarray(image)
   image = planning_copies.area_copy(image, width)
   gray = image_range.to_unit(image) if image.dtype.kind == 'u' else image

@@ -41,6 +41,7 @@ import numpy as np
 from mixstereo_tf.classical import halftone
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
+from mixstereo_tf.unmixing import tilt
 from mixstereo_tf.video import motion as motion_lib
 
 # What a shot keeps of its deciding frame's detection info (`hints.FrameHint.detection`).
@@ -254,9 +255,8 @@ class VideoState:
     """Records the unmixed frame: its 'info' (mixture, detection, eye order, disparity range,
     mixing weight, halftone screen, tilt) when it is the shot's first frame that decided
     its encoding (not one read as the video's, 'undecided': black or dark frames of a
-    fade), or when its mixture
-    is the larger encoding the shot may still be (`hints.FrameHint.may_be`: the shot
-    settles on it); and its
+    fade), or when its mixture is the larger encoding the shot may still be
+    (`hints.FrameHint.may_be`: the shot settles on it); and its
     'disparity_left' as the next frame's prior, NaN where its 'consistent_left' (when
     given) says the match failed the left-right check: there the next frame searches the
     valid prior's range nearby (or everything), so a wrong disparity is not inherited."""
@@ -273,7 +273,7 @@ class VideoState:
                     'swap_eyes': info['eye_order'] == 'swapped' if 'eye_order' in info else None,
                     'mixing_weight': info.get('mixing_weight'),
                     'descreen': info.get('screen_period', halftone.OFF),
-                    'rectify': tuple(info['tilt']) if 'tilt' in info else 'off'}
+                    'rectify': tuple(info['tilt']) if 'tilt' in info else tilt.OFF}
     elif self._shot.get('may_be') and info.get('mixture') == self._shot['may_be']:
       self._shot.update(mixture=info['mixture'], may_be=None,  # Settled by this frame.
                         detection=_detection_of(info))
