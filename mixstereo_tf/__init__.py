@@ -215,7 +215,7 @@ def unmix(image: Union[str, bytes, os.PathLike, np.ndarray, Any], *,
     swap_eyes: True: the left eye in the cyan (second) filter's channels; 'auto': detected.
     mixing_weight: a of double images a L + (1 - a) R (None: 1/2, 'auto': estimated).
     descreen: a scan's halftone screen smoothed: 'auto', 'off', a period (screen_period).
-    rectify: 'auto' turns a tilted anaglyph level where that helps (info['tilt']); 'off'.
+    rectify: 'auto' turns a tilted anaglyph or double image level if it helps; 'off'.
 
   Returns:
     An `Unmixed`: views and disparities the size of the input, and `info`.

@@ -23,7 +23,7 @@ is a left eye lower than the right.
 """
 
 import dataclasses
-from typing import Callable, Optional, Sequence, Tuple
+from typing import Callable, Iterator, Optional, Sequence, Tuple
 
 import cv2
 import numpy as np
@@ -66,33 +66,53 @@ def _peak(scores: np.ndarray, x: int, y: int) -> Tuple[float, float]:
   return x + dx, y + dy
 
 
+def match_template(template: np.ndarray, window: np.ndarray, min_score: float,
+             interior: bool = False) -> Optional[Tuple[float, float]]:
+  """Sub-pixel (x, y) of `template`'s match in `window` (top-left corner, window pixels),
+  None where the normalised cross-correlation peak is under min_score or does not stand
+  out (another within 0.05 of it beyond 3 px); `interior`: also None where it lies on the
+  window's last column or its first or last row (a search cut short there)."""
+  scores = cv2.matchTemplate(window, template, cv2.TM_CCOEFF_NORMED)
+  _, best, _, (bx, by) = cv2.minMaxLoc(scores)
+  if interior and (bx >= scores.shape[1] - 1 or by in (0, scores.shape[0] - 1)):
+    return None
+  others = scores.copy()
+  others[max(0, by - 3):by + 4, max(0, bx - 3):bx + 4] = -1.0
+  if best < min_score or others.max() > best - 0.05:
+    return None
+  return _peak(scores, bx, by)
+
+
+def corners(image: np.ndarray, features: int, patch: int,
+            reach_y: int) -> Iterator[Tuple[int, int, int]]:
+  """(x, y, top) of up to `features` corners of float32 [h, w] `image`
+  (`cv2.goodFeaturesToTrack`) whose `patch`-px patch, widened by +- reach_y rows (from row
+  `top`), lies inside it."""
+  found = cv2.goodFeaturesToTrack(image, features, 0.01, 8, blockSize=7)
+  height, width = image.shape
+  r = patch // 2
+  for x, y in np.round(found[:, 0]).astype(int) if found is not None else ():
+    top = y - r - reach_y
+    if top >= 0 and y + r + reach_y < height and x - r >= 0 and x + r < width:
+      yield x, y, top
+
+
 def displacements(left: np.ndarray, right: np.ndarray,
                   config: EpipolarConfig = EpipolarConfig()) -> np.ndarray:
   """[N, 2] (dx, dy) from left-eye corners to their right-eye matches, pixels of [h, w]
   float32 eye images (module docstring)."""
-  height, width = left.shape
-  corners = cv2.goodFeaturesToTrack(left, config.features, 0.01, 8, blockSize=7)
-  if corners is None:
-    return np.zeros((0, 2))
+  width = left.shape[1]
   r, reach_x = config.patch // 2, int(config.reach_fraction * width)
   found = []
-  for x, y in np.round(corners[:, 0]).astype(int):
-    top = y - r - config.reach_y
-    if top < 0 or y + r + config.reach_y >= height or x - r < 0 or x + r >= width:
-      continue
+  for x, y, top in corners(left, config.features, config.patch, config.reach_y):
     template = left[y - r:y + r + 1, x - r:x + r + 1]
     if template.std() < 3.0:
       continue
     x0 = max(0, x - r - reach_x)
     window = right[top:y + r + 1 + config.reach_y, x0:min(width, x + r + 1 + reach_x)]
-    scores = cv2.matchTemplate(window, template, cv2.TM_CCOEFF_NORMED)
-    _, best, _, (bx, by) = cv2.minMaxLoc(scores)
-    others = scores.copy()
-    others[max(0, by - 3):by + 4, max(0, bx - 3):bx + 4] = -1.0
-    if best < config.min_score or others.max() > best - 0.05:
-      continue
-    px, py = _peak(scores, bx, by)
-    found.append((x - (x0 + px + r), y - (top + py + r)))
+    match = match_template(template, window, config.min_score)
+    if match is not None:
+      found.append((x - (x0 + match[0] + r), y - (top + match[1] + r)))
   return np.array(found, np.float64).reshape(-1, 2)
 
 
@@ -159,8 +179,9 @@ def rectify(image: np.ndarray, tilt: Tilt, right_channels: Sequence[int]
   lift = lambda x, dy: warp(x, np.float64([[1, 0, 0], [0, 1, dy]]), (x.shape[1], x.shape[0]))
   level = warp(image, turn, size)
   channels = list(right_channels)
-  level[..., channels] = lift(level[..., channels], tilt.offset).reshape(
-      level.shape[:2] + (len(channels),))
+  if channels and tilt.offset:
+    level[..., channels] = lift(level[..., channels], tilt.offset).reshape(
+        level.shape[:2] + (len(channels),))
   until = cv2.invertAffineTransform(turn)
 
   def back(array: np.ndarray, right: bool = False) -> np.ndarray:

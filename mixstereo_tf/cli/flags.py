@@ -272,8 +272,8 @@ def define_unmix_predictor() -> None:
                       "first: 'auto' finds them per image (a video: per shot); 'off'; or "
                       'their period in pixels (info: screen_period).')
   flags.DEFINE_enum('rectify', tilt.AUTO, (tilt.AUTO, tilt.OFF), "'auto': a tilted anaglyph "
-                    '(a crooked scan) turned level where the matcher gains, the outputs '
-                    'turned back (info: tilt).')
+                    '(a crooked scan) or double image (a rolled camera) turned level where '
+                    'the matcher gains, the outputs turned back (info: tilt).')
 
 
 def unmix_predictor_config() -> predictors.PredictorConfig:

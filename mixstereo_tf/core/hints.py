@@ -60,8 +60,8 @@ class FrameHint:
     descreen: a printed image's halftone screen (`classical.halftone.resolve`): 'auto'
       (found from the frame), 'off' or its period in pixels (a video shot's, found on its
       first frame); None: the unmixer's own setting.
-    rectify: a tilted anaglyph's turn (`unmixing.tilt.level`): 'auto', 'off' or the shot's
-      (angle degrees, offset pixels); None: the unmixer's own setting.
+    rectify: a tilted anaglyph's or double image's turn (`unmixing.tilt.level`): 'auto',
+      'off' or the shot's (angle degrees, offset pixels); None: the unmixer's own setting.
   """
   mixture: Optional[str] = None
   may_be: Optional[str] = None

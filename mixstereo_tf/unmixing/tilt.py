@@ -1,4 +1,5 @@
-"""A tilted anaglyph made level before it is unmixed, its outputs turned back after.
+"""A tilted anaglyph or double image made level before it is unmixed, its outputs turned
+back after.
 
     image, deep, back, info = level(image, deep, name, 'auto')  # `steps.run`, step 1b
     ... outputs = back(outputs)                                 # the input's frame again
@@ -12,6 +13,17 @@ is turned and its right eye moved onto the line. On Motorcycle, SceneFlow and th
 frames (scratch `s27/tilt4.py`) every level frame kept its level (the estimate lost 0.004
 to 0.016), and every frame turned by 3 degrees was turned back (+0.07 to +0.15).
 The disparities of a turned image run along its eyes' line, in pixels.
+
+A double image's line is its echo's (`classical.echo_tilt`: an angle, no offset, which
+both copies would share); the check is its self-matching's consistent share at lags of
+at least `DiplopiaConfig.min_lag` (`echo_tilt.consistent_share`), on the box inside the
+image that both the input and the turned canvas show (the canvas' replicated corners
+match nothing), gaining at least echo_min_gain. Chosen on 16 validation photo warps
+(256 x 512 to 540 x 960) at a = 0.3 / 0.5 / 0.7 (scratch `s28/dtilt/t11.py`): of 48
+level ones 8 read a turn of 0.3 degrees or more, their gains at most 0.0006 (on the
+whole canvas, -0.03 to +0.007); turned by 2 / 1 / 0.5 degrees, 28 of 37 / 18 of 38 /
+10 of 31 such reads gain 0.005 or more (the line within 0.5 degrees on most; the rest
+stay as they are).
 """
 
 import dataclasses
@@ -20,6 +32,8 @@ from typing import Callable, Dict, Optional, Tuple, Union
 import numpy as np
 
 from mixstereo_tf.classical import anaglyph
+from mixstereo_tf.classical import diplopia_costs
+from mixstereo_tf.classical import echo_tilt
 from mixstereo_tf.classical import epipolar
 from mixstereo_tf.classical import matcher
 from mixstereo_tf.core import hints
@@ -35,16 +49,28 @@ RIGHT_KEYS = ('right', 'disparity_right', 'consistent_right')
 
 @dataclasses.dataclass(frozen=True)
 class LevelConfig:
-  """`level`'s parameters: the line's estimate, the copy the matcher checks it on (pixels
-  a frame) and the consistent share it must add (module docstring)."""
+  """`level`'s parameters: the line's estimate (an anaglyph's, a double image's echo), the
+  copy the matcher checks it on (pixels a frame) and the consistent share it must add
+  (module docstring)."""
   line: epipolar.EpipolarConfig = epipolar.EpipolarConfig()
+  echo: echo_tilt.EchoConfig = echo_tilt.EchoConfig()
   width: int = 640
   min_gain: float = 0.002
+  echo_min_gain: float = 0.005
+
+
+def turnable(name: str) -> bool:
+  """Whether encoding `name` is one `level` turns: the anaglyphs and double images."""
+  spec = mixtures.get_mixture(name)
+  return spec.is_anaglyph or spec.family == 'diplopia'
 
 
 def consistent_share(image: np.ndarray, name: str, width: int) -> float:
-  """The census matcher's left-right consistent share of uint8 anaglyph `image` of
-  encoding `name`, on a copy `width` px a frame, its 8-px border left out."""
+  """The matcher's left-right consistent share of uint8 `image` of encoding `name`, on a
+  copy `width` px a frame, its 8-px border left out: an anaglyph's census matcher over
+  its own estimated range, a double image's self-matching (`echo_tilt.consistent_share`)."""
+  if not mixtures.get_mixture(name).is_anaglyph:
+    return echo_tilt.consistent_share(_gray(image), width)
   left, right = anaglyph.eye_images(
       image_range.u8_to_unit(planning_copies.area_copy(image, width)), name)
   left, right = (np.float32(x) for x in (left, right))
@@ -53,34 +79,64 @@ def consistent_share(image: np.ndarray, name: str, width: int) -> float:
   return float(consistent[8:-8, 8:-8].mean())
 
 
+def _gray(image: np.ndarray) -> np.ndarray:
+  """A double image's float32 intensities, 0-255 (the double-image matcher's)."""
+  return np.float32(diplopia_costs.gray_255(image_range.u8_to_unit(image)))
+
+
 def _estimate(image: np.ndarray, name: str, config: LevelConfig) -> Optional[epipolar.Tilt]:
-  """The line's tilt of uint8 anaglyph `image` (its eyes' channels averaged), None where it
-  is too small to be worth a turn (`epipolar.worth_rectifying`)."""
-  left, right = (np.float32(image[..., list(eye)]).mean(axis=-1)
-                 for eye in mixtures.get_mixture(name).eye_channels)
-  tilt = epipolar.estimate(left, right, config.line)
+  """The line's tilt of uint8 `image` (an anaglyph's eyes' channels averaged; a double
+  image's echo), None where it is too small to be worth a turn
+  (`epipolar.worth_rectifying`)."""
+  if not mixtures.get_mixture(name).is_anaglyph:
+    tilt = echo_tilt.estimate(_gray(image), config.echo)
+  else:
+    left, right = (np.float32(image[..., list(eye)]).mean(axis=-1)
+                   for eye in mixtures.get_mixture(name).eye_channels)
+    tilt = epipolar.estimate(left, right, config.line)
   return tilt if epipolar.worth_rectifying(tilt, config.line) else None
 
 
-def _helps(image: np.ndarray, turned: np.ndarray, name: str, config: LevelConfig) -> bool:
-  """Whether the matcher's consistent share rises by config.min_gain once turned."""
+def _helps(image: np.ndarray, turned: np.ndarray, angle: float, name: str,
+           config: LevelConfig) -> bool:
+  """Whether the matcher's consistent share rises by config.min_gain once turned (a
+  double image's by config.echo_min_gain, on the box both show: module docstring)."""
+  if not mixtures.get_mixture(name).is_anaglyph:
+    image, turned = _common_box(image, turned, angle)
+    return (echo_tilt.consistent_share(_gray(turned), config.width) -
+            echo_tilt.consistent_share(_gray(image), config.width)) >= config.echo_min_gain
   gain = (consistent_share(turned, name, config.width) -
           consistent_share(image, name, config.width))
   return gain >= config.min_gain
 
 
+def _common_box(image: np.ndarray, turned: np.ndarray, angle: float):
+  """The central boxes of `image` and of its `turned` canvas (turned by `angle` degrees
+  about its centre) of the size that lies inside the image in both, 1 px spare a side."""
+  height, width = image.shape[:2]
+  sine = abs(np.sin(np.radians(angle)))
+  rows, columns = max(1, int(height - width * sine) - 2), max(1, int(width - height * sine) - 2)
+  box = lambda x: x[(x.shape[0] - rows) // 2:(x.shape[0] - rows) // 2 + rows,
+                    (x.shape[1] - columns) // 2:(x.shape[1] - columns) // 2 + columns]
+  return np.ascontiguousarray(box(image)), np.ascontiguousarray(box(turned))
+
+
 def choose(image: np.ndarray, name: str,
            config: LevelConfig = LevelConfig()) -> Optional[epipolar.Tilt]:
-  """The tilt to level uint8 anaglyph `image` by, None where it is level or none helps."""
+  """The tilt to level uint8 `image` of encoding `name` (`turnable`) by, None where it is
+  level or none helps."""
   tilt = _estimate(image, name, config)
   if tilt is None:
     return None
   turned = epipolar.rectify(image, tilt, _right_channels(name))[0]
-  return tilt if _helps(image, turned, name, config) else None
+  return tilt if _helps(image, turned, tilt.angle, name, config) else None
 
 
 def _right_channels(name: str) -> Tuple[int, ...]:
-  return tuple(mixtures.get_mixture(name).eye_channels[1])
+  """The channels a turn moves by the line's offset: an anaglyph's right eye's (a double
+  image has none of its own)."""
+  spec = mixtures.get_mixture(name)
+  return tuple(spec.eye_channels[1]) if spec.is_anaglyph else ()
 
 
 def _back(outputs: Dict[str, object], back: Callable[..., np.ndarray],
@@ -113,12 +169,12 @@ def level(image: np.ndarray, deep: Optional[np.ndarray], name: str, setting: Set
           hint: hints.FrameHint, config: LevelConfig = LevelConfig()):
   """(image, deep, hint, back, info): uint8 `image` of encoding `name` (and its 16-bit
   samples `deep`, or None) turned level under `setting` (AUTO: `choose`; OFF; a shot's
-  (angle, offset)) where it is an anaglyph, the `hint`'s prior turned with it and its
-  on_disparity given maps turned back; back(outputs, swapped=False) brings a dict of their
-  outputs to the input's frame; info {'tilt': [angle degrees, offset pixels]} where
-  turned, else {}."""
+  (angle, offset)) where it is an anaglyph or a double image (`turnable`), the `hint`'s
+  prior turned with it and its on_disparity given maps turned back; back(outputs,
+  swapped=False) brings a dict of their outputs to the input's frame; info {'tilt':
+  [angle degrees, offset pixels]} where turned, else {}."""
   unchanged = image, deep, hint, lambda outputs, swapped=False: outputs, {}
-  if setting == OFF or not mixtures.get_mixture(name).is_anaglyph:
+  if setting == OFF or not turnable(name):
     return unchanged
   right = _right_channels(name)
   if setting == AUTO:
@@ -126,7 +182,7 @@ def level(image: np.ndarray, deep: Optional[np.ndarray], name: str, setting: Set
     if tilt is None:
       return unchanged
     turned, back, forth = epipolar.rectify(image, tilt, right)
-    if not _helps(image, turned, name, config):
+    if not _helps(image, turned, tilt.angle, name, config):
       return unchanged
   else:
     tilt = epipolar.Tilt(float(setting[0]), float(setting[1]), 0)

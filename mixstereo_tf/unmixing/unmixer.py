@@ -70,8 +70,9 @@ class PredictorConfig:
     descreen: a printed image's halftone screen, smoothed before anything else
       (`classical.halftone`): 'off' (the paper's inputs), 'auto' (found per image, a
       video per shot; the tools' default) or its period in pixels.
-    rectify: a tilted anaglyph turned level (`unmixing.tilt`): 'off' (the paper's inputs)
-      or 'auto' (estimated and checked per image, a video per shot; the tools' default).
+    rectify: a tilted anaglyph or double image turned level (`unmixing.tilt`): 'off' (the
+      paper's inputs) or 'auto' (estimated and checked per image, a video per shot; the
+      tools' default).
   """
   method: str = 'model'
   checkpoint: Optional[str] = None
