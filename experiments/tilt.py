@@ -1,4 +1,5 @@
-"""Tilted anaglyphs: crooked scans and misregistered inks, turned level (`unmixing/tilt.py`).
+"""Tilted anaglyphs and double images: crooked scans, rolled cameras and misregistered inks,
+turned level (`unmixing/tilt.py`).
 
     python -m experiments.tilt --photo_dir=photos/warps
 
@@ -19,6 +20,10 @@ unmixes each with `--rectify=off` and `--rectify=auto`, scored in the turned fra
    disparities up to 77 px, window-aligned by chance) in `FALSE_TURN_ENCODINGS`, every
    other one through a quality-85 JPEG, and the KITTI frames at hand
    (`--tilt_kitti_dirs`); each it would turn is listed.
+4. Double images (I = a L + (1 - a) R), their echo's line (`classical/echo_tilt.py`): the
+   real pairs at a = 1/2 turned by `ANGLES` (no ink offset: both copies share every
+   channel), and false turns as in part 3 on level double images of the 16 warps and the
+   KITTI frames at a = 0.3 / 0.5 / 0.7 (every other warp through a quality-85 JPEG).
 """
 
 import os
@@ -82,9 +87,12 @@ def tilted(pair: dict, encoding: str, angle: float, offset: float) -> tuple:
   return warp(mixture, cv2.INTER_LINEAR, cv2.BORDER_REFLECT), truth
 
 
-def scores(mixture: np.ndarray, truth: dict, encoding: str, setting: str) -> tuple:
-  """(turned?, bad-1 %, left PSNR, right PSNR) of the default method."""
-  out = mixstereo_tf.unmix(mixture, mixture=encoding, rectify=setting)
+def scores(mixture: np.ndarray, truth: dict, encoding: str, setting: str,
+           weight: float = 0.5) -> tuple:
+  """(turned?, bad-1 %, left PSNR, right PSNR) of the default method (a double image
+  mixed at `weight` told so: `--mixing_weight`)."""
+  out = mixstereo_tf.unmix(mixture, mixture=encoding, rectify=setting,
+                           mixing_weight=None if weight == 0.5 else weight)
   known = truth['known']
   rows, columns = np.flatnonzero(known.any(1)), np.flatnonzero(known.any(0))
   box = (slice(rows[0], rows[-1] + 1), slice(columns[0], columns[-1] + 1))
@@ -94,11 +102,11 @@ def scores(mixture: np.ndarray, truth: dict, encoding: str, setting: str) -> tup
   return ('tilt' in out.info, 100 * float(np.mean(error > 1)), psnr('left'), psnr('right'))
 
 
-def table(pairs: dict, encodings: tuple) -> list:
+def table(pairs: dict, encodings: tuple, offsets: tuple = (0.0, OFFSET)) -> list:
   """Rows per angle and offset: turned by auto, then bad-1 and views per setting."""
   lines = ['| tilt | turned by auto | ' + ' | '.join(SETTINGS) + ' |',
            '| --- | --- |' + ' --- |' * len(SETTINGS)]
-  for offset in (0.0, OFFSET):
+  for offset in offsets:
     for angle in ANGLES:
       found = {setting: [] for setting in SETTINGS}
       for pair in pairs.values():
@@ -123,36 +131,52 @@ def _kitti(folder: str) -> dict:
   return {'left': left, 'right': right}
 
 
-def false_turns(atlas) -> list:
-  """Part 3's lines."""
+def _level_images(atlas, encodings: tuple, weights: tuple = (0.5,)) -> dict:
+  """Part 3's and 4's level images: {name: (mixture, encoding, truth or None, weight)}, an
+  encoding 'diplopia' mixed at each of `weights` (a L + (1 - a) R)."""
+  def mixed(pair, encoding, weight):
+    if encoding != 'diplopia':
+      return image_range.signed_to_u8(mixtures.mix(
+          encoding, image_range.u8_to_signed(pair['left']),
+          image_range.u8_to_signed(pair['right'])).numpy())
+    return np.uint8(np.round(weight * np.float32(pair['left']) +
+                             (1 - weight) * np.float32(pair['right'])))
   images = {}
   for index in range(16):
     height, width = SIZES[index % len(SIZES)]
     pair = photo_warps.warped_pair(validation.PHOTO_SEED + 500 + index, photo_warps.WarpConfig(
         height=height, width=width, max_disparity=96), atlas)
-    for encoding in FALSE_TURN_ENCODINGS:
-      mixture, truth = tilted(pair, encoding, 0.0, 0.0)
+    truth = tilted(pair, 'anaglyph', 0.0, 0.0)[1]
+    for encoding, weight in ((e, w) for e in encodings for w in weights):
+      mixture = mixed(pair, encoding, weight)
       if index % 2:
         _, data = cv2.imencode('.jpg', mixture[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, 85])
         mixture = cv2.imdecode(data, cv2.IMREAD_COLOR)[..., ::-1].copy()
+      named = encoding if len(weights) == 1 else f'{encoding} a = {weight:g}'
       images[f'warp {index} ({width} x {height}{", JPEG" if index % 2 else ""}), '
-             f'{encoding}'] = (mixture, encoding, truth)
+             f'{named}'] = (mixture, encoding, truth, weight)
   for folder in FLAGS.tilt_kitti_dirs:
     pair = _kitti(folder)
-    for encoding in FALSE_TURN_ENCODINGS[:3]:
-      mixed = mixtures.mix(encoding, image_range.u8_to_signed(pair['left']),
-                           image_range.u8_to_signed(pair['right']))
-      images[f'{os.path.basename(folder)}, {encoding}'] = (
-          image_range.signed_to_u8(mixed.numpy()), encoding, None)
+    for encoding, weight in ((e, w) for e in encodings[:3] for w in weights):
+      named = encoding if len(weights) == 1 else f'{encoding} a = {weight:g}'
+      images[f'{os.path.basename(folder)}, {named}'] = (mixed(pair, encoding, weight),
+                                                         encoding, None, weight)
+  return images
+
+
+def false_turns(images: dict, title: str) -> list:
+  """Part 3's (or 4's) lines on `_level_images`."""
   turned = []
-  for name, (mixture, encoding, truth) in images.items():
+  for name, (mixture, encoding, truth, weight) in images.items():
     found = tilt.choose(mixture, encoding)
     if found is not None:
       cost = '' if truth is None else ' (bad-1, views: off %.1f%%, %.2f / %.2f dB; auto ' \
-          '%.1f%%, %.2f / %.2f dB)' % tuple(value for setting in SETTINGS for value in
-                                             scores(mixture, truth, encoding, setting)[1:])
+          '%.1f%%, %.2f / %.2f dB)' % tuple(
+              value for setting in SETTINGS
+              for value in scores(mixture, truth, encoding, setting, weight)[1:])
       turned.append(f'{name} by {found.angle:.2f} degrees, {found.offset:.2f} px{cost}')
-  return ['## 3. False turns', '', f'Of {len(images)} level anaglyphs `--rectify=auto` would '
+  kind = 'double images' if title.startswith('4') else 'anaglyphs'
+  return [f'## {title}', '', f'Of {len(images)} level {kind} `--rectify=auto` would '
           f'turn {len(turned)}' + (': ' + '; '.join(turned) + '.' if turned else '.'), '']
 
 
@@ -166,9 +190,14 @@ def main(argv):
           ''] + table(warps, ('anaglyph', 'dubois_ffmpeg'))
   for name, pair in printed.real_pairs().items():
     body += [f'## 2. {name}, colour anaglyph', ''] + table({name: pair}, ('anaglyph',))
-  body += false_turns(atlas)
+  body += false_turns(_level_images(atlas, FALSE_TURN_ENCODINGS), '3. False turns')
+  for name, pair in printed.real_pairs().items():
+    body += [f'## 4. {name}, double image (a = 1/2)', ''] + table(
+        {name: pair}, ('diplopia',), offsets=(0.0,))
+  body += false_turns(_level_images(atlas, ('diplopia',), (0.3, 0.5, 0.7)),
+                      '4. False turns of double images')
   markdown.write(FLAGS.tilt_output, [
-      '# Tilted anaglyphs: turned level or not', '',
+      '# Tilted anaglyphs and double images: turned level or not', '',
       f'Written by `python -m experiments.tilt {" ".join(sys.argv[1:])}` in '
       f'{time.perf_counter() - start:.0f} s on {os.cpu_count()} CPU cores (module '
       'docstring).', ''] + body)

@@ -447,3 +447,5 @@ def test_tilt_turns_the_mixture_and_its_truth_alike():
   lowered, _ = experiment.tilted(pair, 'anaglyph', 0.0, 1.0)
   np.testing.assert_array_equal(lowered[1:, :, 0], left[:-1, :, 0])  # The left eye 1 px low.
   np.testing.assert_array_equal(lowered[..., 1:], mixture[..., 1:])
+  double, _ = experiment.tilted(pair, 'diplopia', 0.0, 0.0)  # Part 4: no offset to move.
+  assert np.abs(double - (left / 2 + right / 2)).max() <= 1
