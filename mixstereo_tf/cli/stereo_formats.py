@@ -234,6 +234,8 @@ _ANAGLYPHS = {
                   'less retinal rivalry on red objects'),
     'gray': ('gray', 'gray red-cyan anaglyph: no colour, no rivalry'),
     'colour': ('anaglyph', 'full-colour red-cyan anaglyph (left R, right G and B)'),
+    'red_blue': ('red_blue', 'gray red-blue anaglyph (left luma in R, right in B, G black): '
+                 'for red-blue glasses'),
 }
 
 

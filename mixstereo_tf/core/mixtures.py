@@ -10,9 +10,11 @@ integer coefficients equal these to 1/65536 and floor instead of round).
 
 Operators take batched or unbatched float images in the network range [-1, 1]
 (`[..., H, W, 3]`, RGB) and return the mixture in that range. Where every row of
-[A_L | A_R] sums to one (all but Dubois) the map commutes with the [0, 1] -> [-1, 1]
-normalisation and is applied directly, so channel copies are exact; Dubois is applied to
-the gamma-encoded [0, 1] values (as anaglyph tools do) and clipped.
+[A_L | A_R] sums to one (all but Dubois and the two-channel anaglyphs) the map commutes
+with the [0, 1] -> [-1, 1] normalisation and is applied directly, so channel copies are
+exact; Dubois is applied to the gamma-encoded [0, 1] values (as anaglyph tools do) and
+clipped, and the red-blue and red-green anaglyphs (FFmpeg arbg, argg) to [0, 1] values,
+their empty channel black.
 
 `MixtureSpec.left_channels` / `right_channels` ({view channel: mixture channel}) are the
 channels copied unchanged, derived from the matrices; `eye_channels` says which mixture
@@ -20,7 +22,7 @@ channels mostly carry which view (what the classical matcher compares).
 """
 
 import dataclasses
-from typing import Callable, Dict, Mapping, Tuple
+from typing import Callable, Dict, Mapping, Optional, Tuple
 
 import numpy as np
 import tensorflow as tf
@@ -74,9 +76,11 @@ class MixtureSpec:
     name: the operator's name, as given to `--mixture`.
     left_matrix, right_matrix: A_L, A_R (rows: mixture R, G, B; columns: view R, G, B).
     clip: clip the [0, 1] result (Dubois).
-    family: glasses / kind: 'red_cyan', 'green_magenta', 'amber_blue', 'diplopia',
-      'monocular'.
+    family: glasses / kind: 'red_cyan', 'green_magenta', 'amber_blue', 'red_blue',
+      'red_green', 'diplopia', 'monocular'.
     description: one line for help texts.
+    served_as: the encoding an image of this one is unmixed as once `served` has filled
+      its empty channel (red-blue, red-green: 'gray', the same two lumas), or None.
   """
   name: str
   left_matrix: Matrix
@@ -84,6 +88,7 @@ class MixtureSpec:
   clip: bool
   family: str
   description: str
+  served_as: Optional[str] = None
 
   @property
   def fn(self) -> Callable[[tf.Tensor, tf.Tensor], tf.Tensor]:
@@ -123,19 +128,21 @@ class MixtureSpec:
     left = np.abs(np.asarray(self.left_matrix)).sum(axis=1)
     right = np.abs(np.asarray(self.right_matrix)).sum(axis=1)
     return (tuple(int(c) for c in np.flatnonzero(left > right)),
-            tuple(int(c) for c in np.flatnonzero(right >= left)))
+            tuple(int(c) for c in np.flatnonzero((right >= left) & (right > 0))))
 
 
 def _apply(spec: MixtureSpec, left, right) -> tf.Tensor:
   left, right = tf.convert_to_tensor(left), tf.convert_to_tensor(right)
   a_left = tf.constant(spec.left_matrix, dtype=left.dtype)
   a_right = tf.constant(spec.right_matrix, dtype=left.dtype)
-  if spec.clip:
+  rows = np.sum(spec.left_matrix, axis=1) + np.sum(spec.right_matrix, axis=1)
+  unit = spec.clip or not np.allclose(rows, 1.0)  # The map needs [0, 1] values.
+  if unit:
     left, right = image_range.signed_to_unit(left), image_range.signed_to_unit(right)
   # Row-vector form: mixture_c = sum_k A[c, k] * view_k.
   mixed = (tf.linalg.matvec(a_left, left[..., None, :]) +
            tf.linalg.matvec(a_right, right[..., None, :]))[..., 0, :]
-  if spec.clip:
+  if unit:
     return image_range.unit_to_signed(tf.clip_by_value(mixed, 0.0, 1.0))
   return mixed
 
@@ -182,6 +189,12 @@ def _specs():
   yield MixtureSpec('amber_blue_half', _rows('R', 'G', None), _rows(None, None, 'Y'), False,
                     'amber_blue', 'half-colour amber-blue anaglyph: R, G from left, '
                     'B = Y(right) (FFmpeg aybh with the views exchanged)')
+  yield MixtureSpec('red_blue', _rows('Y', None, None), _rows(None, None, 'Y'), False,
+                    'red_blue', 'gray red-blue anaglyph: R = Y(left), B = Y(right), G empty '
+                    '(FFmpeg arbg)', served_as='gray')
+  yield MixtureSpec('red_green', _rows('Y', None, None), _rows(None, 'Y', None), False,
+                    'red_green', 'gray red-green anaglyph: R = Y(left), G = Y(right), B empty '
+                    '(FFmpeg argg)', served_as='gray')
   yield MixtureSpec('amber_blue_dubois', *map(_scaled, _FFMPEG_DUBOIS['amber_blue']), True,
                     'amber_blue', 'Dubois amber-blue anaglyph, amber over the left eye '
                     '(FFmpeg aybd)')
@@ -191,6 +204,7 @@ _SPECS: Dict[str, MixtureSpec] = {spec.name: spec for spec in _specs()}
 
 MIXTURE_NAMES = tuple(_SPECS)
 ANAGLYPH_NAMES = tuple(name for name, spec in _SPECS.items() if spec.is_anaglyph)
+SERVED_ANAGLYPH_NAMES = tuple(name for name in ANAGLYPH_NAMES if not _SPECS[name].served_as)
 
 
 def get_mixture(name: str) -> MixtureSpec:
@@ -200,6 +214,25 @@ def get_mixture(name: str) -> MixtureSpec:
   except KeyError:
     raise ValueError(f'Unknown mixture {name!r}; valid mixtures are: '
                      f'{", ".join(MIXTURE_NAMES)}.') from None
+
+
+def served_name(name: str) -> str:
+  """The encoding an image of encoding `name` is unmixed as (`MixtureSpec.served_as`)."""
+  return get_mixture(name).served_as or name
+
+
+def served(image: np.ndarray, name: str) -> np.ndarray:
+  """[..., 3] `image` of encoding `name` as its `served_name` encoding: each channel that
+  neither view fills takes the right eye's channel (a red-blue anaglyph's G its B: the
+  gray red-cyan anaglyph's G = B = Y(right)); `image` itself where nothing is empty."""
+  spec = get_mixture(name)
+  if not spec.served_as:
+    return image
+  empty = [c for c in range(3) if not any(spec.left_matrix[c]) and not any(
+      spec.right_matrix[c])]
+  image = np.array(image)
+  image[..., empty] = image[..., spec.eye_channels[1][:1]]
+  return image
 
 
 def mix(name: str, left, right) -> tf.Tensor:
@@ -216,10 +249,12 @@ def mix_double(left, right, weight: float) -> tf.Tensor:
 
 def parse_names(text: str) -> Tuple[str, ...]:
   """'anaglyph' or a comma-separated list ('anaglyph,gray,dubois'); 'anaglyphs' stands for
-  every anaglyph encoding. Raises ValueError naming an unknown name."""
+  every anaglyph encoding unmixed as itself (not the two-channel ones, which are served as
+  another: `served`; the recipes and shipped models that say 'anaglyphs' mean these).
+  Raises ValueError naming an unknown name."""
   names = []
   for name in (n.strip() for n in text.split(',')):
-    names.extend(ANAGLYPH_NAMES if name == 'anaglyphs' else (get_mixture(name).name,))
+    names.extend(SERVED_ANAGLYPH_NAMES if name == 'anaglyphs' else (get_mixture(name).name,))
   if not names:
     raise ValueError('Expected at least one mixture name.')
   return tuple(dict.fromkeys(names))

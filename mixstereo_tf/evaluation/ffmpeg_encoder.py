@@ -26,7 +26,8 @@ FFMPEG_MODES: Dict[str, Tuple[str, bool]] = {
     'green_magenta_gray': ('agmg', False), 'green_magenta_half': ('agmh', False),
     'green_magenta_dubois': ('agmd', False), 'amber_blue': ('aybc', True),
     'amber_blue_gray': ('aybg', True), 'amber_blue_half': ('aybh', True),
-    'amber_blue_dubois': ('aybd', False),
+    'amber_blue_dubois': ('aybd', False), 'red_blue': ('arbg', False),
+    'red_green': ('argg', False),
 }
 # Lossy storage -> FFmpeg output options: a JPEG of quality about 90 and an H.264 video
 # frame at x264's default quality, both with chroma at half resolution (4:2:0).

@@ -3,7 +3,9 @@
     found = detect(image)   # found.name: an encoding of CANDIDATES, or None
     found.confidence, found.reason, found.scores
 
-Two questions, each answered by a physical property of the encodings (`mixtures`):
+An image with one empty channel is a two-channel anaglyph (red-blue, red-green) or none
+(`two_channel`). Otherwise two questions, each answered by a physical property of the
+encodings (`mixtures`):
   1. **Glasses (family).** An anaglyph's channels come from two views: the channels of one
      eye are aligned with each other, those of different eyes are displaced by the
      disparities. On a copy area-downsampled to DetectConfig.width px, every pair of
@@ -48,6 +50,8 @@ from mixstereo_tf.core import workers
 from mixstereo_tf.restoration import dubois_leak
 from mixstereo_tf.unmixing import channel_matching
 from mixstereo_tf.unmixing import colour_sets
+from mixstereo_tf.unmixing import margins
+from mixstereo_tf.unmixing import two_channel
 
 # The channel each family's odd eye owns (red-cyan: R alone is the left eye).
 FAMILY_ODD_CHANNEL = {'red_cyan': 0, 'green_magenta': 1, 'amber_blue': 2}
@@ -97,7 +101,8 @@ class DetectConfig:
       up to 0.13 (8 of 36 photographs x 3 storages accepted, all as amber-blue;
       GreenMeadow 0.128) where FFmpeg anaglyphs score a median 0.53-0.71; the doubt falls
       on all 8 and on 4 / 17 / 21 of 279 / 266 / 263 accepted anaglyphs (png / jpeg /
-      h264; `experiments/results/detection_photos.md`).
+      h264; `experiments/results/detection_photos.md`, before the two-channel check,
+      which now refuses one of the 8: Blinds, its blue almost black).
     min_brightness: an image whose brightest channel's 99th percentile is below this
       (0..1) is too dark to tell (no encoding named): the frames of a fade from black,
       whose colours lie under the codec's noise, read as gray with confidence 1 (a colour
@@ -192,44 +197,6 @@ def ghost_leak(image: np.ndarray, small: np.ndarray, odd: int,
                               config.ghost_collinearity)
 
 
-# A margin row or column is uniform when no channel varies along it by more than this share
-# of full scale (JPEG noise on a flat bar stays within it).
-MARGIN_TOLERANCE = 0.05
-# Within the margins, the rows and columns at the edges with fewer than COLOUR_SHARE of
-# their pixels coloured (channels spread by more than MARGIN_TOLERANCE of full scale) are
-# left out too: gray surroundings with text (a screenshot of a page or a viewer).
-COLOUR_SHARE = 0.05
-
-
-def content_box(image: np.ndarray) -> Tuple[int, int, int, int]:
-  """(top, bottom, left, right) of `image` [H, W, 3] without its uniform margins: the rows
-  and columns at its edges along which no channel varies by more than MARGIN_TOLERANCE of
-  full scale (letterbox or pillarbox bars, a white frame). Their neutral colour fits every
-  colour set, so a colour anaglyph inside them read as half-colour. The whole image when
-  fewer than 16 rows or columns would remain. Then the gray surroundings (`COLOUR_SHARE`):
-  a colour anaglyph in a screenshot of a page read as half-colour."""
-  values = np.asarray(image, np.float32)
-  scale = 1.0 if values.max(initial=0.0) <= 1.0 else 255.0
-
-  tolerance = MARGIN_TOLERANCE * scale
-  top, bottom = _span(np.ptp(values, axis=1).max(axis=-1) > tolerance)
-  values = values[top:bottom]  # Columns within the rows kept: bars and a frame together.
-  left, right = _span(np.ptp(values, axis=0).max(axis=-1) > tolerance)
-  coloured = np.ptp(values[:, left:right], axis=-1) > tolerance
-  rows = _span(coloured.mean(axis=1) > COLOUR_SHARE)
-  columns = _span(coloured[rows[0]:rows[1]].mean(axis=0) > COLOUR_SHARE)
-  return top + rows[0], top + rows[1], left + columns[0], left + columns[1]
-
-
-def _span(kept: np.ndarray) -> Tuple[int, int]:
-  """[first, last + 1) of the lines `kept` (bool) marks; all of them where fewer than 16
-  would remain (a flat image, a gray anaglyph of flat areas)."""
-  index = kept.nonzero()[0]
-  if index.size == 0 or index[-1] + 1 - index[0] < 16:
-    return 0, kept.size
-  return int(index[0]), int(index[-1]) + 1
-
-
 def _doubt(family: str, score: float, config: DetectConfig) -> Optional[str]:
   """`Detection.doubt` of an accepted family of score `score`."""
   if score >= config.doubtful_family_score:
@@ -238,21 +205,43 @@ def _doubt(family: str, score: float, config: DetectConfig) -> Optional[str]:
           f'{config.doubtful_family_score}), as in some photographs with saturated colours')
 
 
-def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
-  """The anaglyph encoding of an [H, W, 3] RGB image (uint8, or float in [0, 1]); uniform
-  margins (letterbox bars, a frame, a border) are left out (`content_box`)."""
+def _copies(image: np.ndarray, config: DetectConfig) -> Tuple[np.ndarray, np.ndarray]:
+  """(the image within its content box, its 0..255 copy config.width px a frame)."""
   if np.ndim(image) == 3 and np.size(image):  # Else `downsampled` says what is wrong.
-    top, bottom, left, right = content_box(image)
+    top, bottom, left, right = margins.content_box(image)
     image = image[top:bottom, left:right]
   small = channel_matching.downsampled(image, config.width)
   if min(small.shape[:2]) < 16:
     raise ValueError(f'detect needs an image of at least 16x16 px after downsampling to '
                      f'{config.width} px a frame; got {small.shape[1]}x{small.shape[0]}.')
+  return image, small
+
+
+def _too_dark(small: np.ndarray, config: DetectConfig) -> Optional[Detection]:
+  """No encoding named where the copy is too dark to tell (config.min_brightness)."""
   brightness = float(np.percentile(small.max(axis=-1), 99.0)) / 255.0
-  if brightness < config.min_brightness:
-    return Detection(None, 0.0, f'too dark to tell its encoding (99% of the pixels below '
-                     f'{brightness:.2f} of full scale, < {config.min_brightness})',
-                     {'brightness': round(brightness, 3)})
+  if brightness >= config.min_brightness:
+    return None
+  return Detection(None, 0.0, f'too dark to tell its encoding (99% of the pixels below '
+                   f'{brightness:.2f} of full scale, < {config.min_brightness})',
+                   {'brightness': round(brightness, 3)})
+
+
+def _two_channel(small: np.ndarray, config: DetectConfig) -> Optional[Detection]:
+  """A red-blue or red-green anaglyph (`two_channel`), or an image with an empty channel
+  whose other two are not displaced (no anaglyph); None where no channel is empty."""
+  found = two_channel.detect(small, config.reach_fraction, config.min_family_score,
+                             config.family_softness)
+  return None if found is None else Detection(*found, {})
+
+
+def detect(image: np.ndarray, config: DetectConfig = DetectConfig()) -> Detection:
+  """The anaglyph encoding of an [H, W, 3] RGB image (uint8, or float in [0, 1]); uniform
+  margins (letterbox bars, a frame, a border) are left out (`margins.content_box`)."""
+  image, small = _copies(image, config)
+  first = _too_dark(small, config) or _two_channel(small, config)
+  if first is not None:
+    return first
   families = family_scores(small, config)
   scores = {f'family:{k}': round(v, 4) for k, v in families.items()}
   family = max(families, key=families.get)

@@ -112,8 +112,9 @@ def resolve_mixture(image: np.ndarray, requested: str, allowed: Sequence[str],
 
 
 def _allowed_name(name: str, allowed: Sequence[str]) -> str:
-  """`name`, or a ValueError when a predictor that unmixes `allowed` cannot unmix it."""
-  if name not in allowed:
+  """`name`, or a ValueError when a predictor that unmixes `allowed` cannot unmix it (the
+  encoding it is served as: `mixtures.served_name`)."""
+  if mixtures.served_name(name) not in allowed:
     raise ValueError(f'The image is read as mixture {name!r}; this predictor unmixes '
                      f'{", ".join(allowed)}: choose one that unmixes {name!r} '
                      '(PredictorConfig.pretrained, PredictorConfig.checkpoint or '

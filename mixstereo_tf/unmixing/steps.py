@@ -37,6 +37,7 @@ from mixstereo_tf.classical import halftone
 from mixstereo_tf.classical import sgbm
 from mixstereo_tf.core import hints
 from mixstereo_tf.core import image_range
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.restoration import views
 from mixstereo_tf.unmixing import chroma
 from mixstereo_tf.unmixing import disparity_range
@@ -189,6 +190,16 @@ def _encoding(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   return name, info
 
 
+def _served(image: np.ndarray, deep: Optional[np.ndarray], name: str):
+  """(image, deep, the encoding they are unmixed as): a two-channel anaglyph's (and its
+  16-bit samples') empty channel filled (`mixtures.served`), else as they are."""
+  served = mixtures.served_name(name)
+  if served == name:
+    return image, deep, name
+  return (mixtures.served(image, name),
+          None if deep is None else mixtures.served(deep, name), served)
+
+
 def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
         requested_range: Range, default_range: Callable[[str], Tuple[int, int]], method: str,
         solve: Callable[..., Dict[str, object]],
@@ -214,7 +225,8 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   image = image_range.eight_bits(image)
   if hint.mixing_weight is None and mixing_weight is not None:
     hint = dataclasses.replace(hint, mixing_weight=mixing_weight)
-  name, info = _encoding(image, requested_mixture, allowed, hint)
+  encoded, info = _encoding(image, requested_mixture, allowed, hint)
+  image, deep, name = _served(image, deep, encoded)
   image, deep, hint, turn_back, turned = tilt.level(
       image, deep, name, rectify if hint.rectify is None else hint.rectify, hint)
   swapped, eyes = _eye_order(image, name, swap_eyes, hint)
@@ -235,11 +247,13 @@ def run(image: np.ndarray, requested_mixture: str, allowed: Sequence[str],
   if swapped:
     outputs = eye_order.unmirror(outputs)
   outputs = turn_back(outputs, swapped)
-  info = dict(info, method=method, mixture=name, disparity_range=list(search),
+  info = dict(info, method=method, mixture=encoded, disparity_range=list(search),
               prior=hint.prior is not None, **eyes, **screen, **turned,
               **outputs.get('info', {}))
   if halved:
     info['matched_at_colour_resolution'] = True  # Stored with half-resolution colour.
+  if name != encoded:
+    info['unmixed_as'] = name  # A red-blue or red-green anaglyph: as the gray one.
   info['seconds'] = round(time.perf_counter() - start, 3)
   outputs['info'] = info
   return outputs

@@ -15,6 +15,7 @@ from mixstereo_tf.artifacts import runs
 from mixstereo_tf.classical import diplopia_weight
 from mixstereo_tf.classical import halftone
 from mixstereo_tf.core import hints
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import families
 from mixstereo_tf.unmixing import mixture_choice
 from mixstereo_tf.unmixing import steps
@@ -157,7 +158,7 @@ def check_mixture(config: PredictorConfig, trained: Sequence[str]) -> str:
     ValueError: an encoding the model was not trained on.
   """
   requested = config.mixture or trained[0]
-  if requested != mixture_choice.AUTO and requested not in trained:
+  if requested != mixture_choice.AUTO and mixtures.served_name(requested) not in trained:
     raise ValueError(f'PredictorConfig.mixture={requested} but the model was trained on '
                      f'{", ".join(repr(m) for m in trained)} mixtures '
                      f'({config.saved_model or config.checkpoint or "this model"}).')

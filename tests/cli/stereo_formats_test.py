@@ -123,6 +123,10 @@ def test_anaglyph_reencodings_use_the_mixture_operators(tmp_path):
   assert np.abs(optimized[..., 0] - expected_red).max() <= 1
   gray = np.asarray(Image.open(paths[2]))
   np.testing.assert_array_equal(gray[..., 1], gray[..., 2])
+  red_blue = np.asarray(Image.open(stereo_formats.write_formats(
+      result, str(tmp_path / 't'), ['anaglyph_red_blue'])[0]))
+  assert (red_blue[..., 1] == 0).all()  # For red-blue glasses: green black, not mid-gray.
+  np.testing.assert_array_equal(red_blue[..., [0, 2]], gray[..., [0, 2]])
 
 
 def test_wiggle_gif_loops_through_six_frames(tmp_path):

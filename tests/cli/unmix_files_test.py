@@ -967,7 +967,7 @@ def test_stereo_formats_of_an_image_are_listed_in_its_info(tmp_path):
                                     options)
   assert report.processed == 1 and not report.failures
   formats = ['x.mpo', 'x.jps', 'x_wiggle.gif', 'x_rgbd.png', 'x_viewer.html'] + [
-      f'x_anaglyph_{n}.png' for n in ('dubois', 'optimized', 'gray', 'colour')]
+      f'x_anaglyph_{n}.png' for n in ('dubois', 'optimized', 'gray', 'colour', 'red_blue')]
   info = json.loads((tmp_path / 'out' / 'x_info.json').read_text())
   assert info['files'][-len(formats):] == formats
   assert sorted(os.listdir(tmp_path / 'out')) == sorted(info['files'] + ['x_info.json'])

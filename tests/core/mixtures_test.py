@@ -34,6 +34,8 @@ _EXPECTED01 = {
     'green_magenta_half': [_R01[0], _y(_L01), _R01[2]],
     'amber_blue_gray': [_y(_L01), _y(_L01), _y(_R01)],
     'amber_blue_half': [_L01[0], _L01[1], _y(_R01)],
+    'red_blue': [_y(_L01), 0.0, _y(_R01)],  # The empty channel black, not mid-gray.
+    'red_green': [_y(_L01), _y(_R01), 0.0],
 }
 # FFmpeg's Dubois matrices (vf_stereo3d.c integers / 65536): the first row of each, left | right.
 _FFMPEG_DUBOIS_ROW0 = {
@@ -65,6 +67,8 @@ _SURVIVING = {
     'amber_blue_gray': ({}, {}),
     'amber_blue_half': ({0: 0, 1: 1}, {}),
     'amber_blue_dubois': ({}, {}),
+    'red_blue': ({}, {}),
+    'red_green': ({}, {}),
 }
 
 
@@ -140,7 +144,8 @@ def test_ffmpeg_dubois_matrices_are_the_published_integers():
     ('anaglyph', ((0,), (1, 2))), ('gray', ((0,), (1, 2))), ('dubois', ((0,), (1, 2))),
     ('dubois_ffmpeg', ((0,), (1, 2))), ('green_magenta', ((1,), (0, 2))),
     ('green_magenta_dubois', ((1,), (0, 2))), ('amber_blue', ((0, 1), (2,))),
-    ('amber_blue_dubois', ((0, 1), (2,))), ('amber_blue_half', ((0, 1), (2,)))])
+    ('amber_blue_dubois', ((0, 1), (2,))), ('amber_blue_half', ((0, 1), (2,))),
+    ('red_blue', ((0,), (2,))), ('red_green', ((0,), (1,)))])  # The empty channel: no eye's.
 def test_eye_channels(name, eyes):
   assert mixtures.get_mixture(name).eye_channels == eyes
 
@@ -156,3 +161,17 @@ def test_mix_double_weights_the_left_eye_by_a():
                              0.3 * 0.5 + 0.7 * -1.0, atol=1e-6)
   np.testing.assert_allclose(mixtures.mix_double(left, right, 0.5).numpy(),
                              mixtures.mix('diplopia', left, right).numpy(), atol=1e-6)
+
+
+@pytest.mark.parametrize('name, empty', [('red_blue', 1), ('red_green', 2)])
+def test_a_two_channel_anaglyph_is_served_as_the_gray_one(name, empty):
+  """Its empty channel black (not the signed range's mid-gray), filled from the right
+  eye's channel it is the gray red-cyan anaglyph; 'anaglyphs' (the recipes') leaves it out."""
+  mixed = np.float32(mixtures.mix(name, _image(_L01), _image(_R01)).numpy()[0, 0, 0])
+  np.testing.assert_allclose((mixed + 1) / 2, _EXPECTED01[name], atol=1e-6)
+  assert mixtures.served_name(name) == 'gray' and mixtures.served_name('gray') == 'gray'
+  u8 = np.uint8(np.round(255 * np.float32(_EXPECTED01[name])))[None, None]
+  gray = np.uint8(np.round(255 * np.float32(_EXPECTED01['gray'])))
+  np.testing.assert_array_equal(mixtures.served(u8, name)[0, 0], gray)
+  assert u8[0, 0, empty] == 0 and name not in mixtures.parse_names('anaglyphs')
+  assert mixtures.served(u8, 'gray') is u8

@@ -50,7 +50,7 @@ def _bad1(out, scene):
 def test_the_shipped_features_load_with_their_description():
   entry = pretrained.get(NAME)
   assert entry.kind == 'features'
-  assert set(entry.mixtures) == set(mixtures.ANAGLYPH_NAMES)
+  assert set(entry.mixtures) == set(mixtures.SERVED_ANAGLYPH_NAMES)  # Red-blue: as gray.
   model = pretrained.load_model(entry)
   single, pair = model((tf.zeros([1, 16, 16, 1]), tf.zeros([1, 16, 16, 2])))
   assert single.shape[-1] == pair.shape[-1] == entry.config['width']

@@ -138,7 +138,7 @@ def choose(name: Optional[str], mixture: Optional[str]) -> Pretrained:
   """
   if name:
     return get(name)
-  wanted = 'anaglyph' if mixture in (None, 'auto') else mixture
+  wanted = 'anaglyph' if mixture in (None, 'auto') else mixtures.served_name(mixture)
   fitting = [entry for entry in available() if wanted in entry.mixtures]
   if fitting:
     return next((entry for entry in fitting if entry.default), fitting[0])

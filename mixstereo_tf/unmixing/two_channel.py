@@ -1,0 +1,65 @@
+"""Two-channel anaglyphs (red-blue, red-green glasses): one eye per channel, the third empty.
+
+    found = detect(small, reach_fraction, min_score, softness)  # (name, confidence, score)
+
+Red-blue and red-green glasses predate red-cyan ones and remain the cheapest; FFmpeg makes
+their anaglyphs (`arbg`, `argg`): R = the left view's luma, B (or G) = the right view's,
+the third channel black. `detection`'s families need three channels, two of one eye
+aligned against each other, so such an image scored as no anaglyph (Motorcycle's red-blue
+anaglyph: best family 0.068 < 0.08). Here a channel is empty when, above its 1st
+percentile, its 90th percentile lies within EMPTY_P90 and its 99th within EMPTY_P99 of
+full scale (lossy storage leaks a little of the others into it, most at their edges)
+while each other channel spreads over FULL_SPREAD or more (a picture in each); the other
+two are matched against each other (the census matcher, as the families are) and the
+share of left-right consistent pixels displaced by 1.5 px or more is the score, held to
+the families' threshold. Red is the left eye (as the glasses are worn and FFmpeg
+encodes); `--swap_eyes` turns it. Chosen on Motorcycle, SceneFlow, the KITTI object
+frame and held-out wallpapers (scratch `s28/rb/spread*.py`): the empty channel of their
+red-blue / red-green anaglyphs through FFmpeg's JPEG and H.264 reaches 21 levels at the
+99th percentile, through OpenCV's quality-50 JPEG of a 247-px one 18 / 44 (90th / 99th);
+three-channel FFmpeg anaglyphs of 12 photo warps (png, JPEG, H.264) keep every channel
+over 78, photographs over 26 (two, almost without blue, read as empty and are refused as
+before: their other two channels align).
+"""
+
+from typing import Optional, Tuple
+
+import numpy as np
+
+from mixstereo_tf.unmixing import channel_matching
+
+# Each two-channel encoding's empty channel (`mixtures`: red_blue, red_green).
+EMPTY_CHANNEL = {'red_blue': 1, 'red_green': 2}
+EMPTY_P90, EMPTY_P99 = 0.08, 0.2  # Of full scale, above the channel's 1st percentile.
+FULL_SPREAD = 0.25  # The other channels' 99th minus 1st percentile, of full scale.
+
+
+def empty_channel(small: np.ndarray) -> Optional[int]:
+  """The channel of a 0..255 [h, w, 3] copy that carries nothing while the other two
+  carry a picture (module docstring), or None."""
+  low, p90, p99 = np.percentile(small.reshape(-1, 3), (1, 90, 99), axis=0)
+  empty = np.flatnonzero((p90 - low <= EMPTY_P90 * 255) & (p99 - low <= EMPTY_P99 * 255))
+  if len(empty) != 1 or np.delete(p99 - low, empty).min() < FULL_SPREAD * 255:
+    return None
+  return int(empty[0])
+
+
+def detect(small: np.ndarray, reach_fraction: float, min_score: float,
+           softness: float) -> Optional[Tuple[Optional[str], float, str]]:
+  """(name, confidence, reason) of a two-channel anaglyph's 0..255 copy `small`, name None
+  where its two channels are not displaced (score < min_score; confidence that it is no
+  anaglyph); None where no channel is empty or the empty one is no encoding's (red)."""
+  empty = empty_channel(small)
+  names = [name for name, channel in EMPTY_CHANNEL.items() if channel == empty]
+  if not names:
+    return None
+  left, right = (c for c in range(3) if c != empty)
+  out = channel_matching.match(small[..., left], small[..., right],
+                               channel_matching.span(small, reach_fraction))
+  score = float((out['consistent_left'] & (np.abs(out['disparity_left']) >= 1.5)).mean())
+  confidence = float(1.0 / (1.0 + np.exp(-(score - min_score) / softness)))
+  if score < min_score:
+    return None, 1.0 - confidence, (f'channel {"RGB"[empty]} is empty and the other two '
+                                    f'are not displaced (score {score:.3f} < {min_score})')
+  return names[0], confidence, (f'channel {"RGB"[empty]} is empty, the other two displaced '
+                                f'(score {score:.3f}): {names[0]}')
