@@ -59,18 +59,65 @@ class LevelConfig:
   echo_min_gain: float = 0.005
 
 
+class _EyesLine:
+  """An anaglyph's line: between its eyes' channels (`epipolar.estimate`), its right eye
+  moved onto the rows, checked by the census matcher on the whole canvas."""
+
+  @staticmethod
+  def estimate(image: np.ndarray, name: str, config: LevelConfig):
+    left, right = (np.float32(image[..., list(eye)]).mean(axis=-1)
+                   for eye in mixtures.get_mixture(name).eye_channels)
+    return epipolar.estimate(left, right, config.line)
+
+  @staticmethod
+  def helps(image: np.ndarray, turned: np.ndarray, name: str, config: LevelConfig,
+            angle: float) -> bool:
+    del angle  # The whole canvas (measured so: module docstring).
+    share = lambda x: census_share(x, name, config.width)
+    return share(turned) - share(image) >= config.min_gain
+
+  @staticmethod
+  def right_channels(name: str) -> Tuple[int, ...]:
+    return tuple(mixtures.get_mixture(name).eye_channels[1])
+
+
+class _EchoLine:
+  """A double image's line: its echo's (`echo_tilt`; an angle alone), checked by its
+  self-matching on the box both frames show."""
+
+  @staticmethod
+  def estimate(image: np.ndarray, name: str, config: LevelConfig):
+    del name
+    return echo_tilt.estimate(_gray(image), config.echo)
+
+  @staticmethod
+  def helps(image: np.ndarray, turned: np.ndarray, name: str, config: LevelConfig,
+            angle: float) -> bool:
+    del name
+    image, turned = _common_box(image, turned, angle)
+    share = lambda x: echo_tilt.consistent_share(_gray(x), config.width)
+    return share(turned) - share(image) >= config.echo_min_gain
+
+  @staticmethod
+  def right_channels(name: str) -> Tuple[int, ...]:
+    del name
+    return ()  # Both copies share every channel.
+
+
+def _line(name: str):
+  """The line strategy of encoding `name`: anaglyphs' eyes, double images' echo, or None."""
+  spec = mixtures.get_mixture(name)
+  return _EyesLine if spec.is_anaglyph else _EchoLine if spec.family == 'diplopia' else None
+
+
 def turnable(name: str) -> bool:
   """Whether encoding `name` is one `level` turns: the anaglyphs and double images."""
-  spec = mixtures.get_mixture(name)
-  return spec.is_anaglyph or spec.family == 'diplopia'
+  return _line(name) is not None
 
 
-def consistent_share(image: np.ndarray, name: str, width: int) -> float:
-  """The matcher's left-right consistent share of uint8 `image` of encoding `name`, on a
-  copy `width` px a frame, its 8-px border left out: an anaglyph's census matcher over
-  its own estimated range, a double image's self-matching (`echo_tilt.consistent_share`)."""
-  if not mixtures.get_mixture(name).is_anaglyph:
-    return echo_tilt.consistent_share(_gray(image), width)
+def census_share(image: np.ndarray, name: str, width: int) -> float:
+  """The census matcher's left-right consistent share of uint8 anaglyph `image` of
+  encoding `name`, on a copy `width` px a frame, its 8-px border left out."""
   left, right = anaglyph.eye_images(
       image_range.u8_to_unit(planning_copies.area_copy(image, width)), name)
   left, right = (np.float32(x) for x in (left, right))
@@ -85,29 +132,10 @@ def _gray(image: np.ndarray) -> np.ndarray:
 
 
 def _estimate(image: np.ndarray, name: str, config: LevelConfig) -> Optional[epipolar.Tilt]:
-  """The line's tilt of uint8 `image` (an anaglyph's eyes' channels averaged; a double
-  image's echo), None where it is too small to be worth a turn
-  (`epipolar.worth_rectifying`)."""
-  if not mixtures.get_mixture(name).is_anaglyph:
-    tilt = echo_tilt.estimate(_gray(image), config.echo)
-  else:
-    left, right = (np.float32(image[..., list(eye)]).mean(axis=-1)
-                   for eye in mixtures.get_mixture(name).eye_channels)
-    tilt = epipolar.estimate(left, right, config.line)
+  """The line's tilt of uint8 `image` (`_line`), None where it is too small to be worth a
+  turn (`epipolar.worth_rectifying`)."""
+  tilt = _line(name).estimate(image, name, config)
   return tilt if epipolar.worth_rectifying(tilt, config.line) else None
-
-
-def _helps(image: np.ndarray, turned: np.ndarray, angle: float, name: str,
-           config: LevelConfig) -> bool:
-  """Whether the matcher's consistent share rises by config.min_gain once turned (a
-  double image's by config.echo_min_gain, on the box both show: module docstring)."""
-  if not mixtures.get_mixture(name).is_anaglyph:
-    image, turned = _common_box(image, turned, angle)
-    return (echo_tilt.consistent_share(_gray(turned), config.width) -
-            echo_tilt.consistent_share(_gray(image), config.width)) >= config.echo_min_gain
-  gain = (consistent_share(turned, name, config.width) -
-          consistent_share(image, name, config.width))
-  return gain >= config.min_gain
 
 
 def _common_box(image: np.ndarray, turned: np.ndarray, angle: float):
@@ -128,15 +156,8 @@ def choose(image: np.ndarray, name: str,
   tilt = _estimate(image, name, config)
   if tilt is None:
     return None
-  turned = epipolar.rectify(image, tilt, _right_channels(name))[0]
-  return tilt if _helps(image, turned, tilt.angle, name, config) else None
-
-
-def _right_channels(name: str) -> Tuple[int, ...]:
-  """The channels a turn moves by the line's offset: an anaglyph's right eye's (a double
-  image has none of its own)."""
-  spec = mixtures.get_mixture(name)
-  return tuple(spec.eye_channels[1]) if spec.is_anaglyph else ()
+  turned = epipolar.rectify(image, tilt, _line(name).right_channels(name))[0]
+  return tilt if _line(name).helps(image, turned, name, config, tilt.angle) else None
 
 
 def _back(outputs: Dict[str, object], back: Callable[..., np.ndarray],
@@ -176,13 +197,14 @@ def level(image: np.ndarray, deep: Optional[np.ndarray], name: str, setting: Set
   unchanged = image, deep, hint, lambda outputs, swapped=False: outputs, {}
   if setting == OFF or not turnable(name):
     return unchanged
-  right = _right_channels(name)
+  line = _line(name)
+  right = line.right_channels(name)
   if setting == AUTO:
     tilt = _estimate(image, name, config)
     if tilt is None:
       return unchanged
     turned, back, forth = epipolar.rectify(image, tilt, right)
-    if not _helps(image, turned, tilt.angle, name, config):
+    if not line.helps(image, turned, name, config, tilt.angle):
       return unchanged
   else:
     tilt = epipolar.Tilt(float(setting[0]), float(setting[1]), 0)
