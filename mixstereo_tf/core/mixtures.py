@@ -117,6 +117,12 @@ class MixtureSpec:
     return bool(np.linalg.matrix_rank(rows[np.abs(rows).sum(1) > 0], tol=1e-6) > 1)
 
   @property
+  def empty_channels(self) -> Tuple[int, ...]:
+    """Mixture channels neither view fills (a red-blue anaglyph's G), black."""
+    return tuple(c for c in range(3)
+                 if not any(self.left_matrix[c]) and not any(self.right_matrix[c]))
+
+  @property
   def is_anaglyph(self) -> bool:
     """True for the colour-filter encodings (each mixture channel mostly one view)."""
     return self.family not in ('diplopia', 'monocular')
@@ -228,10 +234,8 @@ def served(image: np.ndarray, name: str) -> np.ndarray:
   spec = get_mixture(name)
   if not spec.served_as:
     return image
-  empty = [c for c in range(3) if not any(spec.left_matrix[c]) and not any(
-      spec.right_matrix[c])]
   image = np.array(image)
-  image[..., empty] = image[..., spec.eye_channels[1][:1]]
+  image[..., list(spec.empty_channels)] = image[..., spec.eye_channels[1][:1]]
   return image
 
 

@@ -1,6 +1,6 @@
 """Two-channel anaglyphs (red-blue, red-green glasses): one eye per channel, the third empty.
 
-    found = detect(small, reach_fraction, min_score, softness)  # (name, confidence, score)
+    found = detect(small, reach_fraction, min_score, softness)  # (name, confidence, reason)
 
 Red-blue and red-green glasses predate red-cyan ones and remain the cheapest; FFmpeg makes
 their anaglyphs (`arbg`, `argg`): R = the left view's luma, B (or G) = the right view's,
@@ -19,17 +19,21 @@ red-blue / red-green anaglyphs through FFmpeg's JPEG and H.264 reaches 21 levels
 99th percentile, through OpenCV's quality-50 JPEG of a 247-px one 18 / 44 (90th / 99th);
 three-channel FFmpeg anaglyphs of 12 photo warps (png, JPEG, H.264) keep every channel
 over 78, photographs over 26 (two, almost without blue, read as empty and are refused as
-before: their other two channels align).
+before: their other two channels align). Those frames are evaluation frames too, so
+`results/detection.md`'s two-channel rows are not independent of these levels.
 """
 
 from typing import Optional, Tuple
 
 import numpy as np
 
+from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import channel_matching
 
-# Each two-channel encoding's empty channel (`mixtures`: red_blue, red_green).
-EMPTY_CHANNEL = {'red_blue': 1, 'red_green': 2}
+# Each two-channel encoding's empty channel (`mixtures`: red_blue G, red_green B).
+EMPTY_CHANNEL = {name: mixtures.get_mixture(name).empty_channels[0]
+                 for name in mixtures.ANAGLYPH_NAMES
+                 if len(mixtures.get_mixture(name).empty_channels) == 1}
 EMPTY_P90, EMPTY_P99 = 0.08, 0.2  # Of full scale, above the channel's 1st percentile.
 FULL_SPREAD = 0.25  # The other channels' 99th minus 1st percentile, of full scale.
 
