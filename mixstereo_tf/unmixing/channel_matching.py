@@ -46,6 +46,12 @@ def match(a: np.ndarray, b: np.ndarray, search: Tuple[int, int], strips: int = 1
   return matcher.match(a, b, *search, matcher.MatcherConfig(threads=strips, strips=strips))
 
 
+def displaced_share(out: dict) -> float:
+  """The share of pixels of a `match` output that are left-right consistent and displaced
+  by 1.5 px or more: how far two channels are from showing one view."""
+  return float((out['consistent_left'] & (np.abs(out['disparity_left']) >= 1.5)).mean())
+
+
 def eye_match(small: np.ndarray, odd: int, search: Tuple[int, int],
               strips: int = 1) -> Matched:
   """(ys, xs, xr): the odd channel's left-right consistent pixels (y, x) and the columns

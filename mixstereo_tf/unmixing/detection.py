@@ -164,10 +164,7 @@ def family_scores(small: np.ndarray, config: DetectConfig) -> Dict[str, float]:
   # The pairs in threads: each match is one strip (the same result on any machine) and
   # numba releases the GIL.
   outs = workers.run_tasks(match_pair, _PAIRS, len(_PAIRS))
-  displaced = {}
-  for pair, out in zip(_PAIRS, outs):
-    moved = out['consistent_left'] & (np.abs(out['disparity_left']) >= 1.5)
-    displaced[pair] = float(moved.mean())
+  displaced = {pair: channel_matching.displaced_share(out) for pair, out in zip(_PAIRS, outs)}
   scores = {}
   for family, odd in FAMILY_ODD_CHANNEL.items():
     others = tuple(c for c in range(3) if c != odd)

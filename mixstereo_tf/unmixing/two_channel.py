@@ -29,6 +29,7 @@ import numpy as np
 
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.unmixing import channel_matching
+from mixstereo_tf.unmixing import colour_sets
 
 # Each two-channel encoding's empty channel (`mixtures`: red_blue G, red_green B).
 EMPTY_CHANNEL = {name: mixtures.get_mixture(name).empty_channels[0]
@@ -60,8 +61,8 @@ def detect(small: np.ndarray, reach_fraction: float, min_score: float,
   left, right = (c for c in range(3) if c != empty)
   out = channel_matching.match(small[..., left], small[..., right],
                                channel_matching.span(small, reach_fraction))
-  score = float((out['consistent_left'] & (np.abs(out['disparity_left']) >= 1.5)).mean())
-  confidence = float(1.0 / (1.0 + np.exp(-(score - min_score) / softness)))
+  score = channel_matching.displaced_share(out)
+  confidence = colour_sets.logistic((score - min_score) / softness)
   if score < min_score:
     return None, 1.0 - confidence, (f'channel {"RGB"[empty]} is empty and the other two '
                                     f'are not displaced (score {score:.3f} < {min_score})')
