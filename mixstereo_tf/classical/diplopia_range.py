@@ -24,6 +24,18 @@ from mixstereo_tf.core import planning_copies
 RANGE_PENALTIES = (8, 64)
 
 
+def coarse_self_match(gray: np.ndarray, reach: int,
+                      config: diplopia.DiplopiaConfig) -> dict:
+  """`parallel_sgm.match_volume`'s output for the self-matching of float [h, w] `gray` (a
+  planning copy, 0-255) over lags [1, reach] with `RANGE_PENALTIES`, whatever `config`'s:
+  the range estimate's matching, and the tilt check's (`echo_tilt.consistent_share`)."""
+  config = dataclasses.replace(config, matching=dataclasses.replace(
+      config.matching, min_disparity=1, max_disparity=reach, p1=RANGE_PENALTIES[0],
+      p2=RANGE_PENALTIES[1]))
+  return parallel_sgm.match_volume(diplopia_costs.self_matching_volume(gray, config),
+                                   config.matching)
+
+
 def estimate_range(mixture, config: Optional[diplopia.DiplopiaConfig] = None, width: int = 320,
                    fraction: float = 1 / 3, density: float = 0.02,
                    margin: int = 3) -> Tuple[int, int]:
@@ -54,11 +66,7 @@ def estimate_range(mixture, config: Optional[diplopia.DiplopiaConfig] = None, wi
     gray = cv2.resize(gray, (max(1, round(full_width / scale)),
                              max(1, round(gray.shape[0] / scale))), interpolation=cv2.INTER_AREA)
   reach = max(2, planning_copies.reach(gray.shape, fraction))
-  config = dataclasses.replace(config, matching=dataclasses.replace(
-      config.matching, min_disparity=1, max_disparity=reach, p1=RANGE_PENALTIES[0],
-      p2=RANGE_PENALTIES[1]))
-  matched = parallel_sgm.match_volume(diplopia_costs.self_matching_volume(gray, config),
-                                      config.matching)
+  matched = coarse_self_match(gray, reach, config)
   found = matched['disparity_left'][matched['consistent_left']]
   counts = np.histogram(found, bins=np.arange(1, reach + 2))[0]  # counts[i]: lag i + 1.
   share = np.convolve(counts, np.ones(5), 'same') / max(1, found.size)

@@ -31,10 +31,8 @@ import cv2
 import numpy as np
 
 from mixstereo_tf.classical import diplopia
-from mixstereo_tf.classical import diplopia_costs
 from mixstereo_tf.classical import diplopia_range
 from mixstereo_tf.classical import epipolar
-from mixstereo_tf.classical import parallel_sgm
 from mixstereo_tf.core import planning_copies
 
 
@@ -117,10 +115,6 @@ def consistent_share(gray: np.ndarray, width: int,
   config = config or diplopia.DiplopiaConfig()
   small = planning_copies.area_copy(np.float32(gray), width)
   reach = max(2, planning_copies.reach(small.shape, 1 / 3))
-  config = dataclasses.replace(config, matching=dataclasses.replace(
-      config.matching, min_disparity=1, max_disparity=reach, p1=diplopia_range.RANGE_PENALTIES[0],
-      p2=diplopia_range.RANGE_PENALTIES[1]))
-  matched = parallel_sgm.match_volume(diplopia_costs.self_matching_volume(small, config),
-                                      config.matching)
+  matched = diplopia_range.coarse_self_match(small, reach, config)
   found = matched['consistent_left'] & (matched['disparity_left'] >= config.min_lag)
   return float(found[8:-8, 8:-8].mean())
