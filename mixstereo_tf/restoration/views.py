@@ -117,31 +117,26 @@ def _solve(mixture, spec, d_left, d_right, consistent, priors, config, start):
   offsets = (-d_left, d_right)
   matrices = (np.asarray(spec.left_matrix, np.float32),
               np.asarray(spec.right_matrix, np.float32))
-  inverses, copied = [], []
-  for own, channels in zip(matrices, (spec.left_channels, spec.right_channels)):
-    gram = config.observation_weight * own.T @ own
-    # Unmatched / matched pixels when no channel is clipped.
-    inverses.append(np.stack([np.linalg.inv(gram + (config.prior_weight + c *
-                                                     config.match_weight) * np.eye(3))
-                              for c in (0, 1)]).astype(np.float32))
-    copied.append(np.array([channels.get(i, -1) for i in range(3)], np.int64))
-  left, right = (np.array(view, np.float32, order='C') for view in start)
-  contiguous = lambda arrays, dtype: tuple(np.ascontiguousarray(a, dtype) for a in arrays)
   weights = tuple(np.float32(w) for w in (config.observation_weight, config.match_weight,
                                            config.prior_weight, config.relaxation))
+  observation, match, prior = weights[:3]
+  every = tuple(kernel.clipped_inverses(own, observation, prior, match) for own in matrices)
+  # Unmatched / matched pixels' inverses with every channel observed (pattern 7).
+  inverses = tuple(np.ascontiguousarray(each[:, 7]) for each in every)
+  copied = tuple(np.array([channels.get(i, -1) for i in range(3)], np.int64)
+                 for channels in (spec.left_channels, spec.right_channels))
+  left, right = (np.array(view, np.float32, order='C') for view in start)
+  contiguous = lambda arrays, dtype: tuple(np.ascontiguousarray(a, dtype) for a in arrays)
   inputs = (config.iterations, np.ascontiguousarray(mixture, np.float32),
             contiguous(offsets, np.float32), contiguous(consistent, np.bool_),
             contiguous(priors, np.float32))
   if decoupled(spec):  # The same alternations in closed form.
     solve = kernel.solve_decoupled_rows
-    arguments = inputs + (tuple(inverses), tuple(copied), weights, left, right)
+    arguments = inputs + (inverses, copied, weights, left, right)
   else:
     solve = kernel.solve_rows
-    observation, match, prior = weights[:3]
-    clipped = tuple(kernel.clipped_inverses(own, observation, prior, match) if spec.clip
-                    else np.empty((0, 8, 3, 3), np.float32) for own in matrices)
-    arguments = inputs + (matrices, tuple(inverses), tuple(copied), weights, clipped,
-                          left, right)
+    clipped = every if spec.clip else (np.empty((0, 8, 3, 3), np.float32),) * 2
+    arguments = inputs + (matrices, inverses, copied, weights, clipped, left, right)
   height, threads = mixture.shape[0], workers.usable_cpus(config.threads)
   workers.run_tasks(lambda block: solve(*block, *arguments),
                     workers.row_blocks(height, 4 * threads), threads)
