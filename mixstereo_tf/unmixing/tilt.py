@@ -153,11 +153,20 @@ def choose(image: np.ndarray, name: str,
            config: LevelConfig = LevelConfig()) -> Optional[epipolar.Tilt]:
   """The tilt to level uint8 `image` of encoding `name` (`turnable`) by, None where it is
   level or none helps."""
+  chosen = _chosen(image, name, config)
+  return None if chosen is None else chosen[0]
+
+
+def _chosen(image: np.ndarray, name: str, config: LevelConfig):
+  """(tilt, `epipolar.rectify`'s (turned, back, forth) of `image` by it) of `choose`, or
+  None where it is level or no turn helps."""
   tilt = _estimate(image, name, config)
   if tilt is None:
     return None
-  turned = epipolar.rectify(image, tilt, _line(name).right_channels(name))[0]
-  return tilt if _line(name).helps(image, turned, name, config, tilt.angle) else None
+  line = _line(name)
+  rectified = epipolar.rectify(image, tilt, line.right_channels(name))
+  return (tilt, rectified) if line.helps(image, rectified[0], name, config,
+                                         tilt.angle) else None
 
 
 def _back(outputs: Dict[str, object], back: Callable[..., np.ndarray],
@@ -197,15 +206,12 @@ def level(image: np.ndarray, deep: Optional[np.ndarray], name: str, setting: Set
   unchanged = image, deep, hint, lambda outputs, swapped=False: outputs, {}
   if setting == OFF or not turnable(name):
     return unchanged
-  line = _line(name)
-  right = line.right_channels(name)
+  right = _line(name).right_channels(name)
   if setting == AUTO:
-    tilt = _estimate(image, name, config)
-    if tilt is None:
+    chosen = _chosen(image, name, config)
+    if chosen is None:
       return unchanged
-    turned, back, forth = epipolar.rectify(image, tilt, right)
-    if not line.helps(image, turned, name, config, tilt.angle):
-      return unchanged
+    tilt, (turned, back, forth) = chosen
   else:
     tilt = epipolar.Tilt(float(setting[0]), float(setting[1]), 0)
     turned, back, forth = epipolar.rectify(image, tilt, right)
