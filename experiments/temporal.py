@@ -38,6 +38,7 @@ from absl import flags
 import cv2
 import numpy as np
 
+from mixstereo_tf.cli import video_files
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
 from mixstereo_tf.data import synthetic
@@ -93,10 +94,12 @@ def make_clip(frames_per_shot: int, mixture_name: str = 'anaglyph'):
 
 def unmix_clip(unmixer, frames, config):
   """Outputs of every frame, in order, with the per-shot state of `config`, as the video
-  loop runs them (`frame_pipeline`: a frame's prior is what the one before reported)."""
+  loop runs them (`frame_pipeline`: a frame's prior is what the one before reported; each
+  frame's hint has a video frame's fields, `video_files.frame_fields`)."""
   state = temporal.VideoState(config)
+  fields = video_files.frame_fields(chroma_halved=False)
   with frame_pipeline.FramePipeline(unmixer, state) as pipeline:
-    pending = [pipeline.submit(frame) for frame in frames]
+    pending = [pipeline.submit(frame, **fields) for frame in frames]
   return [p.result() for p in pending], state
 
 

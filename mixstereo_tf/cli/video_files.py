@@ -108,9 +108,9 @@ class Opening:
 
 
 def frame_fields(chroma_halved: bool) -> Dict[str, object]:
-  """The hint fields of every video frame: a video writes the views and the left
-  disparity (the right one is unread), and how its colour was stored."""
-  return {'unread': 'disparity_right', 'chroma_halved': chroma_halved}
+  """The hint fields of every video frame: a video writes the views and the left disparity
+  (the right one is unread; a double image's are its first stage's), and its storage."""
+  return {'unread': 'disparity_right', 'base_disparities': True, 'chroma_halved': chroma_halved}
 
 
 def _drawn_when_done(pending, state: Dict[str, object], layout: str,

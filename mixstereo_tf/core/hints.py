@@ -42,6 +42,10 @@ class FrameHint:
     unread: an output the caller does not read ('disparity_right': a video's frames,
       which write the views and the left disparity): a stage may return its first stage's
       value there instead of refining it (`refiner_stage.refiner_unmix`); None: every output.
+    base_disparities: a stage whose views do not depend on its refined disparities (a
+      double image's refiner) returns its first stage's disparities instead of refining
+      them (`refiner_stage.refiner_unmix`): a video's frames, where the refinement costs
+      most of the refiner's time and does not improve the disparities (docs/DESIGN.md).
     on_disparity: called once with {'disparity_left', 'disparity_right'} (and
       'consistent_left' where the stage checks them) as soon as the frame's first stage
       has matched them, before its views are restored or refined (the anaglyph matcher,
@@ -75,6 +79,7 @@ class FrameHint:
   fallback_mixture: Optional[str] = None
   mixing_weight: Union[None, float, str] = None
   unread: Optional[str] = None
+  base_disparities: bool = False
   on_disparity: Optional[Callable[[Dict[str, np.ndarray]], None]] = None
   chroma_halved: bool = False
   stored_image: Optional[np.ndarray] = None

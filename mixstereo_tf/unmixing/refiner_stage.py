@@ -3,7 +3,7 @@ result (the classical method, or another stage with its outputs) refined by the 
 then the views restored (anaglyphs) or settled onto the mixture (double images)."""
 
 import dataclasses
-from typing import Callable, Dict, Optional
+from typing import Callable, Dict, Optional, Tuple
 
 import numpy as np
 
@@ -15,16 +15,17 @@ from mixstereo_tf.unmixing import steps
 from mixstereo_tf.unmixing import tiling
 
 
-def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: int,
+def refiner_unmix(network: Callable[[Tuple[str, ...]], tiling.Network], multiple: int,
                   image: np.ndarray, name: str, search: steps.Range,
                   hint: Optional[hints.FrameHint] = None,
                   base_stage: Optional[Callable[..., Dict[str, object]]] = None
                   ) -> Dict[str, object]:
   """The hybrid (`models/refiner.py`): the base stage (`steps.classical_unmix`, or another with
   its signature and outputs, e.g. the learned matching stage), the refiner on its result
-  (`network(None)`, in tiles; `network(key)`: without output `key`, when the hint's
-  `unread` is a disparity nothing else reads: families that do not restore views from
-  both), then the views made to agree with the mixture by the family's `settle_views`
+  (`network(())`, in tiles; `network(keys)`: without the disparity outputs `keys`, where
+  the family does not restore its views from them and the hint's `unread` names one or
+  its `base_disparities` asks for both: the base's are returned there), then the views
+  made to agree with the mixture by the family's `settle_views`
   (anaglyphs: restored from the refined disparities, double images: projected onto
   their equation). The hint's on_disparity is the base stage's: a video's next
   frame searches around the base's disparities and starts while these are refined
@@ -35,9 +36,7 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
       hint.stored_image.dtype == np.uint16)  # Anaglyphs: the base at 8 bits, views below.
   base = (base_stage or steps.classical_unmix)(image, name, search, dataclasses.replace(
       hint, stored_image=None) if deep and family.restores_views else hint)
-  unread = hint and hint.unread
-  skipped = (unread if unread in ('disparity_left', 'disparity_right')
-             and not family.restores_views else None)
+  skipped = _skipped(family, hint)
   keys = ('left', 'right_warped' if 'right_warped' in base else 'right')  # As trained.
   base_views = [image_range.eight_bits(base[key]) for key in keys]
   refined = tiling.apply(network(skipped), refiner.network_input(
@@ -49,12 +48,20 @@ def refiner_unmix(network: Callable[[Optional[str]], tiling.Network], multiple: 
              if deep and not family.restores_views  # Double images: 16-bit base layers.
              else {key: image_range.signed_to_u8(view) for key, view in signed.items()})
   for key in ('disparity_left', 'disparity_right'):
-    outputs[key] = refined[key][..., 0] if key != skipped else base[key]
+    outputs[key] = refined[key][..., 0] if key not in skipped else base[key]
   outputs.update(family.settle_views(hints.views_image(image, hint), name, outputs,
                                      base.get('info', {})))
   if 'info' in base:  # The base's record: a double image's mixing weight.
     outputs['info'] = base['info']
   return outputs
+
+
+def _skipped(family, hint: Optional[hints.FrameHint]) -> Tuple[str, ...]:
+  """The disparity outputs the refiner leaves to its base (`refiner_unmix`)."""
+  if hint is None or family.restores_views:
+    return ()
+  return tuple(key for key in ('disparity_left', 'disparity_right')
+               if hint.base_disparities or key == hint.unread)
 
 
 def _deep_views(base, base_views, signed) -> Dict[str, np.ndarray]:

@@ -648,21 +648,23 @@ def test_an_input_too_large_for_memory_fails_alone(tmp_path):
 
 def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_path):
   """Videos write the views and the left disparity: each frame's hint says so, which lets a
-  refiner leave out its right disparity correction (tests/unmixing/shipped_test.py)."""
+  refiner leave out its right disparity correction, and asks for the base's disparities
+  (a double image's refiner then runs its views' network alone;
+  tests/unmixing/shipped_test.py)."""
   source = _anaglyph_clip(tmp_path / 'clip.mp4', 'gray', frames=3)
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(
       'classical', mixture='gray', disparity_range=(0, 8)))
   seen = []
 
   def unmix(image, hint=None):
-    seen.append(hint and hint.unread)
+    seen.append(hint and (hint.unread, hint.base_disparities))
     return unmixer(image, hint=hint)
 
   report = unmix_files.unmix_inputs(dataclasses.replace(unmixer, fn=unmix), source,
                                     str(tmp_path / 'out'), media.OutputOptions('sbs'))
   # Each frame once: the first for the colour maps' range, as the first of its shot (its
   # outputs taken by the frame pipeline), then the others.
-  assert report.frames == 3 and seen == ['disparity_right'] * 3
+  assert report.frames == 3 and seen == [('disparity_right', True)] * 3
   # The colour maps span that range (0..8 px here), not the method's largest disparity.
   info = json.loads((tmp_path / 'out' / 'clip_info.json').read_text())
   assert info['display_range'] == [0.0, 8.0] and unmixer.max_disparity != 8.0

@@ -228,12 +228,34 @@ def test_an_unread_right_disparity_is_the_base_stages_and_the_rest_unchanged(sce
   assert np.abs(full['disparity_right'] - base).max() > 0.1  # The refiner changed it.
 
 
-def test_an_anaglyph_refiner_refines_both_disparities_whatever_is_unread(scenes):
-  """Anaglyph views are restored from both disparities, so an unread one is still refined."""
+@pytest.mark.parametrize('swap_eyes', [False, True])
+def test_base_disparities_are_the_classical_stages_and_the_views_unchanged(scenes, swap_eyes):
+  """A video frame's hint (base_disparities): the diplopia refiner runs its views' network
+  alone; the views are the full run's (a double image's do not depend on the refined
+  disparities) and both disparities the classical stage's."""
+  scene = scenes[0]
+  image = np.rint((scene['left'].astype(float) + scene['right']) / 2).astype(np.uint8)
+  config = dict(mixture='diplopia', disparity_range=(1, 48), swap_eyes=swap_eyes)
+  refined, classical = (predictors.build_unmixer(predictors.PredictorConfig(
+      method, **config)) for method in ('model', 'classical'))
+  full, base = refined(image), classical(image)
+  video = refined(image, hint=hints.FrameHint(unread='disparity_right',
+                                              base_disparities=True))
+  for key in ('left', 'right'):
+    np.testing.assert_array_equal(video[key], full[key])
+  for key in ('disparity_left', 'disparity_right'):
+    np.testing.assert_array_equal(video[key], base[key])
+    assert np.abs(full[key] - base[key]).max() > 0.1  # The full run refined it.
+
+
+def test_an_anaglyph_refiner_refines_both_disparities_whatever_the_hint(scenes):
+  """Anaglyph views are restored from both disparities, so an unread one is still refined,
+  and base_disparities does not apply."""
   image = _anaglyph(scenes[0])
   unmix = predictors.build_unmixer(predictors.PredictorConfig(
       'model', pretrained='anaglyph', mixture='anaglyph', disparity_range=(0, 48)))
-  full, video = unmix(image), unmix(image, hint=hints.FrameHint(unread='disparity_right'))
+  full = unmix(image)
+  video = unmix(image, hint=hints.FrameHint(unread='disparity_right', base_disparities=True))
   for key in ('left', 'right', 'disparity_left', 'disparity_right'):
     np.testing.assert_array_equal(video[key], full[key])
 
