@@ -63,3 +63,41 @@ def test_a_red_blue_anaglyph_is_unmixed_as_the_gray_one_and_says_so():
   assert 'unmixed_as' not in theirs.info
   assert mixtures.parse_names('anaglyphs') == tuple(
       n for n in mixtures.ANAGLYPH_NAMES if n not in ('red_blue', 'red_green'))
+
+
+def _print(left, right, odd, lumas=None):
+  """Two inks on white paper, an eye each (red-blue: the left view in blue ink, the right in
+  red ink): the channel `odd` is dark wherever either ink is, the other two's product."""
+  lumas = lumas or [cv2.cvtColor(v, cv2.COLOR_RGB2GRAY).astype(np.float64)
+                    for v in (left, right)]
+  eyes = [c for c in range(3) if c != odd]
+  image = np.empty(left.shape, np.float64)
+  image[..., eyes[0]], image[..., eyes[1]] = lumas
+  image[..., odd] = lumas[0] * lumas[1] / 255.0
+  noise = np.random.default_rng(0).normal(0.0, 1.5, image.shape)
+  return np.uint8(np.clip(np.rint(0.92 * image + 8 + noise), 0, 255))
+
+
+def test_a_two_ink_print_is_found_by_its_ink_channel_and_a_gray_anaglyph_is_not():
+  left, right = _pair()
+  for name, odd in (('red_blue', 1), ('red_green', 2)):
+    printed = _print(left, right, odd)
+    assert two_channel.empty_channel(np.float32(printed)) is None  # Paper: nothing empty.
+    assert two_channel.ink_channel(np.float32(printed)) == odd
+    found = detection.detect(printed)
+    assert found.name == name and 'product' in found.reason, found
+  for name in ('gray', 'anaglyph', 'half_color'):  # G is B, or the right eye's own green.
+    assert two_channel.ink_channel(np.float32(_mixed(name, left, right))) is None
+
+
+def test_a_photograph_whose_green_is_its_red_times_blue_is_refused_as_before():
+  """R and B of one view, aligned: the ink channel stands for nothing, the families decide;
+  the same view in both inks is no print of two (its square explains the product)."""
+  left, _ = _pair()
+  assert two_channel.ink_channel(np.float32(_print(left, left, 1))) is None
+  own = [left[..., c].astype(np.float64) for c in (0, 2)]  # One view's red and blue.
+  printed = _print(left, left, 1, own)
+  assert two_channel.ink_channel(np.float32(printed)) == 1
+  assert two_channel.detect(np.float32(printed), 0.25, 0.08, 0.02) is None
+  found = detection.detect(printed)
+  assert found.name is None and 'no colour channel is displaced' in found.reason, found
