@@ -72,16 +72,18 @@ def ink_channel(small: np.ndarray) -> Optional[int]:
   """The channel of a 0..255 [h, w, 3] copy that a print's two inks make of the other two
   (module docstring): fitted by them and their product within INK_FIT of full scale, and
   by at most INK_SHARE of what either alone (with its square) leaves, which is at least
-  INK_SINGLE (a gray anaglyph's G is its B); or None."""
+  INK_SINGLE (a gray anaglyph's G is its B); of two such, the one with the smaller share
+  (an eye's channel can come near the fit too); or None."""
   flat = small.reshape(-1, 3).astype(np.float64) / 255.0
+  shares = {}
   for channel in sorted(set(EMPTY_CHANNEL.values())):
     one, two = (flat[:, c] for c in range(3) if c != channel)
     joint = _fit_rms(flat[:, channel], one, two, one * two)
     single = min(_fit_rms(flat[:, channel], one, one * one),
                  _fit_rms(flat[:, channel], two, two * two))
     if joint <= INK_FIT and single >= INK_SINGLE and joint <= INK_SHARE * single:
-      return channel
-  return None
+      shares[channel] = joint / single
+  return min(shares, key=shares.get) if shares else None
 
 
 def detect(small: np.ndarray, reach_fraction: float, min_score: float,
