@@ -45,7 +45,7 @@ class FrameHint:
     base_disparities: a stage whose views do not depend on its refined disparities (a
       double image's refiner) returns its first stage's disparities instead of refining
       them (`refiner_stage.refiner_unmix`): a video's frames, where the refinement costs
-      most of the refiner's time and does not improve the disparities (docs/DESIGN.md).
+      most of the refiner's time and on real pans gains only on KITTI's (docs/DESIGN.md).
     on_disparity: called once with {'disparity_left', 'disparity_right'} (and
       'consistent_left' where the stage checks them) as soon as the frame's first stage
       has matched them, before its views are restored or refined (the anaglyph matcher,

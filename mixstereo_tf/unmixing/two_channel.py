@@ -105,9 +105,10 @@ def detect(small: np.ndarray, reach_fraction: float, min_score: float,
   min_score = min_score if inked is None else max(min_score, INK_MIN_SCORE)
   confidence = colour_sets.logistic((score - min_score) / softness)
   if score < min_score:
-    return None if inked is not None else (
-        None, 1.0 - confidence, (f'channel {"RGB"[empty]} is empty and the other two are '
-                                 f'not displaced (score {score:.3f} < {min_score})'))
+    if inked is not None:
+      return None  # No print: the families decide (a photograph is refused as before).
+    return None, 1.0 - confidence, (f'channel {"RGB"[empty]} is empty and the other two '
+                                    f'are not displaced (score {score:.3f} < {min_score})')
   what = 'the product of the other two (a print)' if inked is not None else 'empty'
   return names[0], confidence, (f'channel {"RGB"[empty]} is {what}, the other two displaced '
                                 f'(score {score:.3f}): {names[0]}')
