@@ -19,7 +19,10 @@ mixture channels, fitted where the views match (`colour_transfer`; standing in f
 network's views. Without a network's priors (or when asked: the refiner's), a last
 solve (the colour-line pass) takes as its prior the colour transfer refitted on the
 restored views: colours a wrong but consistent disparity warped in are pulled towards
-what each view's own channels explain locally. Encodings that transmit no colour
+what each view's own channels explain locally; where the mixture does not observe the
+borrowed channels at all (`decoupled`), their finest detail is then scaled by how much of
+it the camera's channels share (`borrowed_detail`: the other camera's noise is no part of
+this view). Encodings that transmit no colour
 (`MixtureSpec.transmits_colour`: the gray ones) give gray views, their luminance.
 Clipped channels of the Dubois encodings (0 or 255) are not used as observations.
 
@@ -36,6 +39,7 @@ import numpy as np
 
 from mixstereo_tf.core import image_range
 from mixstereo_tf.core import mixtures
+from mixstereo_tf.restoration import borrowed_detail
 from mixstereo_tf.restoration import colour_transfer
 from mixstereo_tf.restoration import kernel
 from mixstereo_tf.core import workers
@@ -68,6 +72,11 @@ class RestoreConfig:
     colour_line_iterations: alternations of that last solve (it starts from the restored
       views; for channel encodings the lost channels are decoupled, and 4 over-relaxed
       steps leave about 1/16 of the change undone).
+    borrowed_detail_sigma: where the colour-line pass may run, on the encodings whose borrowed
+      channels the mixture does not observe (`decoupled`), their detail below a Gaussian
+      of this many pixels is scaled by the share the camera's channels have in common
+      (`borrowed_detail`); 0: kept as warped. 0.7 (not the paper's): chosen on photo
+      warps degraded apart over 0.7, 1 and 1.4 (docs/LEARNED_MATCHING.md).
     threads: threads of the solve (row blocks); 0 = every CPU this process may use.
   """
   observation_weight: float = 30.0
@@ -80,6 +89,7 @@ class RestoreConfig:
   transfer_subsample: int = 2
   colour_line_weight: float = 2.0
   colour_line_iterations: int = 4
+  borrowed_detail_sigma: float = 0.7
   threads: int = 0
 
 
@@ -237,8 +247,9 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
     config: weights.
     consistent: (left, right) bool [H, W], `lr_consistency` of these disparities at
       config.lr_threshold when already computed (an earlier restoration's); None: computed.
-    colour_line: run the colour-line pass (at config.colour_line_weight); None: only
-      without fallback priors (a network's views skip it: the paper's path).
+    colour_line: run the colour-line pass (at config.colour_line_weight) and the borrowed
+      detail's scaling; None: only without fallback priors (a network's views skip both:
+      the paper's path).
 
   Returns:
     'left', 'right': float32 [H, W, 3] in [0, 1]; 'consistent_left', 'consistent_right':
@@ -262,6 +273,9 @@ def restore_views(mixture: np.ndarray, mixture_name: str, d_left: np.ndarray,
   if colour_line and config.colour_line_weight > 0 and spec.transmits_colour:
     left, right = _colour_line_pass(mixture, spec, d_left, d_right, consistent,
                                     (left, right), config)
+  if colour_line and decoupled(spec):
+    left, right, _ = borrowed_detail.scale_borrowed(mixture, spec, left, right,
+                                                    config.borrowed_detail_sigma)
   if not spec.transmits_colour:  # Gray encodings: only brightness exists to restore.
     left, right = (np.repeat(view @ np.asarray(mixtures.LUMA, np.float32)[:, None], 3, -1)
                    for view in (left, right))

@@ -1,5 +1,6 @@
 """Known-answer tests of the restoration of both views from a mixture and disparities."""
 
+import cv2
 import numpy as np
 import pytest
 
@@ -9,7 +10,8 @@ from mixstereo_tf.restoration import views
 # A 1 % pull towards the prior (w_prior / w_match) and no colour-line pass (tested on its
 # own below), to see how exact the views are when the match is perfect; the default pulls
 # 10 % and adds the pass, which real matches need (`experiments/restoration_weight.py`).
-SLIGHT_PULL = views.RestoreConfig(prior_weight=0.01, colour_line_weight=0.0)
+SLIGHT_PULL = views.RestoreConfig(prior_weight=0.01, colour_line_weight=0.0,
+                                  borrowed_detail_sigma=0.0)
 
 
 def _pair(shift=3, height=24, width=40, seed=0):
@@ -211,7 +213,8 @@ def test_the_colour_line_pass_repairs_colours_a_wrong_disparity_warped_in():
   errors = {}
   for weight in (0.0, 1.0, 4.0):
     out = views.restore_views(mixture, 'anaglyph', wrong, wrong, consistent=matched,
-                              config=views.RestoreConfig(colour_line_weight=weight))
+                              config=views.RestoreConfig(colour_line_weight=weight,
+                                                             borrowed_detail_sigma=0.0))
     # The channels the mixture copies stay exact.
     np.testing.assert_array_equal(out['left'][..., 0], left[..., 0])
     np.testing.assert_array_equal(out['right'][..., 1:], right[..., 1:])
@@ -232,7 +235,8 @@ def test_the_colour_line_pass_keeps_a_right_match_and_skips_network_priors_unles
   assert np.abs(with_pass['left'][inner] - left[inner]).mean() < 0.01
   prior = np.full_like(left, 0.5)
   outs = [views.restore_views(mixture, 'anaglyph', d, d, prior, prior,
-                              config=views.RestoreConfig(colour_line_weight=weight))
+                              config=views.RestoreConfig(colour_line_weight=weight,
+                                                             borrowed_detail_sigma=0.0))
           for weight in (0.0, 1.0)]
   np.testing.assert_array_equal(outs[0]['left'], outs[1]['left'])
   # Asked for (the refiner's restoration), the pass also runs over a network's priors.
@@ -240,6 +244,39 @@ def test_the_colour_line_pass_keeps_a_right_match_and_skips_network_priors_unles
   assert not np.array_equal(asked['left'], outs[0]['left'])
   error = lambda out: np.abs(out['left'][inner] - left[inner]).mean()
   assert error(asked) < error(outs[0]) + 0.01
+
+
+def test_borrowed_detail_of_noisy_cameras_is_scaled_where_the_colour_line_pass_may_run():
+  """Two cameras seeing one texture, each with its own noise per channel: the default
+  restoration scales the borrowed channels' finest band (`borrowed_detail`) and comes
+  nearer each camera's views than with it off; the mixture's own channels stay exact, and
+  a network's priors (the paper's path) skip it."""
+  rng = np.random.default_rng(5)
+  shift, height, width = 3, 48, 96
+  detail = cv2.GaussianBlur(rng.normal(0, 1, (height, width + shift)).astype(np.float32),
+                            (0, 0), 2.0)  # Most power at coarse scales, as a photograph's.
+  texture = 0.5 + 0.7 * detail[..., None] - [0.0, 0.05, 0.1]
+  d = np.full((height, width), float(shift), np.float32)
+  columns = np.broadcast_to(np.arange(width)[None, :], (height, width))
+  seen = (columns >= shift, columns + shift < width)  # Left, right pixels the other sees.
+  noisy = [np.clip(view + rng.normal(0, 0.05, view.shape), 0, 1).astype(np.float32)
+           for view in (texture[:, :width], texture[:, shift:])]
+  mixture = _mix('anaglyph', *noisy)
+  # Without the colour-line pass, whose exact colour lines here would already take the
+  # borrowed channels' detail from the view's own channel.
+  on = views.RestoreConfig(colour_line_weight=0.0)
+  off = views.RestoreConfig(colour_line_weight=0.0, borrowed_detail_sigma=0.0)
+  outs = [views.restore_views(mixture, 'anaglyph', d, d, config=config)
+          for config in (on, off)]
+  for key, truth, mask in zip(('left', 'right'), noisy, seen):
+    error = lambda out: np.mean((out[key][mask] - truth[mask]) ** 2)
+    assert error(outs[0]) < 0.95 * error(outs[1])
+  np.testing.assert_array_equal(outs[0]['left'][..., 0], mixture[..., 0])
+  np.testing.assert_array_equal(outs[0]['right'][..., 1:], mixture[..., 1:])
+  prior = np.full_like(noisy[0], 0.5)
+  given = [views.restore_views(mixture, 'anaglyph', d, d, prior, prior, config=config)
+           for config in (on, off)]
+  np.testing.assert_array_equal(given[0]['left'], given[1]['left'])
 
 
 def test_the_dubois_inverses_are_those_of_every_observation_pattern():
