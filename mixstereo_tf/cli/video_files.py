@@ -107,10 +107,11 @@ class Opening:
     return unmixed
 
 
-def frame_fields(chroma_halved: bool) -> Dict[str, object]:
-  """The hint fields of every video frame: a video writes the views and the left disparity
-  (the right one is unread; a double image's are its first stage's), and its storage."""
-  return {'unread': 'disparity_right', 'base_disparities': True, 'chroma_halved': chroma_halved}
+def frame_fields(chroma_halved: bool, config: temporal.TemporalConfig) -> Dict[str, object]:
+  """A video frame's hint fields: the views and left disparity written (a double image's
+  its first stage's with the shot's prior, else refined as a still's), and its storage."""
+  prior = config.enabled and config.use_prior
+  return {'unread': 'disparity_right', 'base_disparities': prior, 'chroma_halved': chroma_halved}
 
 
 def _drawn_when_done(pending, state: Dict[str, object], layout: str,
@@ -161,7 +162,7 @@ def unmix_video(unmixer: predictors.Unmixer, item: input_listing.MediaItem, open
   def render(frame):
     unmix_start = time.perf_counter()
     index = state['done'] + shots.frames  # This run's frames begun before this one.
-    fields = frame_fields(state['chroma_halved'])
+    fields = frame_fields(state['chroma_halved'], temporal_config)
     pending = pipeline.submit(frame, index % video_config.segment_frames == 0,
                               opened.take(index), **fields)
     report.unmix_seconds += time.perf_counter() - unmix_start
@@ -217,7 +218,7 @@ def opening(unmixer: predictors.Unmixer, path: str,
         continue
       hint = dataclasses.replace(
           temporal.VideoState(temporal_config).begin(frame.image, cut=True),
-          **frame_fields(info.chroma_halved))
+          **frame_fields(info.chroma_halved, temporal_config))
       try:
         return Opening(index, frame_pipeline.Unmixed(frame.image, hint,
                                                      unmixer(frame.image, hint=hint)),

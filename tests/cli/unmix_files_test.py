@@ -646,11 +646,15 @@ def test_an_input_too_large_for_memory_fails_alone(tmp_path):
   assert report.failures[0][1] == 'MemoryError: Unable to allocate 90.1 GiB for an array'
 
 
-def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_path):
+@pytest.mark.parametrize('config, base', [(temporal.TemporalConfig(), True),
+                                          (temporal.TemporalConfig(use_prior=False), False),
+                                          (temporal.TemporalConfig(enabled=False), False)])
+def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_path, config,
+                                                                         base):
   """Videos write the views and the left disparity: each frame's hint says so, which lets a
-  refiner leave out its right disparity correction, and asks for the base's disparities
-  (a double image's refiner then runs its views' network alone;
-  tests/unmixing/shipped_test.py)."""
+  refiner leave out its right disparity correction, and with the shot's prior asks for the
+  base's disparities (a double image's refiner then runs its views' network alone;
+  tests/unmixing/shipped_test.py); matched whole, frames are refined as stills are."""
   source = _anaglyph_clip(tmp_path / 'clip.mp4', 'gray', frames=3)
   unmixer = predictors.build_unmixer(predictors.PredictorConfig(
       'classical', mixture='gray', disparity_range=(0, 8)))
@@ -661,10 +665,11 @@ def test_video_frames_tell_the_unmixer_that_the_right_disparity_is_unread(tmp_pa
     return unmixer(image, hint=hint)
 
   report = unmix_files.unmix_inputs(dataclasses.replace(unmixer, fn=unmix), source,
-                                    str(tmp_path / 'out'), media.OutputOptions('sbs'))
+                                    str(tmp_path / 'out'),
+                                    media.OutputOptions('sbs', temporal_config=config))
   # Each frame once: the first for the colour maps' range, as the first of its shot (its
   # outputs taken by the frame pipeline), then the others.
-  assert report.frames == 3 and seen == [('disparity_right', True)] * 3
+  assert report.frames == 3 and seen == [('disparity_right', base)] * 3
   # The colour maps span that range (0..8 px here), not the method's largest disparity.
   info = json.loads((tmp_path / 'out' / 'clip_info.json').read_text())
   assert info['display_range'] == [0.0, 8.0] and unmixer.max_disparity != 8.0
