@@ -103,9 +103,9 @@ def define_output_options() -> None:
                        "With --temporal: search each frame around the previous frame's "
                        'disparities (steadier disparities, faster; the learned matching '
                        "stage then matches a shot's first frame and the census matcher the "
-                       'others); --notemporal_prior matches every frame whole (the learned '
-                       "stage or a double image's refiner on each: better disparities, views, "
-                       "slower), the shot's encoding and range kept (results/temporal.md).")
+                       'others); --notemporal_prior matches every frame whole, as a still '
+                       "(the learned stage on each: better disparities and views; slower), "
+                       "the shot's encoding and range kept (experiments/results/temporal.md).")
   flags.DEFINE_multi(flag_parsers.NameListParser(stereo_formats.FORMAT_NAMES),
                      flags.CsvListSerializer(','), 'output_format',
                      [list(options['formats'])],

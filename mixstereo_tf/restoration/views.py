@@ -66,9 +66,9 @@ class RestoreConfig:
       transfer refitted on the restored views (the colour-line pass, `_colour_line_pass`);
       0: no such pass (the restoration before it). By default only without fallback
       priors (`restore_views`' colour_line).
-      2 (not the paper's): best mean and smallest largest regret over every encoding on
-      validation examples, procedural and photo warps
-      (`experiments/results/colour_line_weight.md`).
+      2 (not the paper's): best mean over every encoding on validation examples,
+      procedural and photo warps (`experiments/results/colour_line_weight.md`; smallest
+      largest regret too until its 2026-11-30 rerun, 1 since: 0.22 against 0.25 dB).
     colour_line_iterations: alternations of that last solve (it starts from the restored
       views; for channel encodings the lost channels are decoupled, and 4 over-relaxed
       steps leave about 1/16 of the change undone).
