@@ -63,11 +63,11 @@ def _correlation(first: np.ndarray, second: np.ndarray) -> float:
 
 
 def shared_share(mixture: np.ndarray, channels: Tuple[int, int], sigma: float) -> float:
-  """k in [0, 1]: how much of the finest band (`fine_band`) of the mixture's two `channels`
-  is detail they share, relative to a coarser band's (between Gaussians of 2 and 4
-  sigma): correlation there / correlation in the reference band (module docstring). A
-  scene whose colours differ in detail at every scale keeps its detail (k = 1, as where
-  the reference band is uncorrelated or flat)."""
+  """k in [0, 1]: the correlation of the mixture's two `channels` in the finest band
+  (`fine_band`) over their correlation in a reference band (between Gaussians of 2 and
+  4 sigma): the share of the finest band that is scene (module docstring). A scene whose
+  colours differ in detail at every scale keeps its detail (k near 1); k = 1 where the
+  reference band is uncorrelated or flat."""
   planes = [np.asarray(mixture[..., c], np.float32) for c in channels]
   fine = [fine_band(plane, sigma)[1] for plane in planes]
   reference = [cv2.GaussianBlur(plane, (0, 0), 2 * sigma, borderType=cv2.BORDER_REFLECT) -
@@ -83,7 +83,7 @@ def scale_borrowed(mixture: np.ndarray, spec: mixtures.MixtureSpec, left: np.nda
                    right: np.ndarray, sigma: float) -> Tuple[np.ndarray, np.ndarray, float]:
   """(left, right, k): each view's channels that the mixture does not give it (borrowed
   from the other eye) with their finest band scaled by k (`shared_share` of `own_pair`);
-  the views unchanged and k = 1 where no eye keeps two channels or `sigma` <= 0. The
+  the views unchanged and k = 1 where `own_pair` is None or `sigma` <= 0. The
   caller applies it only where the borrowed channels are not observed at all
   (`views.decoupled` encodings), so the mixture still holds exactly."""
   pair = own_pair(spec)
