@@ -2,9 +2,9 @@
 
 A colour anaglyph gives each view some channels of its own (the left view's red) and none
 of the others, which the restoration warps in from the other eye (`views.restore_views`).
-What the other camera recorded there is the scene's detail plus what is that camera's
-own (sensor noise, demosaicking), and that is no part of this view: warped in, it is an
-error. How much of the finest band is such is read from the mixture itself. The channels
+What the other camera recorded there is the scene's detail plus that camera's own noise
+and demosaicking, which are no part of this view: warped in, they are an error. How much
+of the finest band they make is read from the mixture itself. The channels
 that one eye keeps are one camera's at the same pixel: the correlation of two of its
 channels in a band is P_s / (P_s + P_n), P_s the power they share, P_n what each has
 alone. A scene's own colour detail differs between channels much alike at every scale, a
@@ -16,8 +16,8 @@ detail, the other camera's noise) is k times it: the borrowed channels' finest b
 scaled by k (a Wiener gain), the coarser bands kept.
 
 Measured (`experiments/results/borrowed_detail.md`): k is 1.00 on Motorcycle and the
-SceneFlow frame, 0.42 on both KITTI frames (colour anaglyphs written losslessly), 0.96-0.99
-on average on 4:2:0 JPEGs, whose colour detail is the luma's. Shapes: views float32
+SceneFlow frame, 0.42 on both KITTI frames (colour anaglyphs written losslessly), 0.96-0.98
+on average on 4:2:0 JPEGs of photo warps, whose colour detail is the luma's. Shapes: views float32
 [H, W, 3] in [0, 1]; sigma in pixels.
 """
 

@@ -22,8 +22,8 @@ restored views: colours a wrong but consistent disparity warped in are pulled to
 what each view's own channels explain locally; where the mixture does not observe the
 borrowed channels at all (`decoupled`), their finest detail is then scaled by how much of
 it the camera's channels share (`borrowed_detail`: the other camera's noise is no part of
-this view). Encodings that transmit no colour
-(`MixtureSpec.transmits_colour`: the gray ones) give gray views, their luminance.
+this view). Encodings that transmit no colour (`MixtureSpec.transmits_colour`: the gray
+ones) give gray views, their luminance.
 Clipped channels of the Dubois encodings (0 or 255) are not used as observations.
 
 Images are float32 [H, W, 3] in [0, 1]; disparities float32 [H, W] in pixels, signed (the
@@ -75,8 +75,9 @@ class RestoreConfig:
     borrowed_detail_sigma: where the colour-line pass may run, on the encodings whose borrowed
       channels the mixture does not observe (`decoupled`), their detail below a Gaussian
       of this many pixels is scaled by the share the camera's channels have in common
-      (`borrowed_detail`); 0: kept as warped. 0.7 (not the paper's): chosen on photo
-      warps degraded apart over 0.7, 1 and 1.4 (docs/LEARNED_MATCHING.md).
+      (`borrowed_detail`); 0: kept as warped. 0.7 (not the paper's): best mean of 0.7, 1
+      and 1.4 on validation photo warps, clean, degraded apart and as JPEG
+      (`experiments/results/borrowed_detail.md`).
     threads: threads of the solve (row blocks); 0 = every CPU this process may use.
   """
   observation_weight: float = 30.0
