@@ -97,7 +97,7 @@ def unmix_clip(unmixer, frames, config):
   loop runs them (`frame_pipeline`: a frame's prior is what the one before reported; each
   frame's hint has a video frame's fields, `video_files.frame_fields`)."""
   state = temporal.VideoState(config)
-  fields = video_files.frame_fields(False, config)
+  fields = video_files.frame_fields(chroma_halved=False, config=config)
   with frame_pipeline.FramePipeline(unmixer, state) as pipeline:
     pending = [pipeline.submit(frame, **fields) for frame in frames]
   return [p.result() for p in pending], state

@@ -31,11 +31,16 @@ from mixstereo_tf.core import mixtures
 GREEN = 1  # The channel a Bayer mosaic samples at every other site.
 
 
+def _blur(channel: np.ndarray, sigma: float) -> np.ndarray:
+  """A float32 [H, W] channel's Gaussian blur of `sigma` pixels, edges reflected."""
+  return cv2.GaussianBlur(channel, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)
+
+
 def fine_band(channel: np.ndarray, sigma: float) -> Tuple[np.ndarray, np.ndarray]:
   """(coarse, fine) of a float32 [H, W] channel: its Gaussian blur of `sigma` pixels and
   the rest (channel = coarse + fine)."""
   channel = np.asarray(channel, np.float32)
-  coarse = cv2.GaussianBlur(channel, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)
+  coarse = _blur(channel, sigma)
   return coarse, channel - coarse
 
 
@@ -70,9 +75,7 @@ def shared_share(mixture: np.ndarray, channels: Tuple[int, int], sigma: float) -
   reference band is uncorrelated or flat."""
   planes = [np.asarray(mixture[..., c], np.float32) for c in channels]
   fine = [fine_band(plane, sigma)[1] for plane in planes]
-  reference = [cv2.GaussianBlur(plane, (0, 0), 2 * sigma, borderType=cv2.BORDER_REFLECT) -
-               cv2.GaussianBlur(plane, (0, 0), 4 * sigma, borderType=cv2.BORDER_REFLECT)
-               for plane in planes]
+  reference = [_blur(plane, 2 * sigma) - _blur(plane, 4 * sigma) for plane in planes]
   shared = _correlation(*reference)
   if shared <= 0:
     return 1.0
